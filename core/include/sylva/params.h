@@ -1,0 +1,47 @@
+/* sylva: species parameters (MODEL.md symbols; scenario.md keys and defaults). */
+#ifndef SYLVA_PARAMS_H
+#define SYLVA_PARAMS_H
+
+#include "equations.h"
+
+/** How a species turns light into growth. */
+typedef enum sylva_allocation {
+  SYLVA_ALLOC_LGTM = 0, /**< Borchert-Honda + priority (LGTM eq. 1-2) */
+  SYLVA_ALLOC_NONE = 1  /**< simplified IGM: the growth equation alone */
+} sylva_allocation;
+
+/** Every parameter of one species. Angles in degrees, lengths in metres. */
+typedef struct sylva_species_def {
+  double rho;              /**< internode length */
+  sylva_equation growth;   /**< growth equation X(t), internodes */
+  sylva_allocation allocation;
+  double sprout_light;     /**< simplified IGM: least bud light that sprouts */
+  double lambda;           /**< BH main/lateral weight */
+  double k;                /**< ratio of top-priority nodes */
+  double w1, w2, w3;       /**< priority weights */
+  int tau;                 /**< iterations of apical control */
+  double alpha;            /**< light conversion rate */
+  double sigma;            /**< light sensitivity */
+  double mu;               /**< weight of the optimal direction */
+  double gamma;            /**< weight of the tropism */
+  double tropism[3];       /**< tropism vector */
+  double theta;            /**< branching angle */
+  double divergence;       /**< phyllotaxis divergence angle */
+  double b_min, b_max;     /**< shade impact base */
+  int pyramid_depth;       /**< Qd, voxels */
+  double r_s;              /**< shedding threshold */
+  double r_tip;            /**< terminal radius, m */
+  double pipe_exponent;    /**< v of the pipe model */
+  int m0, m_min;           /**< marker points m(T) = max(m_min, m0 - T) */
+  double cone_angle;       /**< marker cone half-angle */
+  double cone_radius;      /**< marker cone length, internodes */
+  int initial_nodes;       /**< internodes of the initial vertical trunk */
+} sylva_species_def;
+
+/** The defaults of scenario.md (the igm-fig11 row with r_s 0.35). */
+sylva_species_def sylva_default_species_def(void);
+
+/** Checks ranges; on failure returns SYLVA_ERANGE and names the field in *field. */
+int sylva_species_check(const sylva_species_def *def, const char **field);
+
+#endif

@@ -1,0 +1,21 @@
+/* sylva: versioned binary image of a whole world. */
+#ifndef SYLVA_SNAPSHOT_H
+#define SYLVA_SNAPSHOT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "world.h"
+
+/** Format version written by this build. */
+#define SYLVA_SNAPSHOT_VERSION 1
+
+/** Serialises w into a malloc'd buffer (*data, *size); the caller frees it. */
+int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size);
+/** Builds a new world from an image. A bad image (magic, version, checksum,
+ *  truncation, inconsistent content) returns a negative status and creates nothing.
+ *  The clock of the restored world is taken from clock/clock_ctx (may be NULL). */
+int sylva_snapshot_load(const uint8_t *data, size_t size, double (*clock)(void *),
+                        void *clock_ctx, sylva_world **out);
+
+#endif

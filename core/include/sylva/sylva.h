@@ -1,0 +1,9 @@
+/* sylva: the whole public API of libsylva-core. */
+#ifndef SYLVA_SYLVA_H
+#define SYLVA_SYLVA_H
+#include "equations.h"
+#include "params.h"
+#include "snapshot.h"
+#include "status.h"
+#include "world.h"
+#endif

@@ -1,0 +1,156 @@
+/* sylva: the world: a voxel light environment, obstacles and plants that grow.
+ *
+ *   sylva_world_def def = sylva_default_world_def();
+ *   ... set def.min, def.max, def.seed ...
+ *   sylva_world *w; sylva_world_create(&def, &w);
+ *   int sp = sylva_world_add_species(w, &species, "broadleaf");
+ *   sylva_world_add_plant(w, &plant, NULL);
+ *   const sylva_journal *j; while (!sylva_world_finished(w)) sylva_world_step(w, &j);
+ *   sylva_world_destroy(w);
+ *
+ * Plants, stems, species and obstacles are referred to by integer ids. Every
+ * function that can fail returns a negative sylva_status and changes nothing. */
+#ifndef SYLVA_WORLD_H
+#define SYLVA_WORLD_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "params.h"
+#include "status.h"
+
+/** Longest label (plant, species, obstacle id) including the terminating NUL. */
+#define SYLVA_LABEL_MAX 64
+/** Most stems a world may hold. */
+#define SYLVA_MAX_STEMS 1000000
+/** Most voxels a world's box may span (memory is only spent where something is). */
+#define SYLVA_MAX_VOXELS 68719476736.0 /* 2^36 */
+
+/** Phases of one iteration, for timing. */
+typedef enum sylva_phase {
+  SYLVA_PHASE_LIGHT, SYLVA_PHASE_ALLOCATION, SYLVA_PHASE_SHOOTS, SYLVA_PHASE_SHADE,
+  SYLVA_PHASE_RADII, SYLVA_PHASE_SHEDDING, SYLVA_PHASE_STATS, SYLVA_PHASE_COUNT
+} sylva_phase;
+
+/** How to build a world. */
+typedef struct sylva_world_def {
+  double min[3], max[3]; /**< the box, metres; z is up, the ground is z = min[2] */
+  double voxel;          /**< voxel edge, metres (> 0) */
+  uint64_t seed;         /**< drives every random choice */
+  /** Optional clock (seconds) used only to time phases; never affects results. */
+  double (*clock)(void *ctx);
+  void *clock_ctx;
+} sylva_world_def;
+
+/** A plant: one root is a tree, several roots make a shrub (one stem per root). */
+typedef struct sylva_plant_def {
+  int species;              /**< id from sylva_world_add_species */
+  const char *label;        /**< the plant's id in scenario and exports */
+  const double (*roots)[3]; /**< root positions, metres */
+  int root_count;
+} sylva_plant_def;
+
+/** A solid box that shades everything below it. */
+typedef struct sylva_obstacle_def {
+  const char *label;
+  double min[3], max[3];
+} sylva_obstacle_def;
+
+/** A node as the outside sees it. Ids are unique in a world and never reused. */
+typedef struct sylva_node_info {
+  int32_t id, parent;  /**< parent -1 for a root */
+  int32_t plant, stem; /**< plant id, stem index within the plant */
+  int32_t birth;       /**< birth iteration (0 for the initial trunk) */
+  float x, y, z, radius;
+} sylva_node_info;
+
+/** A radius that changed in an iteration. */
+typedef struct sylva_radius_change {
+  int32_t id;
+  float radius;
+} sylva_radius_change;
+
+/** Per-stem measures (MODEL.md "Measures"); NaN where the measure is null. */
+typedef struct sylva_stem_stats {
+  int32_t plant, stem;
+  double height, dbh, crown_width, crown_base, light;
+  int64_t nodes, shed;
+  int cap;
+  bool finished;
+} sylva_stem_stats;
+
+/** What one iteration changed; valid until the next step or destroy. */
+typedef struct sylva_journal {
+  int iteration;
+  const sylva_node_info *added; size_t added_count;
+  const sylva_radius_change *radii; size_t radii_count;
+  const int32_t *shed; size_t shed_count;        /**< roots of removed subtrees */
+  const sylva_stem_stats *stats; size_t stem_count;
+  const int32_t *order;                           /**< stem order of phase 4 (global stem indices) */
+  double phase_seconds[SYLVA_PHASE_COUNT];        /**< only with def.clock */
+} sylva_journal;
+
+/** Memory the world holds, bytes. */
+typedef struct sylva_memory {
+  size_t voxels, skeleton, other;
+} sylva_memory;
+
+typedef struct sylva_world sylva_world;
+
+/** Defaults: a 10 x 10 x 12 m box at 5 cm voxels, seed 1. */
+sylva_world_def sylva_default_world_def(void);
+/** Checks a world def; SYLVA_ETOOBIG when the box spans more than SYLVA_MAX_VOXELS. */
+int sylva_world_def_check(const sylva_world_def *def);
+int sylva_world_create(const sylva_world_def *def, sylva_world **out);
+void sylva_world_destroy(sylva_world *w);
+
+/** Adds a species; returns its id (>= 0) or a negative status. */
+int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const char *label);
+/** Adds a plant with its initial trunks; returns its id or a negative status.
+ *  On failure *bad_root (if given) is the index of the root at fault, or -1. */
+int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root);
+/** Adds an obstacle; returns its id or a negative status (SYLVA_EINVAL for a
+ *  duplicate label or an empty box). */
+int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def);
+/** Removes an obstacle by id. */
+int sylva_world_remove_obstacle(sylva_world *w, int obstacle);
+/** Id of the obstacle with this label, or SYLVA_ENOTFOUND. */
+int sylva_world_find_obstacle(const sylva_world *w, const char *label);
+
+/** Grows one iteration. SYLVA_EFINISHED when every stem has finished. */
+int sylva_world_step(sylva_world *w, const sylva_journal **journal);
+
+/* Queries. */
+const sylva_world_def *sylva_world_get_def(const sylva_world *w);
+int sylva_world_iteration(const sylva_world *w);
+bool sylva_world_finished(const sylva_world *w);
+int sylva_world_species_count(const sylva_world *w);
+const sylva_species_def *sylva_world_species(const sylva_world *w, int species);
+const char *sylva_world_species_label(const sylva_world *w, int species);
+int sylva_world_plant_count(const sylva_world *w);
+const char *sylva_world_plant_label(const sylva_world *w, int plant);
+int sylva_world_plant_species(const sylva_world *w, int plant);
+int sylva_world_plant_stem_count(const sylva_world *w, int plant);
+/** Global index of a plant's stem (stems are numbered in plant order). */
+int sylva_world_stem_index(const sylva_world *w, int plant, int stem);
+int sylva_world_stem_count(const sylva_world *w);
+/** Root position of a global stem. */
+void sylva_world_stem_root(const sylva_world *w, int stem, double root[3]);
+/** Current measures of a global stem (as after the last iteration). */
+void sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out);
+int sylva_world_obstacle_count(const sylva_world *w);
+/** The i-th live obstacle (0 <= i < count), in the order they were added. */
+void sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out);
+/** Live nodes, in id order (parents before children). */
+size_t sylva_world_node_count(const sylva_world *w);
+void sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out);
+/** Light (0..1) of the voxel holding point p; 0 outside the world. */
+double sylva_world_light_at(const sylva_world *w, const double p[3]);
+/** Voxel grid size. */
+void sylva_world_dims(const sylva_world *w, int dims[3]);
+void sylva_world_memory(const sylva_world *w, sylva_memory *out);
+/** A 64-bit hash of the whole state (skeleton, generator, iteration). */
+uint64_t sylva_world_hash(const sylva_world *w);
+
+#endif

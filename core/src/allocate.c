@@ -1,0 +1,158 @@
+#include "allocate.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "world_impl.h"
+
+double sylva__bh_share(double lm, double ll, double lambda) {
+  double den = lambda * lm + (1.0 - lambda) * ll;
+  if (!(den > 0.0)) return 0.0;
+  return (lm + ll) * (1.0 - lambda) * ll / den;
+}
+
+double sylva__priority_weight(int rank, int n, double k, double w1, double w2, double w3) {
+  double r = (double)rank / (double)n;
+  if (r < k || k >= 1.0) return w1;
+  return w2 + (w3 - w2) * (r - k) / (1.0 - k);
+}
+
+static int cmp_ranked(const void *a, const void *b) {
+  const sylva__ranked *x = a, *y = b;
+  if (x->rbh > y->rbh) return -1;
+  if (x->rbh < y->rbh) return 1;
+  return (x->pos > y->pos) - (x->pos < y->pos);
+}
+
+static int push_sprout(sylva_world *w, int32_t slot, int32_t stem, int32_t n, double r, bool apex) {
+  if (SYLVA__VEC_RESERVE(w->sprouts, w->sprouts.len + 1)) return SYLVA_ENOMEM;
+  w->sprouts.data[w->sprouts.len++] = (sylva__sprout){slot, stem, n, r, apex};
+  return SYLVA_OK;
+}
+
+/* Distributes r_b over the axis starting at slot first; laterals go on the stack. */
+static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b, bool trunk,
+                         int local, int cap) {
+  sylva__skeleton *s = &w->nodes;
+  const sylva_species_def *d = &w->species[w->stems[stem].species].def;
+  w->axis.len = 0;
+  for (int32_t n = first; n >= 0; n = s->axis_child[n]) {
+    if (SYLVA__VEC_RESERVE(w->axis, w->axis.len + 1)) return SYLVA_ENOMEM;
+    w->axis.data[w->axis.len++] = n;
+  }
+  int nb = (int)w->axis.len;
+  if (SYLVA__VEC_RESERVE(w->ranked, (size_t)nb)) return SYLVA_ENOMEM;
+  for (int i = 0; i < nb; i++) {
+    int32_t n = w->axis.data[i];
+    double lm = s->axis_child[n] >= 0 ? s->q[s->axis_child[n]] : 0.0;
+    double ll = s->lateral_child[n] >= 0 ? s->q[s->lateral_child[n]] : w->light[n];
+    /* a scar (shed branch) has no bud left to feed */
+    double rbh = (s->flags[n] & SYLVA__NODE_SCAR) ? 0.0 : sylva__bh_share(lm, ll, d->lambda);
+    w->ranked.data[i] = (sylva__ranked){rbh, i};
+  }
+  /* Apical control: the trunk's apex is ranked first while T <= tau. */
+  bool apical = trunk && local <= d->tau;
+  sylva__ranked *items = w->ranked.data;
+  int from = 0;
+  if (apical) {
+    sylva__ranked apex = items[nb - 1];
+    for (int i = nb - 1; i > 0; i--) items[i] = items[i - 1];
+    items[0] = apex;
+    from = 1;
+  }
+  qsort(items + from, (size_t)(nb - from), sizeof *items, cmp_ranked);
+  double sum = 0.0;
+  for (int rank = 0; rank < nb; rank++) {
+    double wr = sylva__priority_weight(rank, nb, d->k, d->w1, d->w2, d->w3);
+    items[rank].rbh *= wr; /* now RBH_i * w_i */
+    sum += items[rank].rbh;
+  }
+  for (int rank = 0; rank < nb; rank++) {
+    int32_t n = w->axis.data[items[rank].pos];
+    double r_i = sum > 0.0 ? r_b * items[rank].rbh / sum : 0.0;
+    bool apex = s->axis_child[n] < 0;
+    if (s->lateral_child[n] >= 0) {
+      if (SYLVA__VEC_RESERVE(w->work, w->work.len + 1) ||
+          SYLVA__VEC_RESERVE(w->work_r, w->work_r.len + 1))
+        return SYLVA_ENOMEM;
+      w->work.data[w->work.len++] = s->lateral_child[n];
+      w->work_r.data[w->work_r.len++] = r_i;
+    } else if (apex || !(s->flags[n] & SYLVA__NODE_SCAR)) {
+      double y = floor(r_i);
+      int32_t grow = y < (double)cap ? (int32_t)y : cap;
+      if (grow >= 1) {
+        int rc = push_sprout(w, n, stem, grow, r_i, apex);
+        if (rc) return rc;
+      }
+    }
+  }
+  return SYLVA_OK;
+}
+
+static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap) {
+  sylva__skeleton *s = &w->nodes;
+  int32_t root = w->stems[stem].root_slot;
+  w->work.len = w->work_r.len = 0;
+  int rc = allocate_axis(w, stem, s->axis_child[root], s->q[root], true, local, cap);
+  while (!rc && w->work.len) {
+    int32_t first = w->work.data[--w->work.len];
+    double r = w->work_r.data[--w->work_r.len];
+    rc = allocate_axis(w, stem, first, r, false, local, cap);
+  }
+  return rc;
+}
+
+static int cmp_sprout(const void *a, const void *b) {
+  const sylva__sprout *x = a, *y = b;
+  if (x->stem != y->stem) return (x->stem > y->stem) - (x->stem < y->stem);
+  if (x->r > y->r) return -1;
+  if (x->r < y->r) return 1;
+  return (x->slot > y->slot) - (x->slot < y->slot);
+}
+
+int sylva__allocate(sylva_world *w, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  w->sprouts.len = 0;
+  /* caps of the stems that grow this iteration (0: does not grow); the array is
+   * reused for the sprout ranges at the end */
+  if (SYLVA__VEC_RESERVE(w->stem_first, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
+  int32_t *caps = w->stem_first.data;
+  bool any_none = false;
+  for (int k = 0; k < w->stem_count; k++) {
+    const sylva__stem *st = &w->stems[k];
+    int local = sylva__stem_local(st, iteration);
+    caps[k] = st->finished ? 0 : sylva_equation_cap(&w->species[st->species].def.growth, local);
+    if (caps[k] > 0 && w->species[st->species].def.allocation == SYLVA_ALLOC_NONE) any_none = true;
+  }
+  for (int k = 0; k < w->stem_count; k++) {
+    const sylva__stem *st = &w->stems[k];
+    if (caps[k] <= 0 || w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM) continue;
+    int rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k]);
+    if (rc) return rc;
+  }
+  if (any_none) {
+    /* Simplified IGM: every apex, and every free bud with enough light, grows c(T). */
+    for (size_t i = 0; i < s->count; i++) {
+      if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->parent[i] < 0) continue;
+      int32_t k = s->stem[i];
+      const sylva_species_def *d = &w->species[w->stems[k].species].def;
+      if (caps[k] <= 0 || d->allocation != SYLVA_ALLOC_NONE) continue;
+      bool apex = s->axis_child[i] < 0;
+      if (!apex && (s->lateral_child[i] >= 0 || (s->flags[i] & SYLVA__NODE_SCAR))) continue;
+      int v[3];
+      sylva__node_voxel(w, (int32_t)i, v);
+      double l = sylva__grid_light(&w->grid, v);
+      if (!apex && l < d->sprout_light) continue;
+      int rc = push_sprout(w, (int32_t)i, k, caps[k], l, apex);
+      if (rc) return rc;
+    }
+  }
+  /* Shoots of a stem are appended in decreasing R_i (slot breaks ties). */
+  qsort(w->sprouts.data, w->sprouts.len, sizeof *w->sprouts.data, cmp_sprout);
+  size_t j = 0;
+  for (int k = 0; k <= w->stem_count; k++) {
+    while (j < w->sprouts.len && w->sprouts.data[j].stem < k) j++;
+    w->stem_first.data[k] = (int32_t)j;
+  }
+  return SYLVA_OK;
+}

@@ -1,0 +1,29 @@
+#include "light.h"
+
+#include <math.h>
+
+#include "world_impl.h"
+
+void sylva__light_collect(sylva_world *w, int iteration, double *light) {
+  sylva__skeleton *s = &w->nodes;
+  int32_t cur_stem = -1;
+  sylva__species *sp = NULL;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    if (s->stem[i] != cur_stem) {
+      cur_stem = s->stem[i];
+      sp = &w->species[w->stems[cur_stem].species];
+    }
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    double l = sylva__grid_light(&w->grid, v);
+    int age = iteration - s->birth[i];
+    double L = sylva__collected(sp->def.alpha, l, age > 0 ? sylva__species_age_pow(sp, age) : 0.0);
+    s->q[i] = L;
+    if (light) light[i] = L;
+  }
+  /* Children sit in higher slots than their parents: one reverse sweep adds each
+   * finished subtree total into its parent. */
+  for (size_t i = s->count; i-- > 0;)
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) s->q[s->parent[i]] += s->q[i];
+}

@@ -1,0 +1,41 @@
+/* Phase 6a: pipe-model radii, basipetal; radii never shrink. */
+#include <math.h>
+#include <string.h>
+
+#include "world_impl.h"
+
+int sylva__radii(sylva_world *w, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  double *acc = w->resource; /* sum of children's R^v, by slot */
+  memset(acc, 0, s->count * sizeof *acc);
+  int32_t cur_stem = -1;
+  double v = 2.5, inv_v = 0.4, r_tip = 0.0;
+  for (size_t i = s->count; i-- > 0;) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    if (s->stem[i] != cur_stem) {
+      cur_stem = s->stem[i];
+      const sylva_species_def *d = &w->species[w->stems[cur_stem].species].def;
+      v = d->pipe_exponent;
+      inv_v = 1.0 / v;
+      r_tip = d->r_tip;
+    }
+    bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
+    double r = terminal ? r_tip : pow(acc[i], inv_v);
+    if (r > (double)s->radius[i]) {
+      float old = s->radius[i];
+      s->radius[i] = (float)r;
+      if (s->radius[i] != old && s->birth[i] != iteration) {
+        if (SYLVA__VEC_RESERVE(w->radii, w->radii.len + 1)) return SYLVA_ENOMEM;
+        w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
+      }
+    }
+    if (s->parent[i] >= 0) acc[s->parent[i]] += pow((double)s->radius[i], v);
+  }
+  /* the list was built apex to root; report it in id order */
+  for (size_t a = 0, b = w->radii.len; a + 1 < b; a++, b--) {
+    sylva_radius_change t = w->radii.data[a];
+    w->radii.data[a] = w->radii.data[b - 1];
+    w->radii.data[b - 1] = t;
+  }
+  return SYLVA_OK;
+}

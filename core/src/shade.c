@@ -1,0 +1,11 @@
+/* Phase 5: the shade a node casts (pyramid and column), added or removed exactly. */
+#include "world_impl.h"
+
+int sylva__shade_node(sylva_world *w, int32_t slot, int sign) {
+  const sylva__stem *st = &w->stems[w->nodes.stem[slot]];
+  sylva__species *sp = &w->species[st->species];
+  const int64_t *weights = sylva__species_shade_weights(sp, w->nodes.birth[slot] - st->born);
+  int v[3];
+  sylva__node_voxel(w, slot, v);
+  return sylva__grid_stamp(&w->grid, v, sp->def.pyramid_depth, weights, sign);
+}

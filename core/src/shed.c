@@ -1,0 +1,52 @@
+/* Phase 6b: shedding of lateral branches whose mean relative light E = Q / (alpha N)
+ * is below r_s (after Takenaka 1994). */
+#include "world_impl.h"
+
+enum { SYLVA__NODE_DOOMED = 128 };
+
+int sylva__shed(sylva_world *w, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  /* E is judged on the light the nodes will collect next iteration (every node at
+   * least one iteration old): a newborn node's l^0 = 1 would otherwise count full
+   * light in any shade and hold up dark branches only while they still grow. */
+  sylva__light_collect(w, iteration + 1, NULL);
+  int32_t *n = w->count; /* subtree node counts */
+  for (size_t i = 0; i < s->count; i++) n[i] = 1;
+  for (size_t i = s->count; i-- > 0;)
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) n[s->parent[i]] += n[i];
+  size_t doomed = 0;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    int32_t p = s->parent[i];
+    if (p >= 0 && (s->flags[p] & SYLVA__NODE_DOOMED)) {
+      s->flags[i] |= SYLVA__NODE_DOOMED;
+      doomed++;
+    } else if (s->flags[i] & SYLVA__NODE_LATERAL) {
+      const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
+      double e = s->q[i] / (d->alpha * (double)n[i]);
+      if (e < d->r_s) {
+        s->flags[i] |= SYLVA__NODE_DOOMED;
+        doomed++;
+        if (SYLVA__VEC_RESERVE(w->shed, w->shed.len + 1)) return SYLVA_ENOMEM;
+        w->shed.data[w->shed.len++] = s->id[i];
+        s->lateral_child[p] = -1;
+        s->flags[p] |= SYLVA__NODE_SCAR;
+      }
+    }
+  }
+  if (!doomed) return SYLVA_OK;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+    int rc = sylva__shade_node(w, (int32_t)i, -1);
+    if (rc) return rc;
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    sylva__grid_vacate(&w->grid, v);
+    s->flags[i] = 0;
+    s->live--;
+    w->stems[s->stem[i]].stats.shed++;
+  }
+  /* the removed subtrees no longer send light to their parents */
+  sylva__light_collect(w, iteration + 1, NULL);
+  return SYLVA_OK;
+}

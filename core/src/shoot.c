@@ -1,0 +1,246 @@
+#include "shoot.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "world_impl.h"
+
+#define SYLVA__DEG (3.14159265358979323846 / 180.0)
+
+static double dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static void cross(const double a[3], const double b[3], double o[3]) {
+  o[0] = a[1] * b[2] - a[2] * b[1];
+  o[1] = a[2] * b[0] - a[0] * b[2];
+  o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static bool normalize(double v[3]) {
+  double n = sqrt(dot(v, v));
+  if (!(n > 1e-12)) return false;
+  v[0] /= n, v[1] /= n, v[2] /= n;
+  return true;
+}
+
+/* Two unit vectors completing d (unit) to an orthonormal basis. */
+static void basis(const double d[3], double e1[3], double e2[3]) {
+  double ref[3] = {1.0, 0.0, 0.0};
+  if (fabs(d[0]) > 0.9) ref[0] = 0.0, ref[1] = 1.0;
+  cross(d, ref, e1);
+  normalize(e1);
+  cross(d, e1, e2);
+}
+
+void sylva__lateral_direction(const double d[3], double theta, double phi, double out[3]) {
+  double e1[3], e2[3];
+  basis(d, e1, e2);
+  double cp = cos(phi * SYLVA__DEG), sp = sin(phi * SYLVA__DEG);
+  double a[3] = {e1[0] * cp + e2[0] * sp, e1[1] * cp + e2[1] * sp, e1[2] * cp + e2[2] * sp};
+  /* rotate d by theta around a (a is perpendicular to d): d cos + (a x d) sin */
+  double axd[3];
+  cross(a, d, axd);
+  double ct = cos(theta * SYLVA__DEG), st = sin(theta * SYLVA__DEG);
+  for (int i = 0; i < 3; i++) out[i] = d[i] * ct + axd[i] * st;
+  normalize(out);
+}
+
+static void internode_direction(const sylva__skeleton *s, int32_t n, double d[3]) {
+  int32_t p = s->parent[n];
+  if (p < 0) {
+    d[0] = 0.0, d[1] = 0.0, d[2] = 1.0;
+    return;
+  }
+  d[0] = (double)s->x[n] - s->x[p];
+  d[1] = (double)s->y[n] - s->y[p];
+  d[2] = (double)s->z[n] - s->z[p];
+  if (!normalize(d)) d[0] = 0.0, d[1] = 0.0, d[2] = 1.0;
+}
+
+/* ---- competition index: sprouting nodes hashed by cell ------------------------ */
+
+typedef struct index_ctx {
+  double inv_cell;
+  size_t mask;
+} index_ctx;
+
+static int64_t cell_key(double x, double y, double z, double inv_cell) {
+  const int64_t off = 1 << 20, m = (1 << 21) - 1;
+  int64_t cx = (int64_t)floor(x * inv_cell), cy = (int64_t)floor(y * inv_cell),
+          cz = (int64_t)floor(z * inv_cell);
+  return (((cx + off) & m) << 42) | (((cy + off) & m) << 21) | ((cz + off) & m);
+}
+
+static size_t hash_key(int64_t k) {
+  uint64_t x = (uint64_t)k * 0x9e3779b97f4a7c15ULL;
+  return (size_t)(x ^ (x >> 29));
+}
+
+static int cmp_keyed(const void *a, const void *b) {
+  const sylva__keyed *x = a, *y = b;
+  if (x->key != y->key) return (x->key > y->key) - (x->key < y->key);
+  return (x->item > y->item) - (x->item < y->item);
+}
+
+static int build_index(sylva_world *w, index_ctx *ix) {
+  size_t n = w->sprouts.len;
+  double cell = 0.0;
+  for (int k = 0; k < w->species_count; k++) {
+    double c = w->species[k].def.cone_radius * w->species[k].def.rho;
+    if (c > cell) cell = c;
+  }
+  ix->inv_cell = 1.0 / (cell > 0.0 ? cell : 1.0);
+  size_t tsize = 16;
+  while (tsize < 2 * n) tsize *= 2;
+  if (SYLVA__VEC_RESERVE(w->cells, n + 1) || SYLVA__VEC_RESERVE(w->table, tsize))
+    return SYLVA_ENOMEM;
+  const sylva__skeleton *s = &w->nodes;
+  sylva__keyed *cells = w->cells.data;
+  for (size_t i = 0; i < n; i++) {
+    int32_t slot = w->sprouts.data[i].slot;
+    cells[i].key = cell_key(s->x[slot], s->y[slot], s->z[slot], ix->inv_cell);
+    cells[i].item = (int32_t)i;
+  }
+  w->cells.len = n;
+  qsort(cells, n, sizeof *cells, cmp_keyed);
+  ix->mask = tsize - 1;
+  for (size_t i = 0; i < tsize; i++) w->table.data[i] = -1;
+  for (size_t i = 0; i < n; i++) {
+    if (i > 0 && cells[i].key == cells[i - 1].key) continue;
+    size_t h = hash_key(cells[i].key) & ix->mask;
+    while (w->table.data[h] >= 0) h = (h + 1) & ix->mask;
+    w->table.data[h] = (int64_t)i;
+  }
+  return SYLVA_OK;
+}
+
+/* True when a sprouting node other than self is closer to p than d2 (squared). */
+static bool contested(const sylva_world *w, const index_ctx *ix, const double p[3], double d2,
+                      int32_t self) {
+  const sylva__skeleton *s = &w->nodes;
+  double d = sqrt(d2);
+  int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    lo[a] = (int64_t)floor((p[a] - d) * ix->inv_cell);
+    hi[a] = (int64_t)floor((p[a] + d) * ix->inv_cell);
+  }
+  const sylva__keyed *cells = w->cells.data;
+  size_t n = w->cells.len;
+  double cell = 1.0 / ix->inv_cell;
+  for (int64_t cz = lo[2]; cz <= hi[2]; cz++)
+    for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
+      for (int64_t cx = lo[0]; cx <= hi[0]; cx++) {
+        /* the key of a cell, from a point inside it */
+        int64_t key = cell_key(((double)cx + 0.5) * cell, ((double)cy + 0.5) * cell,
+                               ((double)cz + 0.5) * cell, ix->inv_cell);
+        size_t h = hash_key(key) & ix->mask;
+        int64_t first = -1;
+        for (; w->table.data[h] >= 0; h = (h + 1) & ix->mask)
+          if (cells[w->table.data[h]].key == key) {
+            first = w->table.data[h];
+            break;
+          }
+        if (first < 0) continue;
+        for (size_t i = (size_t)first; i < n && cells[i].key == key; i++) {
+          if (cells[i].item == self) continue;
+          int32_t slot = w->sprouts.data[cells[i].item].slot;
+          double dx = s->x[slot] - p[0], dy = s->y[slot] - p[1], dz = s->z[slot] - p[2];
+          if (dx * dx + dy * dy + dz * dz < d2) return true;
+        }
+      }
+  return false;
+}
+
+/* ---- one shoot ----------------------------------------------------------------- */
+
+/* Optimal direction Vo: light-weighted mean of unit vectors to usable marker points
+ * drawn uniformly in the cone (spherical sector) around vd. */
+static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_species_def *d,
+                              int markers, const double tip[3], const double vd[3],
+                              int32_t self, double vo[3]) {
+  vo[0] = vo[1] = vo[2] = 0.0;
+  if (markers <= 0) return;
+  double e1[3], e2[3];
+  basis(vd, e1, e2);
+  double cos_a = cos(d->cone_angle * SYLVA__DEG);
+  double len = d->cone_radius * d->rho;
+  for (int m = 0; m < markers; m++) {
+    double u1 = sylva__rng_unit(&w->rng), u2 = sylva__rng_unit(&w->rng),
+           u3 = sylva__rng_unit(&w->rng);
+    double c = 1.0 - u1 * (1.0 - cos_a);
+    double sn = sqrt(fmax(0.0, 1.0 - c * c));
+    double psi = 2.0 * 3.14159265358979323846 * u2;
+    double r = len * cbrt(u3);
+    double dir[3];
+    for (int i = 0; i < 3; i++) dir[i] = c * vd[i] + sn * (cos(psi) * e1[i] + sin(psi) * e2[i]);
+    double p[3] = {tip[0] + r * dir[0], tip[1] + r * dir[1], tip[2] + r * dir[2]};
+    int v[3];
+    if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) continue;
+    if (sylva__grid_blocked(&w->grid, v) || sylva__grid_occupant(&w->grid, v) >= 0) continue;
+    if (contested(w, ix, p, r * r, self)) continue;
+    double l = sylva__grid_light(&w->grid, v);
+    for (int i = 0; i < 3; i++) vo[i] += l * dir[i];
+  }
+  for (int i = 0; i < 3; i++) vo[i] /= (double)markers;
+}
+
+static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int iteration) {
+  const sylva__sprout *sp = &w->sprouts.data[item];
+  sylva__skeleton *s = &w->nodes;
+  sylva__stem *st = &w->stems[sp->stem];
+  const sylva_species_def *d = &w->species[st->species].def;
+  int local = sylva__stem_local(st, iteration);
+  int markers = d->m0 - local;
+  if (markers < d->m_min) markers = d->m_min;
+  w->shoot.len = 0;
+  int32_t tip = sp->slot;
+  for (int32_t k = 0; k < sp->n; k++) {
+    double vd[3];
+    internode_direction(s, tip, vd);
+    bool lateral = k == 0 && !sp->apex;
+    if (lateral) {
+      double axis[3] = {vd[0], vd[1], vd[2]};
+      sylva__lateral_direction(axis, d->theta, (double)s->depth[tip] * d->divergence, vd);
+    }
+    double p0[3] = {s->x[tip], s->y[tip], s->z[tip]};
+    double vo[3];
+    optimal_direction(w, ix, d, markers, p0, vd, item, vo);
+    double vu[3];
+    for (int i = 0; i < 3; i++) vu[i] = vd[i] + d->mu * vo[i] + d->gamma * d->tropism[i];
+    if (!normalize(vu)) memcpy(vu, vd, sizeof vu);
+    double p[3] = {p0[0] + d->rho * vu[0], p0[1] + d->rho * vu[1], p0[2] + d->rho * vu[2]};
+    int32_t slot = sylva__add_node(w, tip, lateral, p, sp->stem, iteration);
+    if (slot == SYLVA_ENOMEM) return SYLVA_ENOMEM;
+    if (slot < 0) break; /* outside, obstacle or another stem's voxel: the shoot stops */
+    if (SYLVA__VEC_RESERVE(w->shoot, w->shoot.len + 1)) return SYLVA_ENOMEM;
+    w->shoot.data[w->shoot.len++] = slot;
+    tip = slot;
+  }
+  return SYLVA_OK;
+}
+
+int sylva__shoots(sylva_world *w, int iteration) {
+  index_ctx ix;
+  int rc = build_index(w, &ix);
+  if (rc) return rc;
+  if (SYLVA__VEC_RESERVE(w->order, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
+  sylva__rng_permutation(&w->rng, w->order.data, w->stem_count);
+  w->order.len = (size_t)w->stem_count;
+  double shade_time = 0.0;
+  for (size_t o = 0; o < w->order.len; o++) {
+    int32_t stem = w->order.data[o];
+    for (int32_t i = w->stem_first.data[stem]; i < w->stem_first.data[stem + 1]; i++) {
+      rc = grow_shoot(w, &ix, i, iteration);
+      if (rc) return rc;
+      /* the shoot's nodes shade the world before the next shoot grows */
+      double t0 = w->def.clock ? w->def.clock(w->def.clock_ctx) : 0.0;
+      for (size_t k = 0; k < w->shoot.len; k++) {
+        rc = sylva__shade_node(w, w->shoot.data[k], +1);
+        if (rc) return rc;
+      }
+      if (w->def.clock) shade_time += w->def.clock(w->def.clock_ctx) - t0;
+    }
+  }
+  w->journal.phase_seconds[SYLVA_PHASE_SHADE] = shade_time;
+  return SYLVA_OK;
+}

@@ -1,0 +1,445 @@
+/* Versioned binary image of a world. Layout: 32-byte header (magic "SYLVASNP",
+ * u32 version, u32 reserved = 0, u64 payload size, u64 FNV-1a 64 of the payload),
+ * then the payload, little-endian. The voxel grid is not stored: shade is an exact
+ * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sylva/snapshot.h"
+#include "world_impl.h"
+
+static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
+enum { HEADER = 32 };
+
+typedef struct writer {
+  uint8_t *buf;
+  size_t len, cap;
+  bool failed;
+} writer;
+
+static void put(writer *o, const void *p, size_t n) {
+  if (o->failed) return;
+  if (o->len + n > o->cap) {
+    size_t cap = o->cap ? o->cap : 4096;
+    while (cap < o->len + n) cap *= 2;
+    uint8_t *b = realloc(o->buf, cap);
+    if (!b) {
+      o->failed = true;
+      return;
+    }
+    o->buf = b;
+    o->cap = cap;
+  }
+  memcpy(o->buf + o->len, p, n);
+  o->len += n;
+}
+
+static void put_u64(writer *o, uint64_t v) {
+  uint8_t b[8];
+  for (int i = 0; i < 8; i++) b[i] = (uint8_t)(v >> (8 * i));
+  put(o, b, 8);
+}
+static void put_u32(writer *o, uint32_t v) {
+  uint8_t b[4];
+  for (int i = 0; i < 4; i++) b[i] = (uint8_t)(v >> (8 * i));
+  put(o, b, 4);
+}
+static void put_i32(writer *o, int32_t v) { put_u32(o, (uint32_t)v); }
+static void put_u8(writer *o, uint8_t v) { put(o, &v, 1); }
+static void put_f64(writer *o, double v) {
+  uint64_t u;
+  memcpy(&u, &v, 8);
+  put_u64(o, u);
+}
+static void put_f32(writer *o, float v) {
+  uint32_t u;
+  memcpy(&u, &v, 4);
+  put_u32(o, u);
+}
+static void put_str(writer *o, const char *s) {
+  size_t n = strlen(s);
+  put_u32(o, (uint32_t)n);
+  put(o, s, n);
+}
+
+static uint64_t fnv1a(const uint8_t *p, size_t n) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ULL;
+  return h;
+}
+
+/* Species fields in one fixed order, shared by writer and reader. */
+#define SYLVA__SPECIES_F64(X)                                                             \
+  X(rho) X(growth.p[0]) X(growth.p[1]) X(growth.p[2]) X(sprout_light) X(lambda) X(k) X(w1) \
+  X(w2) X(w3) X(alpha) X(sigma) X(mu) X(gamma) X(tropism[0]) X(tropism[1]) X(tropism[2])   \
+  X(theta) X(divergence) X(b_min) X(b_max) X(r_s) X(r_tip) X(pipe_exponent) X(cone_angle)  \
+  X(cone_radius)
+#define SYLVA__SPECIES_I32(X) X(tau) X(pyramid_depth) X(m0) X(m_min) X(initial_nodes)
+
+static void put_stats(writer *o, const sylva_stem_stats *s) {
+  put_f64(o, s->height);
+  put_f64(o, s->dbh);
+  put_f64(o, s->crown_width);
+  put_f64(o, s->crown_base);
+  put_f64(o, s->light);
+  put_u64(o, (uint64_t)s->nodes);
+  put_u64(o, (uint64_t)s->shed);
+  put_i32(o, s->cap);
+}
+
+int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
+  *data = NULL;
+  *size = 0;
+  if (w->status) return w->status;
+  writer o = {0};
+  uint8_t zero[HEADER] = {0};
+  put(&o, zero, HEADER);
+  for (int a = 0; a < 3; a++) put_f64(&o, w->def.min[a]);
+  for (int a = 0; a < 3; a++) put_f64(&o, w->def.max[a]);
+  put_f64(&o, w->def.voxel);
+  put_u64(&o, w->def.seed);
+  put_i32(&o, w->iteration);
+  for (int i = 0; i < 4; i++) put_u64(&o, w->rng.s[i]);
+  put_i32(&o, w->nodes.next_id);
+  put_u32(&o, (uint32_t)w->species_count);
+  for (int i = 0; i < w->species_count; i++) {
+    const sylva_species_def *d = &w->species[i].def;
+    put_str(&o, w->species[i].label);
+    put_u32(&o, (uint32_t)d->growth.kind);
+    put_u32(&o, (uint32_t)d->allocation);
+#define SYLVA__W64(f) put_f64(&o, d->f);
+#define SYLVA__W32(f) put_i32(&o, d->f);
+    SYLVA__SPECIES_F64(SYLVA__W64)
+    SYLVA__SPECIES_I32(SYLVA__W32)
+#undef SYLVA__W64
+#undef SYLVA__W32
+  }
+  put_i32(&o, w->grid.next_obstacle_id);
+  put_u32(&o, (uint32_t)w->grid.obstacle_count);
+  for (int i = 0; i < w->grid.obstacle_count; i++) {
+    const sylva__obstacle *ob = &w->grid.obstacles[i];
+    put_i32(&o, ob->id);
+    put_str(&o, ob->label);
+    for (int a = 0; a < 3; a++) put_f64(&o, ob->min[a]);
+    for (int a = 0; a < 3; a++) put_f64(&o, ob->max[a]);
+  }
+  put_u32(&o, (uint32_t)w->plant_count);
+  for (int i = 0; i < w->plant_count; i++) {
+    put_str(&o, w->plants[i].label);
+    put_i32(&o, w->plants[i].species);
+    put_i32(&o, w->plants[i].stem_count);
+  }
+  for (int i = 0; i < w->stem_count; i++) {
+    const sylva__stem *st = &w->stems[i];
+    put_i32(&o, st->born);
+    for (int a = 0; a < 3; a++) put_f64(&o, st->root[a]);
+    put_u8(&o, st->finished);
+    put_stats(&o, &st->stats);
+  }
+  /* live nodes, links as indices among live nodes */
+  const sylva__skeleton *s = &w->nodes;
+  int32_t *index = malloc((s->count + 1) * sizeof *index);
+  if (!index) {
+    free(o.buf);
+    return SYLVA_ENOMEM;
+  }
+  int32_t live = 0;
+  for (size_t i = 0; i < s->count; i++) index[i] = (s->flags[i] & SYLVA__NODE_ALIVE) ? live++ : -1;
+  put_u32(&o, (uint32_t)live);
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    put_i32(&o, s->id[i]);
+    put_i32(&o, s->parent[i] >= 0 ? index[s->parent[i]] : -1);
+    put_i32(&o, s->axis_child[i] >= 0 ? index[s->axis_child[i]] : -1);
+    put_i32(&o, s->lateral_child[i] >= 0 ? index[s->lateral_child[i]] : -1);
+    put_f32(&o, s->x[i]);
+    put_f32(&o, s->y[i]);
+    put_f32(&o, s->z[i]);
+    put_f32(&o, s->radius[i]);
+    put_i32(&o, s->birth[i]);
+    put_i32(&o, s->stem[i]);
+    put_i32(&o, s->depth[i]);
+    put_u8(&o, s->flags[i]);
+  }
+  free(index);
+  if (o.failed) {
+    free(o.buf);
+    return SYLVA_ENOMEM;
+  }
+  uint64_t payload = o.len - HEADER;
+  memcpy(o.buf, magic, 8);
+  uint8_t *h = o.buf + 8;
+  uint32_t version = SYLVA_SNAPSHOT_VERSION;
+  for (int i = 0; i < 4; i++) h[i] = (uint8_t)(version >> (8 * i));
+  for (int i = 0; i < 4; i++) h[4 + i] = 0;
+  for (int i = 0; i < 8; i++) h[8 + i] = (uint8_t)(payload >> (8 * i));
+  uint64_t sum = fnv1a(o.buf + HEADER, payload);
+  for (int i = 0; i < 8; i++) h[16 + i] = (uint8_t)(sum >> (8 * i));
+  *data = o.buf;
+  *size = o.len;
+  return SYLVA_OK;
+}
+
+/* ---- reading ----------------------------------------------------------------- */
+
+typedef struct reader {
+  const uint8_t *p;
+  size_t len, pos;
+  bool bad;
+} reader;
+
+static const uint8_t *take(reader *r, size_t n) {
+  if (r->bad || r->len - r->pos < n) {
+    r->bad = true;
+    return NULL;
+  }
+  const uint8_t *p = r->p + r->pos;
+  r->pos += n;
+  return p;
+}
+static uint64_t get_u64(reader *r) {
+  const uint8_t *b = take(r, 8);
+  uint64_t v = 0;
+  if (b)
+    for (int i = 0; i < 8; i++) v |= (uint64_t)b[i] << (8 * i);
+  return v;
+}
+static uint32_t get_u32(reader *r) {
+  const uint8_t *b = take(r, 4);
+  uint32_t v = 0;
+  if (b)
+    for (int i = 0; i < 4; i++) v |= (uint32_t)b[i] << (8 * i);
+  return v;
+}
+static int32_t get_i32(reader *r) { return (int32_t)get_u32(r); }
+static uint8_t get_u8(reader *r) {
+  const uint8_t *b = take(r, 1);
+  return b ? *b : 0;
+}
+static double get_f64(reader *r) {
+  uint64_t u = get_u64(r);
+  double v;
+  memcpy(&v, &u, 8);
+  return v;
+}
+static float get_f32(reader *r) {
+  uint32_t u = get_u32(r);
+  float v;
+  memcpy(&v, &u, 4);
+  return v;
+}
+/* A label: 1..SYLVA_LABEL_MAX-1 bytes without NUL. */
+static bool get_label(reader *r, char out[SYLVA_LABEL_MAX]) {
+  uint32_t n = get_u32(r);
+  if (r->bad || n == 0 || n >= SYLVA_LABEL_MAX) return r->bad = true, false;
+  const uint8_t *b = take(r, n);
+  if (!b || memchr(b, 0, n)) return r->bad = true, false;
+  memcpy(out, b, n);
+  out[n] = 0;
+  return true;
+}
+
+static void get_stats(reader *r, sylva_stem_stats *s) {
+  s->height = get_f64(r);
+  s->dbh = get_f64(r);
+  s->crown_width = get_f64(r);
+  s->crown_base = get_f64(r);
+  s->light = get_f64(r);
+  s->nodes = (int64_t)get_u64(r);
+  s->shed = (int64_t)get_u64(r);
+  s->cap = get_i32(r);
+}
+
+#define SYLVA__FAIL(code) \
+  do {                    \
+    rc = (code);          \
+    goto fail;            \
+  } while (0)
+
+static int read_world(reader *r, double (*clock)(void *), void *clock_ctx, sylva_world **out) {
+  int rc = SYLVA_OK;
+  sylva_world *w = NULL;
+  sylva_world_def def = sylva_default_world_def();
+  for (int a = 0; a < 3; a++) def.min[a] = get_f64(r);
+  for (int a = 0; a < 3; a++) def.max[a] = get_f64(r);
+  def.voxel = get_f64(r);
+  def.seed = get_u64(r);
+  def.clock = clock;
+  def.clock_ctx = clock_ctx;
+  if (r->bad) return SYLVA_ETRUNCATED;
+  if (sylva_world_create(&def, &w)) return SYLVA_EBADIMAGE;
+  int32_t iteration = get_i32(r);
+  for (int i = 0; i < 4; i++) w->rng.s[i] = get_u64(r);
+  int32_t next_id = get_i32(r);
+  if (iteration < 0 || next_id < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  w->iteration = iteration;
+  uint32_t nspecies = get_u32(r);
+  if (nspecies > 100000) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  for (uint32_t i = 0; i < nspecies && !r->bad; i++) {
+    char label[SYLVA_LABEL_MAX];
+    if (!get_label(r, label)) break;
+    sylva_species_def d = sylva_default_species_def();
+    d.growth.kind = (sylva_equation_kind)get_u32(r);
+    d.allocation = (sylva_allocation)get_u32(r);
+#define SYLVA__R64(f) d.f = get_f64(r);
+#define SYLVA__R32(f) d.f = get_i32(r);
+    SYLVA__SPECIES_F64(SYLVA__R64)
+    SYLVA__SPECIES_I32(SYLVA__R32)
+#undef SYLVA__R64
+#undef SYLVA__R32
+    if (r->bad) break;
+    if (sylva_world_add_species(w, &d, label) < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  }
+  int32_t next_obstacle = get_i32(r);
+  uint32_t nobst = get_u32(r);
+  if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+  if (nobst > 1000000 || next_obstacle < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  for (uint32_t i = 0; i < nobst && !r->bad; i++) {
+    int32_t id = get_i32(r);
+    char label[SYLVA_LABEL_MAX];
+    if (!get_label(r, label)) break;
+    double mn[3], mx[3];
+    for (int a = 0; a < 3; a++) mn[a] = get_f64(r);
+    for (int a = 0; a < 3; a++) mx[a] = get_f64(r);
+    if (r->bad) break;
+    if (id < 0 || id >= next_obstacle || (i > 0 && id <= w->grid.obstacles[i - 1].id))
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
+    if (sylva__grid_add_obstacle(&w->grid, label, mn, mx) < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    w->grid.obstacles[i].id = id;
+  }
+  w->grid.next_obstacle_id = next_obstacle;
+  uint32_t nplants = get_u32(r);
+  if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+  if (nplants > SYLVA_MAX_STEMS) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  w->plants = calloc(nplants + 1, sizeof *w->plants);
+  if (!w->plants) SYLVA__FAIL(SYLVA_ENOMEM);
+  w->plant_cap = (int)nplants + 1;
+  int64_t nstems = 0;
+  for (uint32_t i = 0; i < nplants && !r->bad; i++) {
+    sylva__plant *p = &w->plants[i];
+    if (!get_label(r, p->label)) break;
+    p->species = get_i32(r);
+    p->stem_count = get_i32(r);
+    p->first_stem = (int)nstems;
+    if (p->species < 0 || p->species >= w->species_count || p->stem_count < 1 ||
+        nstems + p->stem_count > SYLVA_MAX_STEMS)
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
+    for (uint32_t j = 0; j < i; j++)
+      if (strcmp(w->plants[j].label, p->label) == 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    nstems += p->stem_count;
+    w->plant_count++;
+  }
+  if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+  w->stems = calloc((size_t)nstems + 1, sizeof *w->stems);
+  if (!w->stems) SYLVA__FAIL(SYLVA_ENOMEM);
+  w->stem_cap = (int)nstems + 1;
+  for (int i = 0; i < w->plant_count; i++)
+    for (int k = 0; k < w->plants[i].stem_count; k++) {
+      sylva__stem *st = &w->stems[w->stem_count++];
+      st->plant = i;
+      st->index = k;
+      st->species = w->plants[i].species;
+      st->born = get_i32(r);
+      for (int a = 0; a < 3; a++) st->root[a] = get_f64(r);
+      uint8_t fin = get_u8(r);
+      st->finished = fin != 0;
+      get_stats(r, &st->stats);
+      st->stats.plant = i;
+      st->stats.stem = k;
+      st->stats.finished = st->finished;
+      st->root_slot = -1;
+      if (fin > 1 || st->born < 0 || st->born > iteration) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    }
+  uint32_t live = get_u32(r);
+  if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+  /* every node takes 45 bytes: refuse counts the image cannot hold */
+  if ((uint64_t)live * 45 > r->len - r->pos || live > (uint32_t)INT32_MAX)
+    SYLVA__FAIL(SYLVA_ETRUNCATED);
+  sylva__skeleton *s = &w->nodes;
+  if (sylva__skeleton_reserve(s, live)) SYLVA__FAIL(SYLVA_ENOMEM);
+  int32_t prev_id = -1;
+  for (uint32_t i = 0; i < live; i++) {
+    int32_t id = get_i32(r), parent = get_i32(r), axis = get_i32(r), lat = get_i32(r);
+    float x = get_f32(r), y = get_f32(r), z = get_f32(r), radius = get_f32(r);
+    int32_t birth = get_i32(r), stem = get_i32(r), depth = get_i32(r);
+    uint8_t flags = get_u8(r);
+    if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+    int v[3];
+    if (id <= prev_id || id >= next_id || parent >= (int32_t)i || parent < -1 ||
+        axis < -1 || axis >= (int32_t)live || (axis >= 0 && axis <= (int32_t)i) ||
+        lat < -1 || lat >= (int32_t)live || (lat >= 0 && lat <= (int32_t)i) || stem < 0 ||
+        stem >= w->stem_count || birth < w->stems[stem].born || birth > iteration ||
+        depth < 0 || !(flags & SYLVA__NODE_ALIVE) ||
+        (flags & ~(SYLVA__NODE_ALIVE | SYLVA__NODE_LATERAL | SYLVA__NODE_SCAR)) ||
+        !(radius > 0.0f) || !isfinite(radius) ||
+        !sylva__grid_voxel(&w->grid, x, y, z, v))
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
+    prev_id = id;
+    int32_t slot = sylva__skeleton_append(s, id, parent, x, y, z, radius, birth, stem, depth, flags);
+    s->axis_child[slot] = axis;
+    s->lateral_child[slot] = lat;
+    if (parent < 0) {
+      if (w->stems[stem].root_slot >= 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+      w->stems[stem].root_slot = slot;
+    } else {
+      /* a child must be named by its parent, with the matching kind of link */
+      bool lateral = (flags & SYLVA__NODE_LATERAL) != 0;
+      int32_t link = lateral ? s->lateral_child[parent] : s->axis_child[parent];
+      if (link != slot || s->stem[parent] != stem || depth != s->depth[parent] + 1)
+        SYLVA__FAIL(SYLVA_EBADIMAGE);
+    }
+  }
+  if (r->pos != r->len) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  s->next_id = next_id;
+  /* links that point forward must be answered by the child's parent */
+  for (size_t i = 0; i < s->count; i++) {
+    if (s->axis_child[i] >= 0 && (s->parent[s->axis_child[i]] != (int32_t)i ||
+                                  (s->flags[s->axis_child[i]] & SYLVA__NODE_LATERAL)))
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
+    if (s->lateral_child[i] >= 0 && (s->parent[s->lateral_child[i]] != (int32_t)i ||
+                                     !(s->flags[s->lateral_child[i]] & SYLVA__NODE_LATERAL)))
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
+  }
+  for (int k = 0; k < w->stem_count; k++)
+    if (w->stems[k].root_slot < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  /* rebuild occupancy and shade from the live nodes */
+  for (size_t i = 0; i < s->count; i++) {
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    if (sylva__grid_blocked(&w->grid, v) && s->birth[i] == w->stems[s->stem[i]].born) {
+      /* an initial trunk can never be inside an obstacle */
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
+    }
+    int orc = sylva__grid_occupy(&w->grid, v, s->stem[i]);
+    if (orc == SYLVA_ENOMEM) SYLVA__FAIL(SYLVA_ENOMEM);
+    if (orc) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    orc = sylva__shade_node(w, (int32_t)i, +1);
+    if (orc) SYLVA__FAIL(orc);
+  }
+  sylva__light_collect(w, w->iteration + 1, NULL);
+  *out = w;
+  return SYLVA_OK;
+fail:
+  sylva_world_destroy(w);
+  return rc;
+}
+
+int sylva_snapshot_load(const uint8_t *data, size_t size, double (*clock)(void *),
+                        void *clock_ctx, sylva_world **out) {
+  *out = NULL;
+  if (!data || size < HEADER) return SYLVA_ETRUNCATED;
+  if (memcmp(data, magic, 8) != 0) return SYLVA_EBADIMAGE;
+  uint32_t version = 0, reserved = 0;
+  uint64_t payload = 0, sum = 0;
+  for (int i = 0; i < 4; i++) version |= (uint32_t)data[8 + i] << (8 * i);
+  for (int i = 0; i < 4; i++) reserved |= (uint32_t)data[12 + i] << (8 * i);
+  for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
+  for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
+  if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
+  if (reserved != 0) return SYLVA_EBADIMAGE;
+  if (payload != size - HEADER) return SYLVA_ETRUNCATED;
+  if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
+  reader r = {data + HEADER, payload, 0, false};
+  return read_world(&r, clock, clock_ctx, out);
+}

@@ -1,0 +1,143 @@
+/* The world's private layout, shared by the phase modules. */
+#ifndef SYLVA_WORLD_IMPL_H
+#define SYLVA_WORLD_IMPL_H
+
+#include "grid.h"
+#include "rng.h"
+#include "skeleton.h"
+#include "sylva/world.h"
+
+typedef struct sylva__species {
+  sylva_species_def def;
+  char label[SYLVA_LABEL_MAX];
+  int t95;             /* first local iteration with X(T) >= 0.95 limit */
+  double *age_pow;     /* age^sigma by age, grown on demand */
+  int age_pow_n;
+  int shade_cache_t;   /* local iteration whose pyramid weights are cached, -1 none */
+  int64_t shade_w[64]; /* fixed-point b^-q, q = 1..pyramid_depth */
+} sylva__species;
+
+typedef struct sylva__plant {
+  char label[SYLVA_LABEL_MAX];
+  int species;
+  int first_stem, stem_count;
+} sylva__plant;
+
+typedef struct sylva__stem {
+  int plant, index, species;
+  int born;           /* world iteration at which the stem was planted */
+  double root[3];
+  int32_t root_slot;
+  bool finished;
+  sylva_stem_stats stats;
+  double ext[5]; /* scratch of the stats pass: min x, max x, min y, max y, max z */
+} sylva__stem;
+
+/** A node that sprouts this iteration. */
+typedef struct sylva__sprout {
+  int32_t slot, stem;
+  int32_t n;   /* new nodes wanted after the cap */
+  double r;    /* resource R_i, orders the shoots of a stem */
+  bool apex;
+} sylva__sprout;
+
+/** One node of an axis being ranked by its BH share. */
+typedef struct sylva__ranked {
+  double rbh;
+  int32_t pos; /* position along the axis, base = 0 */
+} sylva__ranked;
+
+/** A sprout filed under its cell of the competition index. */
+typedef struct sylva__keyed {
+  int64_t key;
+  int32_t item;
+} sylva__keyed;
+
+/** Growable scratch array of one element type. */
+#define SYLVA__VEC(T)   \
+  struct {              \
+    T *data;            \
+    size_t len, cap;    \
+  }
+
+struct sylva_world {
+  sylva_world_def def;
+  sylva__grid grid;
+  sylva__skeleton nodes;
+  sylva__rng rng;
+  int iteration;
+  int status; /* sticky failure of a step (out of memory), 0 when healthy */
+
+  sylva__species *species;
+  int species_count, species_cap;
+  sylva__plant *plants;
+  int plant_count, plant_cap;
+  sylva__stem *stems;
+  int stem_count, stem_cap;
+
+  /* Per-step scratch, reused across steps. */
+  double *light;         /* L_i by slot */
+  double *resource;      /* R_i by slot */
+  int32_t *count;        /* subtree node count / remap, by slot */
+  size_t scratch_cap;
+  SYLVA__VEC(sylva__sprout) sprouts;
+  SYLVA__VEC(int32_t) order;
+  SYLVA__VEC(int32_t) axis;      /* nodes of one axis */
+  SYLVA__VEC(sylva__ranked) ranked; /* ranking of one axis */
+  SYLVA__VEC(int32_t) stem_first; /* first sprout of each stem, stem_count + 1 entries */
+  SYLVA__VEC(int32_t) work;      /* pending (slot) stack for axes */
+  SYLVA__VEC(double) work_r;     /* resource for pending axes */
+  SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */
+  SYLVA__VEC(sylva_node_info) added;
+  SYLVA__VEC(sylva_radius_change) radii;
+  SYLVA__VEC(int32_t) shed;
+  SYLVA__VEC(sylva_stem_stats) stats;
+  SYLVA__VEC(sylva__keyed) cells; /* competition index: sprouts sorted by cell */
+  SYLVA__VEC(int64_t) table;       /* hash of cell key -> first position in cells */
+  sylva_journal journal;
+};
+
+/** Grows a scratch vector to hold n elements; 0 or SYLVA_ENOMEM. */
+int sylva__vec_reserve(void **data, size_t *cap, size_t n, size_t elem);
+#define SYLVA__VEC_RESERVE(v, n) \
+  sylva__vec_reserve((void **)&(v).data, &(v).cap, (n), sizeof *(v).data)
+
+/** Local iteration of a stem at world iteration T (1 for its first). */
+static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
+  return world_iteration - s->born;
+}
+
+/** Shade base b of a node born at a stem's local iteration t. */
+double sylva__species_b(const sylva__species *sp, int t);
+/** Fixed-point pyramid weights for nodes born at local iteration t. */
+const int64_t *sylva__species_shade_weights(sylva__species *sp, int t);
+/** age^sigma, cached. NaN on allocation failure is avoided by computing directly. */
+double sylva__species_age_pow(sylva__species *sp, int age);
+
+/** Rounds p to the stored float position f and finds its voxel; false if outside. */
+bool sylva__voxel_of(const sylva_world *w, const double p[3], float f[3], int v[3]);
+/** Voxel of a slot's node (always inside the grid). */
+void sylva__node_voxel(const sylva_world *w, int32_t slot, int v[3]);
+
+/** Sizes the per-slot scratch arrays to the skeleton's capacity. */
+int sylva__reserve_scratch(sylva_world *w);
+
+/* Phases (one module each). */
+/** Light pass: L by slot (if light != NULL) and Q of every node, at iteration T. */
+void sylva__light_collect(sylva_world *w, int iteration, double *light);
+/** Phases 2-3: fills w->sprouts for stems that grow at iteration T. */
+int sylva__allocate(sylva_world *w, int iteration);
+/** Phases 4-5: grows the sprouts stem by stem in w->order, shading after each shoot. */
+int sylva__shoots(sylva_world *w, int iteration);
+/** Adds (sign +1) or removes (-1) the shade of one node. */
+int sylva__shade_node(sylva_world *w, int32_t slot, int sign);
+/** Pipe-model radii; records changes of nodes born before T. */
+int sylva__radii(sylva_world *w, int iteration);
+/** Shedding of dark lateral branches (needs a fresh light pass in q). */
+int sylva__shed(sylva_world *w, int iteration);
+/** Per-stem measures into stems[].stats. */
+void sylva__stats(sylva_world *w, int iteration);
+/** Adds a node: occupancy and skeleton; returns slot or a negative status. */
+int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const double p[3],
+                        int32_t stem, int iteration);
+#endif
