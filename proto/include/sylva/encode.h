@@ -1,0 +1,40 @@
+/* sylva: deterministic JSON encoders (the same input gives the same bytes). */
+#ifndef SYLVA_ENCODE_H
+#define SYLVA_ENCODE_H
+
+#include <stddef.h>
+
+#include "sylva/world.h"
+
+/** A buffer this large holds any number sylva_fmt_* can write. */
+#define SYLVA_FMT_BUFSIZE 400
+
+/** Formats v with `decimals` (0..17) fixed decimals, then trims trailing zeros and a
+ *  trailing '.': 1.9000 -> "1.9", 2.0 -> "2". A result of "-0" prints "0"; NaN and
+ *  infinities print "null". Returns the length of the full text (like snprintf);
+ *  the text is truncated when it does not fit in n bytes. */
+int sylva_fmt_fixed(char *buf, size_t n, double v, int decimals);
+
+/** Formats v with the fewest significant digits (up to 17) that read back as the
+ *  same double ("0.1", "1e-07", "12"); -0 prints "0", non-finite values "null".
+ *  Returns the length like snprintf. */
+int sylva_fmt_shortest(char *buf, size_t n, double v);
+
+/** One line of `sylva run` (cli.md), without the newline:
+ *  {"iteration": 7, "elapsed_ms": 12.5, "stems": [{"plant": "t1", "stem": 0, ...}]}
+ *  Stems in global stem order (j->stats); NaN measures print null; lengths with 4
+ *  decimals, light with 3, elapsed_ms with 1, all trimmed. Returns a malloc'd
+ *  string, NULL when out of memory. */
+char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms);
+
+/** The last line of `sylva run`, without the newline:
+ *  {"done": true, "iterations": 24, "reason": "finished"}. malloc'd; NULL when out
+ *  of memory. */
+char *sylva_encode_done_line(int iterations, const char *reason);
+
+/** The whole skeleton of w in the `sylva.skeleton/1` format of cli.md, compact,
+ *  ending with a newline. Positions with 4 decimals, radii with 5. malloc'd; NULL
+ *  when out of memory. */
+char *sylva_encode_skeleton(const sylva_world *w);
+
+#endif

@@ -1,0 +1,106 @@
+/* sylva: scenario files (`sylva.scenario/1`, spec/scenario.md): parsing, strict
+ * validation and building a world.
+ *
+ *   sylva_scenario *s; char err[512];
+ *   if (sylva_scenario_parse(text, len, &s, err, sizeof err) < 0) ... err names the
+ *       JSON pointer of the bad value: "/species/oak/lambda: must be in (0, 1), got 1.5"
+ *   sylva_world *w;
+ *   if (sylva_scenario_build(s, &w, err, sizeof err) < 0) ...
+ *   sylva_scenario_free(s); */
+#ifndef SYLVA_SCENARIO_H
+#define SYLVA_SCENARIO_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sylva/params.h"
+#include "sylva/world.h"
+
+/** The format string a scenario must carry. */
+#define SYLVA_SCENARIO_FORMAT "sylva.scenario/1"
+/** Deepest JSON nesting a scenario may have. */
+#define SYLVA_SCENARIO_MAX_DEPTH 64
+/** Most roots of one plant. */
+#define SYLVA_SCENARIO_MAX_ROOTS 1000
+/** Most species of one scenario. */
+#define SYLVA_SCENARIO_MAX_SPECIES 1000
+/** Most obstacles of one scenario. */
+#define SYLVA_SCENARIO_MAX_OBSTACLES 100000
+/** Longest scenario name, bytes. */
+#define SYLVA_SCENARIO_NAME_MAX 255
+/** Largest seed (2^53: every integer up to it is exact in JSON). */
+#define SYLVA_SCENARIO_SEED_MAX 9007199254740992.0
+/** Most iterations of a run. */
+#define SYLVA_SCENARIO_MAX_ITERATIONS 100000
+
+/** A species of the scenario: its name (the key in "species") and parameters. */
+typedef struct sylva_scenario_species {
+  char name[SYLVA_LABEL_MAX];
+  sylva_species_def def; /**< presets, overrides and defaults resolved */
+} sylva_scenario_species;
+
+/** A plant: one root is a tree, several a shrub. */
+typedef struct sylva_scenario_plant {
+  char id[SYLVA_LABEL_MAX];
+  int species;        /**< index into sylva_scenario.species */
+  double (*roots)[3]; /**< root_count positions */
+  int root_count;
+} sylva_scenario_plant;
+
+/** An obstacle (kind "box"). */
+typedef struct sylva_scenario_obstacle {
+  char id[SYLVA_LABEL_MAX];
+  double min[3], max[3];
+} sylva_scenario_obstacle;
+
+/** A parsed and validated scenario; free it with sylva_scenario_free(). Treat it
+ *  as read-only, except that seed and iterations may be overridden (command-line
+ *  options) before sylva_scenario_build(). */
+typedef struct sylva_scenario {
+  char *name;     /**< "untitled" when absent */
+  uint64_t seed;  /**< default 1 */
+  int iterations; /**< the iteration limit; default 40 */
+  double world_min[3], world_max[3];
+  double voxel;   /**< given, or rho/2 of the smallest rho in use */
+  sylva_scenario_species *species;
+  int species_count;
+  sylva_scenario_plant *plants;
+  int plant_count;
+  int stem_count; /**< roots of all plants */
+  sylva_scenario_obstacle *obstacles;
+  int obstacle_count;
+} sylva_scenario;
+
+/** Parses and validates a scenario: the strict JSON check, then every rule of
+ *  scenario.md (known keys only, types, finite numbers, ranges, references, a
+ *  world that fits in memory). On success *out is the new scenario and 0 is
+ *  returned. On failure *out is NULL, the status is negative (SYLVA_EINVAL for
+ *  bad input, SYLVA_ETOOBIG for a world with too many voxels, SYLVA_ENOMEM) and
+ *  err holds a message that starts with the JSON pointer of the offending value
+ *  ("/plants/0/species: unknown species \"pine\"") or with "(syntax)" for a JSON
+ *  syntax error ("(syntax) line 3, column 14 (byte 52): leading zero in number"). */
+int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, char *err,
+                         size_t errlen);
+
+/** A canonical JSON form of s: every species fully resolved (no presets), the
+ *  voxel explicit, numbers that read back exactly; parsing it gives the same
+ *  scenario. malloc'd, ends with a newline; NULL when out of memory. */
+char *sylva_scenario_json(const sylva_scenario *s);
+
+/** Creates the world of s: species, obstacles, then plants (so that a root inside
+ *  an obstacle is found). On failure nothing is left behind, *out is NULL, and err
+ *  names the culprit ("/plants/1/roots/0: root inside an obstacle"). */
+int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, size_t errlen);
+
+/** Frees a scenario (NULL is fine). */
+void sylva_scenario_free(sylva_scenario *s);
+
+/** Number of species presets. */
+int sylva_preset_count(void);
+/** Name of preset i (0 <= i < count), or NULL. */
+const char *sylva_preset_name(int i);
+/** Looks a preset up by name; 0 and *out filled, or SYLVA_ENOTFOUND. */
+int sylva_preset_find(const char *name, sylva_species_def *out);
+
+#endif

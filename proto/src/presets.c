@@ -1,0 +1,59 @@
+/* Species presets: the rows of IGM Table 2 as listed in scenario.md. What the
+ * table leaves out takes the defaults of sylva_default_species_def(). */
+#include <string.h>
+
+#include "sylva/scenario.h"
+#include "sylva/status.h"
+
+typedef struct preset_row {
+  const char *name;
+  double lambda, k;
+  int tau;
+  double rho, x0, xm, r, alpha, sigma, mu, gamma, b_min, b_max, r_s;
+} preset_row;
+
+static const preset_row presets[] = {
+    {"igm-fig11", 0.52, 0.5, 6, 0.10, 2, 100, 0.34, 4, 0.5, 1.5, 0.5, 1.8, 2.2, 0.25},
+    {"igm-fig12", 0.54, 0.35, 6, 0.10, 2, 100, 0.34, 4, 0.5, 1.5, 0.5, 1.8, 2.2, 0.35},
+    {"igm-fig13", 0.52, 0.5, 5, 0.10, 2, 100, 0.34, 4, 0.5, 1.5, 0.5, 1.8, 2.3, 0.35},
+    {"igm-fig14-shrub", 0.46, 0.5, 0, 0.02, 2, 50, 0.34, 6, 1.0, 0.6, 1.0, 2.0, 2.5, 0.15},
+    {"igm-fig15-left", 0.48, 0.5, 4, 0.10, 2, 70, 0.34, 3, 0.5, 1.5, 0.5, 1.8, 2.5, 0.20},
+    {"igm-fig15-right", 0.52, 0.5, 4, 0.10, 2, 100, 0.34, 4, 0.5, 1.0, 0.2, 1.8, 2.2, 0.35},
+    {"igm-fig17b", 0.52, 0.5, 6, 0.10, 2, 100, 0.34, 4, 0.5, 1.0, 0.5, 1.8, 2.2, 0.35},
+    {"igm-fig18-broadleaf", 0.48, 0.5, 2, 0.10, 2, 100, 0.34, 6, 0.5, 1.0, 0.5, 1.8, 2.5, 0.25},
+    {"igm-fig18-shrub", 0.46, 0.5, 0, 0.01, 2, 50, 0.34, 6, 1.0, 1.0, 0.2, 2.0, 2.5, 0.05},
+    {"igm-fig18-cypress", 0.56, 0.5, 14, 0.20, 2, 100, 0.34, 3, 0.5, 0.5, 1.5, 1.8, 2.2, 0.45},
+};
+
+#define PRESET_COUNT ((int)(sizeof presets / sizeof presets[0]))
+
+int sylva_preset_count(void) { return PRESET_COUNT; }
+
+const char *sylva_preset_name(int i) { return i >= 0 && i < PRESET_COUNT ? presets[i].name : NULL; }
+
+int sylva_preset_find(const char *name, sylva_species_def *out) {
+  for (int i = 0; i < PRESET_COUNT; i++) {
+    const preset_row *p = &presets[i];
+    if (strcmp(p->name, name) != 0) continue;
+    sylva_species_def d = sylva_default_species_def();
+    d.lambda = p->lambda;
+    d.k = p->k;
+    d.tau = p->tau;
+    d.rho = p->rho;
+    d.growth.kind = SYLVA_EQ_LOGISTIC;
+    d.growth.p[0] = p->x0;
+    d.growth.p[1] = p->xm;
+    d.growth.p[2] = p->r;
+    d.alpha = p->alpha;
+    d.sigma = p->sigma;
+    d.mu = p->mu;
+    d.gamma = p->gamma;
+    d.b_min = p->b_min;
+    d.b_max = p->b_max;
+    d.r_s = p->r_s;
+    d.initial_nodes = 2; /* round(X0) */
+    if (out) *out = d;
+    return 0;
+  }
+  return SYLVA_ENOTFOUND;
+}

@@ -1,0 +1,1125 @@
+/* Scenario files: strict check, cJSON parse, validation of every rule of
+ * scenario.md with errors that name the JSON pointer of the offending value. */
+#include "sylva/scenario.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sylva/encode.h"
+#include "sylva/json_check.h"
+#include "sylva/status.h"
+#include "strbuf.h"
+
+/* ---- error reporting with a JSON pointer (RFC 6901) ---- */
+
+typedef struct parser {
+  char ptr[1024]; /* pointer of the value being checked; "" is the root */
+  size_t plen;
+  char *err;
+  size_t errlen;
+} parser;
+
+/* Appends one reference token; the pointer is truncated (never overflows) if a key
+ * is absurdly long. Control bytes show as '?' so that messages stay printable. */
+static size_t ptr_push(parser *p, const char *token) {
+  size_t old = p->plen;
+  char *out = p->ptr;
+  size_t n = p->plen, cap = sizeof p->ptr - 1;
+  if (n < cap) out[n++] = '/';
+  for (const unsigned char *s = (const unsigned char *)token; *s && n < cap; s++) {
+    if (*s == '~' || *s == '/') {
+      if (n + 2 > cap) break;
+      out[n++] = '~';
+      out[n++] = *s == '~' ? '0' : '1';
+    } else {
+      out[n++] = *s < 0x20 ? '?' : (char)*s;
+    }
+  }
+  out[n] = '\0';
+  p->plen = n;
+  return old;
+}
+
+static size_t ptr_push_index(parser *p, size_t i) {
+  char token[32];
+  snprintf(token, sizeof token, "%zu", i);
+  return ptr_push(p, token);
+}
+
+static void ptr_pop(parser *p, size_t old) {
+  p->plen = old;
+  p->ptr[old] = '\0';
+}
+
+/* Writes "<pointer>: <message>" and returns status. */
+static int vfail(parser *p, int status, const char *fmt, va_list ap) {
+  if (!p->err || p->errlen == 0) return status;
+  int n = snprintf(p->err, p->errlen, "%s: ", p->plen ? p->ptr : "(root)");
+  if (n >= 0 && (size_t)n < p->errlen) vsnprintf(p->err + n, p->errlen - (size_t)n, fmt, ap);
+  return status;
+}
+
+#if defined(__GNUC__)
+#define PRINTF_LIKE(f, a) __attribute__((format(printf, f, a)))
+#else
+#define PRINTF_LIKE(f, a)
+#endif
+
+static int fail(parser *p, const char *fmt, ...) PRINTF_LIKE(2, 3);
+static int fail(parser *p, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  int rc = vfail(p, SYLVA_EINVAL, fmt, ap);
+  va_end(ap);
+  return rc;
+}
+
+/* Fails at the member `key` of the current value (present or not). */
+static int fail_at_key(parser *p, const char *key, const char *fmt, ...) PRINTF_LIKE(3, 4);
+static int fail_at_key(parser *p, const char *key, const char *fmt, ...) {
+  size_t old = ptr_push(p, key);
+  va_list ap;
+  va_start(ap, fmt);
+  int rc = vfail(p, SYLVA_EINVAL, fmt, ap);
+  va_end(ap);
+  ptr_pop(p, old);
+  return rc;
+}
+
+static int fail_nomem(parser *p) {
+  if (p->err && p->errlen) snprintf(p->err, p->errlen, "out of memory");
+  return SYLVA_ENOMEM;
+}
+
+/* A user string for a message: quoted, at most about 60 bytes, control bytes as '?'. */
+static const char *quote(char buf[80], const char *s) {
+  size_t n = 0;
+  buf[n++] = '"';
+  for (const unsigned char *c = (const unsigned char *)s; *c; c++) {
+    if (n >= 64) {
+      /* Do not cut a UTF-8 sequence in half. */
+      while (n > 1 && ((unsigned char)buf[n - 1] & 0xC0) == 0x80) n--;
+      if (n > 1 && ((unsigned char)buf[n - 1] & 0xC0) == 0xC0) n--;
+      memcpy(buf + n, "...", 3);
+      n += 3;
+      break;
+    }
+    buf[n++] = *c < 0x20 ? '?' : (char)*c;
+  }
+  buf[n++] = '"';
+  buf[n] = '\0';
+  return buf;
+}
+
+static const char *type_name(const cJSON *item) {
+  if (cJSON_IsObject(item)) return "an object";
+  if (cJSON_IsArray(item)) return "an array";
+  if (cJSON_IsString(item)) return "a string";
+  if (cJSON_IsNumber(item)) return "a number";
+  if (cJSON_IsBool(item)) return "a boolean";
+  if (cJSON_IsNull(item)) return "null";
+  return "an invalid value";
+}
+
+/* Shortest exact text of a number, for messages. */
+static const char *num(char buf[SYLVA_FMT_BUFSIZE], double v) {
+  sylva_fmt_shortest(buf, SYLVA_FMT_BUFSIZE, v);
+  return buf;
+}
+
+/* ---- keys ---- */
+
+static size_t edit_distance(const char *a, const char *b) {
+  size_t la = strlen(a), lb = strlen(b);
+  if (la > 40 || lb > 40) return 99;
+  size_t row[41];
+  for (size_t j = 0; j <= lb; j++) row[j] = j;
+  for (size_t i = 1; i <= la; i++) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= lb; j++) {
+      size_t up = row[j];
+      size_t best = diag + (a[i - 1] != b[j - 1]);
+      if (up + 1 < best) best = up + 1;
+      if (row[j - 1] + 1 < best) best = row[j - 1] + 1;
+      row[j] = best;
+      diag = up;
+    }
+  }
+  return row[lb];
+}
+
+/* Every member of obj must be one of known[] and appear once. */
+static int check_keys(parser *p, const cJSON *obj, const char *const *known, size_t count) {
+  for (const cJSON *it = obj->child; it; it = it->next) {
+    size_t k = 0;
+    while (k < count && strcmp(it->string, known[k]) != 0) k++;
+    if (k == count) {
+      size_t best = 0, best_d = 99;
+      for (size_t i = 0; i < count; i++) {
+        size_t d = edit_distance(it->string, known[i]);
+        if (d < best_d) best_d = d, best = i;
+      }
+      if (best_d <= 2 && best_d < strlen(known[best]))
+        return fail_at_key(p, it->string, "unknown key (did you mean \"%s\"?)", known[best]);
+      return fail_at_key(p, it->string, "unknown key");
+    }
+    for (const cJSON *prev = obj->child; prev != it; prev = prev->next)
+      if (strcmp(prev->string, it->string) == 0)
+        return fail_at_key(p, it->string, "duplicate key");
+  }
+  return 0;
+}
+
+/* ---- typed values (the pointer names the value) ---- */
+
+static int want_object(parser *p, const cJSON *item) {
+  return cJSON_IsObject(item) ? 0 : fail(p, "expected an object, got %s", type_name(item));
+}
+
+static int want_number(parser *p, const cJSON *item, double *out) {
+  if (!cJSON_IsNumber(item)) return fail(p, "expected a number, got %s", type_name(item));
+  if (!isfinite(item->valuedouble)) return fail(p, "number out of range (not a finite double)");
+  *out = item->valuedouble;
+  return 0;
+}
+
+static int want_string(parser *p, const cJSON *item, const char **out) {
+  if (!cJSON_IsString(item)) return fail(p, "expected a string, got %s", type_name(item));
+  *out = item->valuestring;
+  return 0;
+}
+
+/* A label: 1 to SYLVA_LABEL_MAX - 1 bytes. */
+static int want_label(parser *p, const cJSON *item, char out[SYLVA_LABEL_MAX]) {
+  const char *s = "";
+  int rc = want_string(p, item, &s);
+  if (rc) return rc;
+  size_t n = strlen(s);
+  if (n == 0 || n >= SYLVA_LABEL_MAX)
+    return fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_LABEL_MAX - 1, n);
+  memcpy(out, s, n + 1);
+  return 0;
+}
+
+/* A range; an infinite bound means "unbounded on that side". */
+typedef struct range {
+  double lo, hi;
+  bool lo_open, hi_open;
+} range;
+
+static bool in_range(double v, range r) {
+  if (r.lo_open ? !(v > r.lo) : !(v >= r.lo)) return false;
+  if (r.hi_open ? !(v < r.hi) : !(v <= r.hi)) return false;
+  return true;
+}
+
+static int range_fail(parser *p, double v, range r) {
+  char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE], c[SYLVA_FMT_BUFSIZE];
+  if (isinf(r.hi))
+    return fail(p, "must be %s %s, got %s", r.lo_open ? ">" : ">=", num(a, r.lo), num(c, v));
+  if (isinf(r.lo))
+    return fail(p, "must be %s %s, got %s", r.hi_open ? "<" : "<=", num(b, r.hi), num(c, v));
+  return fail(p, "must be in %c%s, %s%c, got %s", r.lo_open ? '(' : '[', num(a, r.lo),
+              num(b, r.hi), r.hi_open ? ')' : ']', num(c, v));
+}
+
+static int want_real(parser *p, const cJSON *item, range r, double *out) {
+  double v = 0;
+  int rc = want_number(p, item, &v);
+  if (rc) return rc;
+  if (!in_range(v, r)) return range_fail(p, v, r);
+  *out = v;
+  return 0;
+}
+
+static int want_integer(parser *p, const cJSON *item, double lo, double hi, double *out) {
+  double v = 0;
+  char a[SYLVA_FMT_BUFSIZE];
+  int rc = want_number(p, item, &v);
+  if (rc) return rc;
+  if (v != floor(v)) return fail(p, "must be an integer, got %s", num(a, v));
+  range r = {lo, hi, false, false};
+  if (!in_range(v, r)) return range_fail(p, v, r);
+  *out = v;
+  return 0;
+}
+
+/* [x, y, z] of finite numbers. */
+static int want_vec3(parser *p, const cJSON *item, double out[3]) {
+  if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3) return fail(p, "expected [x, y, z]");
+  int i = 0;
+  for (const cJSON *e = item->child; e; e = e->next, i++) {
+    size_t old = ptr_push_index(p, (size_t)i);
+    int rc = want_number(p, e, &out[i]);
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  return 0;
+}
+
+static const cJSON *member(const cJSON *obj, const char *key) {
+  return cJSON_GetObjectItemCaseSensitive(obj, key);
+}
+
+/* ---- species ---- */
+
+#define UNBOUNDED HUGE_VAL
+static const range R_POSITIVE = {0, UNBOUNDED, true, false};
+
+typedef struct species_field {
+  const char *key;
+  size_t offset;
+  bool integer; /* an int field; else a double */
+  range r;
+} species_field;
+
+#define DBL(name, lo, hi, lo_open, hi_open)                                                     \
+  { #name, offsetof(sylva_species_def, name), false, {lo, hi, lo_open, hi_open} }
+#define INT(name, lo, hi) { #name, offsetof(sylva_species_def, name), true, {lo, hi, false, false} }
+
+/* Ranges as scenario.md and sylva_species_check() want them. */
+static const species_field species_fields[] = {
+    DBL(rho, 1e-4, 100, false, false),
+    DBL(sprout_light, 0, 1, false, false),
+    DBL(lambda, 0, 1, true, true),
+    DBL(k, 0, 1, false, false),
+    DBL(w1, 0, 1e6, false, false),
+    DBL(w2, 0, 1e6, false, false),
+    DBL(w3, 0, 1e6, false, false),
+    INT(tau, 0, 100000),
+    DBL(alpha, 0, 1e6, true, false),
+    DBL(sigma, 0, 1, true, false),
+    DBL(mu, 0, 1000, false, false),
+    DBL(gamma, 0, 1000, false, false),
+    DBL(theta, 0, 180, false, false),
+    DBL(divergence, -360, 360, false, false),
+    DBL(b_min, 1, 1000, true, false),
+    DBL(b_max, 1, 1000, true, false),
+    INT(pyramid_depth, 1, 64),
+    DBL(r_s, 0, 1e6, false, false),
+    DBL(r_tip, 0, 10, true, false),
+    DBL(pipe_exponent, 2, 3.5, false, false),
+    INT(initial_nodes, 1, 1000),
+};
+
+static const species_field marker_fields[] = {
+    INT(m0, 0, 1000),
+    INT(m_min, 0, 1000),
+    DBL(cone_angle, 0, 180, true, false),
+    DBL(cone_radius, 0, 1000, true, false),
+};
+
+#undef DBL
+#undef INT
+
+static const char *const species_keys[] = {
+    "preset", "rho",   "growth", "allocation", "sprout_light", "lambda",        "k",
+    "w1",     "w2",    "w3",     "tau",        "alpha",        "sigma",         "mu",
+    "gamma",  "tropism", "theta", "divergence", "b_min",       "b_max",         "pyramid_depth",
+    "r_s",    "r_tip", "pipe_exponent", "markers", "initial_nodes",
+};
+
+static int set_fields(parser *p, const cJSON *obj, const species_field *fields, size_t count,
+                      sylva_species_def *def) {
+  for (size_t i = 0; i < count; i++) {
+    const cJSON *item = member(obj, fields[i].key);
+    if (!item) continue;
+    size_t old = ptr_push(p, fields[i].key);
+    double v = 0;
+    int rc = fields[i].integer ? want_integer(p, item, fields[i].r.lo, fields[i].r.hi, &v)
+                               : want_real(p, item, fields[i].r, &v);
+    ptr_pop(p, old);
+    if (rc) return rc;
+    char *at = (char *)def + fields[i].offset;
+    if (fields[i].integer) {
+      int iv = (int)v;
+      memcpy(at, &iv, sizeof iv);
+    } else {
+      memcpy(at, &v, sizeof v);
+    }
+  }
+  return 0;
+}
+
+static const char *const equation_params[SYLVA_EQ_COUNT][3] = {
+    [SYLVA_EQ_LOGISTIC] = {"X0", "Xm", "r"},
+    [SYLVA_EQ_BERTALANFFY] = {"beta1", "beta2", NULL},
+    [SYLVA_EQ_WEIBULL] = {"omega1", "omega2", "omega3"},
+    [SYLVA_EQ_GOMPERTZ] = {"A", "B", "C"},
+};
+
+static const char *equation_param_list(sylva_equation_kind kind) {
+  switch (kind) {
+  case SYLVA_EQ_LOGISTIC: return "X0, Xm, r";
+  case SYLVA_EQ_BERTALANFFY: return "beta1, beta2";
+  case SYLVA_EQ_WEIBULL: return "omega1, omega2, omega3";
+  default: return "A, B, C";
+  }
+}
+
+/* "growth": the equation may be left out to override parameters of the base
+ * (preset or default) equation; a different equation needs all its parameters. */
+static int parse_growth(parser *p, const cJSON *obj, sylva_equation *eq) {
+  int rc = want_object(p, obj);
+  if (rc) return rc;
+  sylva_equation_kind kind = eq->kind;
+  for (const cJSON *it = obj->child; it; it = it->next) {
+    for (const cJSON *prev = obj->child; prev != it; prev = prev->next)
+      if (strcmp(prev->string, it->string) == 0)
+        return fail_at_key(p, it->string, "duplicate key");
+  }
+  const cJSON *name = member(obj, "equation");
+  if (name) {
+    size_t old = ptr_push(p, "equation");
+    const char *s = "";
+    rc = want_string(p, name, &s);
+    int k = 0;
+    while (!rc && k < SYLVA_EQ_COUNT && strcmp(s, sylva_equation_name((sylva_equation_kind)k)) != 0)
+      k++;
+    if (!rc && k == SYLVA_EQ_COUNT) {
+      char q[80];
+      rc = fail(p, "unknown equation %s (known: logistic, bertalanffy, weibull, gompertz)",
+                quote(q, s));
+    }
+    ptr_pop(p, old);
+    if (rc) return rc;
+    kind = (sylva_equation_kind)k;
+  }
+  const char *const *names = equation_params[kind];
+  for (const cJSON *it = obj->child; it; it = it->next) {
+    if (strcmp(it->string, "equation") == 0) continue;
+    bool ours = false, known = false;
+    for (int k = 0; k < SYLVA_EQ_COUNT; k++)
+      for (int i = 0; i < 3; i++)
+        if (equation_params[k][i] && strcmp(equation_params[k][i], it->string) == 0) {
+          known = true;
+          ours = ours || k == (int)kind;
+        }
+    if (!known) return fail_at_key(p, it->string, "unknown key");
+    if (!ours)
+      return fail_at_key(p, it->string, "not a parameter of the %s equation (%s)",
+                         sylva_equation_name(kind), equation_param_list(kind));
+  }
+  sylva_equation out = {kind, {0, 0, 0}};
+  for (int i = 0; i < 3 && names[i]; i++) {
+    const cJSON *item = member(obj, names[i]);
+    if (!item) {
+      if (kind != eq->kind)
+        return fail_at_key(p, names[i], "required by the %s equation", sylva_equation_name(kind));
+      out.p[i] = eq->p[i];
+      continue;
+    }
+    size_t old = ptr_push(p, names[i]);
+    rc = want_real(p, item, R_POSITIVE, &out.p[i]);
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
+  if (kind == SYLVA_EQ_LOGISTIC && !(out.p[0] < out.p[1])) {
+    if (member(obj, "X0"))
+      return fail_at_key(p, "X0", "must be < Xm (%s), got %s", num(a, out.p[1]), num(b, out.p[0]));
+    return fail_at_key(p, "Xm", "must be > X0 (%s), got %s", num(a, out.p[0]), num(b, out.p[1]));
+  }
+  if (sylva_equation_limit(&out) > 1e6)
+    return fail(p, "the limit of the equation is %s internodes; at most 1e6 are allowed",
+                num(a, sylva_equation_limit(&out)));
+  *eq = out;
+  return 0;
+}
+
+static int parse_markers(parser *p, const cJSON *obj, sylva_species_def *def) {
+  static const char *const keys[] = {"m0", "m_min", "cone_angle", "cone_radius"};
+  int rc = want_object(p, obj);
+  if (!rc) rc = check_keys(p, obj, keys, 4);
+  if (!rc) rc = set_fields(p, obj, marker_fields, sizeof marker_fields / sizeof marker_fields[0], def);
+  if (rc) return rc;
+  if (def->m_min > def->m0) {
+    if (member(obj, "m_min"))
+      return fail_at_key(p, "m_min", "must be <= m0 (%d), got %d", def->m0, def->m_min);
+    return fail_at_key(p, "m0", "must be >= m_min (%d), got %d", def->m_min, def->m0);
+  }
+  return 0;
+}
+
+static int parse_species(parser *p, const cJSON *obj, sylva_species_def *out) {
+  int rc = want_object(p, obj);
+  if (!rc) rc = check_keys(p, obj, species_keys, sizeof species_keys / sizeof species_keys[0]);
+  if (rc) return rc;
+  sylva_species_def def = sylva_default_species_def();
+  const cJSON *item = member(obj, "preset");
+  if (item) {
+    size_t old = ptr_push(p, "preset");
+    const char *name = "";
+    rc = want_string(p, item, &name);
+    if (!rc && sylva_preset_find(name, &def) != 0) {
+      char list[1024] = "", q[80];
+      size_t n = 0;
+      for (int i = 0; i < sylva_preset_count() && n < sizeof list; i++)
+        n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", sylva_preset_name(i));
+      rc = fail(p, "unknown preset %s (known: %s)", quote(q, name), list);
+    }
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  rc = set_fields(p, obj, species_fields, sizeof species_fields / sizeof species_fields[0], &def);
+  if (rc) return rc;
+  if ((item = member(obj, "growth"))) {
+    size_t old = ptr_push(p, "growth");
+    rc = parse_growth(p, item, &def.growth);
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  if ((item = member(obj, "allocation"))) {
+    size_t old = ptr_push(p, "allocation");
+    const char *s = "";
+    rc = want_string(p, item, &s);
+    if (!rc) {
+      char q[80];
+      if (strcmp(s, "lgtm") == 0) def.allocation = SYLVA_ALLOC_LGTM;
+      else if (strcmp(s, "none") == 0) def.allocation = SYLVA_ALLOC_NONE;
+      else rc = fail(p, "must be \"lgtm\" or \"none\", got %s", quote(q, s));
+    }
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  if ((item = member(obj, "tropism"))) {
+    size_t old = ptr_push(p, "tropism");
+    double v[3] = {0, 0, 0};
+    rc = want_vec3(p, item, v);
+    for (int i = 0; !rc && i < 3; i++)
+      if (fabs(v[i]) > 1000) {
+        size_t o2 = ptr_push_index(p, (size_t)i);
+        rc = range_fail(p, v[i], (range){-1000, 1000, false, false});
+        ptr_pop(p, o2);
+      }
+    ptr_pop(p, old);
+    if (rc) return rc;
+    memcpy(def.tropism, v, sizeof v);
+  }
+  if ((item = member(obj, "markers"))) {
+    size_t old = ptr_push(p, "markers");
+    rc = parse_markers(p, item, &def);
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  if (!(def.b_max >= def.b_min)) {
+    char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
+    if (member(obj, "b_max"))
+      return fail_at_key(p, "b_max", "must be >= b_min (%s), got %s", num(a, def.b_min),
+                         num(b, def.b_max));
+    return fail_at_key(p, "b_min", "must be <= b_max (%s), got %s", num(a, def.b_max),
+                       num(b, def.b_min));
+  }
+  /* The initial trunk follows the final growth equation unless given. */
+  if (!member(obj, "initial_nodes")) {
+    if (def.growth.kind == SYLVA_EQ_LOGISTIC) {
+      double x0 = floor(def.growth.p[0] + 0.5);
+      def.initial_nodes = x0 < 1 ? 1 : x0 > 1000 ? 1000 : (int)x0;
+    } else {
+      def.initial_nodes = 2;
+    }
+  }
+  const char *field = NULL;
+  if (sylva_species_check(&def, &field) != 0)
+    return fail_at_key(p, field ? field : "?", "value out of range");
+  *out = def;
+  return 0;
+}
+
+/* ---- the scenario ---- */
+
+typedef struct id_ref {
+  const char *id;
+  int index;
+} id_ref;
+
+static int cmp_id_ref(const void *a, const void *b) {
+  const id_ref *x = a, *y = b;
+  int c = strcmp(x->id, y->id);
+  return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+/* Finds the first repeated id: *first and *second are the indices of its first
+ * occurrence and of the earliest repetition; false if every id is unique. */
+static bool find_duplicate(id_ref *refs, int count, int *first, int *second) {
+  qsort(refs, (size_t)count, sizeof *refs, cmp_id_ref);
+  bool found = false;
+  for (int i = 1; i < count; i++) {
+    if (strcmp(refs[i - 1].id, refs[i].id) != 0) continue;
+    int group = i - 1;
+    while (group > 0 && strcmp(refs[group - 1].id, refs[i].id) == 0) group--;
+    if (!found || refs[i].index < *second) {
+      *first = refs[group].index;
+      *second = refs[i].index;
+      found = true;
+    }
+  }
+  return found;
+}
+
+static int parse_plant(parser *p, const cJSON *obj, sylva_scenario *s, sylva_scenario_plant *pl) {
+  static const char *const keys[] = {"id", "species", "roots"};
+  int rc = want_object(p, obj);
+  if (!rc) rc = check_keys(p, obj, keys, 3);
+  if (rc) return rc;
+  for (int i = 0; i < 3; i++)
+    if (!member(obj, keys[i])) return fail_at_key(p, keys[i], "required");
+  size_t old = ptr_push(p, "id");
+  rc = want_label(p, member(obj, "id"), pl->id);
+  ptr_pop(p, old);
+  if (rc) return rc;
+
+  old = ptr_push(p, "species");
+  const char *name = "";
+  rc = want_string(p, member(obj, "species"), &name);
+  if (!rc) {
+    pl->species = -1;
+    for (int i = 0; i < s->species_count; i++)
+      if (strcmp(s->species[i].name, name) == 0) pl->species = i;
+    if (pl->species < 0) {
+      char q[80];
+      rc = fail(p, "unknown species %s (not a key of /species)", quote(q, name));
+    }
+  }
+  ptr_pop(p, old);
+  if (rc) return rc;
+
+  old = ptr_push(p, "roots");
+  const cJSON *roots = member(obj, "roots");
+  int count = cJSON_IsArray(roots) ? cJSON_GetArraySize(roots) : 0;
+  if (!cJSON_IsArray(roots)) rc = fail(p, "expected an array of [x, y, z], got %s", type_name(roots));
+  else if (count == 0) rc = fail(p, "must hold at least one root");
+  else if (count > SYLVA_SCENARIO_MAX_ROOTS)
+    rc = fail(p, "%d roots; a plant may have at most %d", count, SYLVA_SCENARIO_MAX_ROOTS);
+  else if (s->stem_count > SYLVA_MAX_STEMS - count)
+    rc = fail(p, "too many stems: a world holds at most %d", SYLVA_MAX_STEMS);
+  if (!rc && !(pl->roots = malloc((size_t)count * sizeof *pl->roots))) rc = fail_nomem(p);
+  int i = 0;
+  for (const cJSON *r = rc ? NULL : roots->child; r && !rc; r = r->next, i++) {
+    size_t o2 = ptr_push_index(p, (size_t)i);
+    rc = want_vec3(p, r, pl->roots[i]);
+    ptr_pop(p, o2);
+  }
+  ptr_pop(p, old);
+  if (rc) return rc;
+  pl->root_count = count;
+  s->stem_count += count;
+  return 0;
+}
+
+static int parse_obstacle(parser *p, const cJSON *obj, sylva_scenario_obstacle *o) {
+  static const char *const keys[] = {"id", "kind", "min", "max"};
+  int rc = want_object(p, obj);
+  if (!rc) rc = check_keys(p, obj, keys, 4);
+  if (rc) return rc;
+  for (int i = 0; i < 4; i++)
+    if (!member(obj, keys[i])) return fail_at_key(p, keys[i], "required");
+  size_t old = ptr_push(p, "id");
+  rc = want_label(p, member(obj, "id"), o->id);
+  ptr_pop(p, old);
+  if (rc) return rc;
+  old = ptr_push(p, "kind");
+  const char *kind = "";
+  rc = want_string(p, member(obj, "kind"), &kind);
+  if (!rc && strcmp(kind, "box") != 0) {
+    char q[80];
+    rc = fail(p, "unknown obstacle kind %s (known: box)", quote(q, kind));
+  }
+  ptr_pop(p, old);
+  if (rc) return rc;
+  old = ptr_push(p, "min");
+  rc = want_vec3(p, member(obj, "min"), o->min);
+  ptr_pop(p, old);
+  if (rc) return rc;
+  old = ptr_push(p, "max");
+  rc = want_vec3(p, member(obj, "max"), o->max);
+  for (int i = 0; !rc && i < 3; i++)
+    if (!(o->max[i] > o->min[i])) {
+      char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
+      rc = fail(p, "must be greater than min on every axis (%c: %s <= %s)", "xyz"[i],
+                num(a, o->max[i]), num(b, o->min[i]));
+    }
+  ptr_pop(p, old);
+  return rc;
+}
+
+/* "1.2e12": two significant digits, no '+' or leading zeros in the exponent. */
+static const char *sci(char buf[48], double v) {
+  char tmp[32];
+  snprintf(tmp, sizeof tmp, "%.1e", v);
+  char *e = strchr(tmp, 'e');
+  if (!e) {
+    snprintf(buf, 48, "%s", tmp);
+    return buf;
+  }
+  *e = '\0';
+  int exponent = atoi(e + 1);
+  size_t n = strlen(tmp);
+  if (n >= 2 && strcmp(tmp + n - 2, ".0") == 0) tmp[n - 2] = '\0';
+  snprintf(buf, 48, "%se%d", tmp, exponent);
+  return buf;
+}
+
+static int fail_status(parser *p, int status, const char *fmt, ...) PRINTF_LIKE(3, 4);
+static int fail_status(parser *p, int status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  int rc = vfail(p, status, fmt, ap);
+  va_end(ap);
+  return rc;
+}
+
+static sylva_world_def world_def_of(const sylva_scenario *s, double voxel) {
+  sylva_world_def def = sylva_default_world_def();
+  memcpy(def.min, s->world_min, sizeof def.min);
+  memcpy(def.max, s->world_max, sizeof def.max);
+  def.voxel = voxel;
+  def.seed = s->seed;
+  return def;
+}
+
+/* Refuses a world whose voxels would not fit and names a voxel edge that would. */
+static int check_world_size(parser *p, const sylva_scenario *s) {
+  sylva_world_def def = world_def_of(s, s->voxel);
+  int rc = sylva_world_def_check(&def);
+  if (rc == 0) return 0;
+  size_t old = ptr_push(p, "world");
+  if (rc != SYLVA_ETOOBIG) {
+    rc = fail_status(p, rc, "%s", sylva_strerror(rc));
+    ptr_pop(p, old);
+    return rc;
+  }
+  double count = 1, volume = 1;
+  for (int i = 0; i < 3; i++) {
+    double extent = s->world_max[i] - s->world_min[i];
+    count *= ceil(extent / s->voxel);
+    volume *= extent;
+  }
+  /* The smallest edge with two significant digits that the core accepts. */
+  double edge = cbrt(volume / SYLVA_MAX_VOXELS);
+  double unit = pow(10.0, floor(log10(edge)) - 1);
+  double steps = ceil(edge / unit - 1e-9);
+  for (int tries = 0; tries < 1000; tries++) {
+    char two[32];
+    snprintf(two, sizeof two, "%.1e", steps * unit);
+    def.voxel = strtod(two, NULL);
+    if (sylva_world_def_check(&def) != SYLVA_ETOOBIG) break;
+    steps += 1;
+  }
+  char a[48], b[48], v[SYLVA_FMT_BUFSIZE], e[SYLVA_FMT_BUFSIZE];
+  rc = fail_status(p, SYLVA_ETOOBIG, "%s voxels at voxel %s m exceed the limit of %s; use \"voxel\" >= %s",
+                   sci(a, count), num(v, s->voxel), sci(b, SYLVA_MAX_VOXELS), num(e, def.voxel));
+  ptr_pop(p, old);
+  return rc;
+}
+
+static void scenario_free_parts(sylva_scenario *s) {
+  if (!s) return;
+  free(s->name);
+  free(s->species);
+  for (int i = 0; s->plants && i < s->plant_count; i++) free(s->plants[i].roots);
+  free(s->plants);
+  free(s->obstacles);
+  free(s);
+}
+
+void sylva_scenario_free(sylva_scenario *s) { scenario_free_parts(s); }
+
+static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
+                                       "world",   "species", "plants",   "obstacles"};
+
+static int parse_top(parser *p, const cJSON *root, sylva_scenario *s) {
+  int rc = want_object(p, root);
+  if (rc) return rc;
+  const cJSON *item = member(root, "format");
+  char q[80];
+  if (!item) return fail_at_key(p, "format", "required: \"%s\" (is this a scenario file?)", SYLVA_SCENARIO_FORMAT);
+  if (!cJSON_IsString(item) || strcmp(item->valuestring, SYLVA_SCENARIO_FORMAT) != 0) {
+    if (cJSON_IsString(item))
+      return fail_at_key(p, "format", "expected \"%s\", got %s", SYLVA_SCENARIO_FORMAT,
+                         quote(q, item->valuestring));
+    return fail_at_key(p, "format", "expected \"%s\", got %s", SYLVA_SCENARIO_FORMAT, type_name(item));
+  }
+  if ((rc = check_keys(p, root, top_keys, sizeof top_keys / sizeof top_keys[0]))) return rc;
+
+  const char *name = "untitled";
+  size_t old;
+  if ((item = member(root, "name"))) {
+    old = ptr_push(p, "name");
+    rc = want_string(p, item, &name);
+    if (!rc && (name[0] == '\0' || strlen(name) > SYLVA_SCENARIO_NAME_MAX))
+      rc = fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_SCENARIO_NAME_MAX, strlen(name));
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+  if (!(s->name = strdup(name))) return fail_nomem(p);
+
+  double v = 0;
+  s->seed = 1;
+  if ((item = member(root, "seed"))) {
+    old = ptr_push(p, "seed");
+    rc = want_integer(p, item, 0, SYLVA_SCENARIO_SEED_MAX, &v);
+    ptr_pop(p, old);
+    if (rc) return rc;
+    s->seed = (uint64_t)v;
+  }
+  s->iterations = 40;
+  if ((item = member(root, "iterations"))) {
+    old = ptr_push(p, "iterations");
+    rc = want_integer(p, item, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &v);
+    ptr_pop(p, old);
+    if (rc) return rc;
+    s->iterations = (int)v;
+  }
+
+  /* species, before the plants that name them */
+  if ((item = member(root, "species"))) {
+    old = ptr_push(p, "species");
+    rc = want_object(p, item);
+    int count = rc ? 0 : cJSON_GetArraySize(item);
+    if (!rc && count > SYLVA_SCENARIO_MAX_SPECIES)
+      rc = fail(p, "%d species; at most %d are allowed", count, SYLVA_SCENARIO_MAX_SPECIES);
+    if (!rc && count && !(s->species = calloc((size_t)count, sizeof *s->species)))
+      rc = fail_nomem(p);
+    for (const cJSON *sp = rc ? NULL : item->child; sp && !rc; sp = sp->next) {
+      size_t o2 = ptr_push(p, sp->string);
+      size_t n = strlen(sp->string);
+      if (n == 0 || n >= SYLVA_LABEL_MAX)
+        rc = fail(p, "a species name must be 1 to %d bytes long, got %zu", SYLVA_LABEL_MAX - 1, n);
+      for (int i = 0; !rc && i < s->species_count; i++)
+        if (strcmp(s->species[i].name, sp->string) == 0) rc = fail(p, "duplicate key");
+      if (!rc) rc = parse_species(p, sp, &s->species[s->species_count].def);
+      if (!rc) memcpy(s->species[s->species_count++].name, sp->string, n + 1);
+      ptr_pop(p, o2);
+    }
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+
+  /* world: the box now, the voxel once the plants are known */
+  if (!(item = member(root, "world"))) return fail_at_key(p, "world", "required: {\"min\": [x, y, z], \"max\": [x, y, z]}");
+  old = ptr_push(p, "world");
+  static const char *const world_keys[] = {"min", "max", "voxel"};
+  rc = want_object(p, item);
+  if (!rc) rc = check_keys(p, item, world_keys, 3);
+  if (!rc && !member(item, "min")) rc = fail_at_key(p, "min", "required");
+  if (!rc && !member(item, "max")) rc = fail_at_key(p, "max", "required");
+  if (!rc) {
+    size_t o2 = ptr_push(p, "min");
+    rc = want_vec3(p, member(item, "min"), s->world_min);
+    ptr_pop(p, o2);
+  }
+  if (!rc) {
+    size_t o2 = ptr_push(p, "max");
+    rc = want_vec3(p, member(item, "max"), s->world_max);
+    for (int i = 0; !rc && i < 3; i++)
+      if (!(s->world_max[i] > s->world_min[i])) {
+        char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
+        rc = fail(p, "must be greater than /world/min on every axis (%c: %s <= %s)", "xyz"[i],
+                  num(a, s->world_max[i]), num(b, s->world_min[i]));
+      }
+    ptr_pop(p, o2);
+  }
+  const cJSON *voxel = rc ? NULL : member(item, "voxel");
+  if (voxel) {
+    size_t o2 = ptr_push(p, "voxel");
+    rc = want_real(p, voxel, R_POSITIVE, &s->voxel);
+    ptr_pop(p, o2);
+  }
+  ptr_pop(p, old);
+  if (rc) return rc;
+
+  if ((item = member(root, "plants"))) {
+    old = ptr_push(p, "plants");
+    int count = cJSON_IsArray(item) ? cJSON_GetArraySize(item) : 0;
+    if (!cJSON_IsArray(item)) rc = fail(p, "expected an array, got %s", type_name(item));
+    else if (count > SYLVA_MAX_STEMS)
+      rc = fail(p, "%d plants; a world holds at most %d stems", count, SYLVA_MAX_STEMS);
+    if (!rc && count && !(s->plants = calloc((size_t)count, sizeof *s->plants))) rc = fail_nomem(p);
+    int i = 0;
+    for (const cJSON *pl = rc ? NULL : item->child; pl && !rc; pl = pl->next, i++) {
+      size_t o2 = ptr_push_index(p, (size_t)i);
+      s->plant_count = i + 1; /* so that a partial plant is freed */
+      rc = parse_plant(p, pl, s, &s->plants[i]);
+      ptr_pop(p, o2);
+    }
+    if (!rc && count > 1) {
+      id_ref *refs = malloc((size_t)count * sizeof *refs);
+      if (!refs) {
+        rc = fail_nomem(p);
+      } else {
+        for (int k = 0; k < count; k++) refs[k] = (id_ref){s->plants[k].id, k};
+        int first, second;
+        if (find_duplicate(refs, count, &first, &second)) {
+          char q[80];
+          size_t o2 = ptr_push_index(p, (size_t)second);
+          rc = fail_at_key(p, "id", "duplicate plant id %s (also /plants/%d/id)",
+                           quote(q, s->plants[second].id), first);
+          ptr_pop(p, o2);
+        }
+        free(refs);
+      }
+    }
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+
+  if ((item = member(root, "obstacles"))) {
+    old = ptr_push(p, "obstacles");
+    int count = cJSON_IsArray(item) ? cJSON_GetArraySize(item) : 0;
+    if (!cJSON_IsArray(item)) rc = fail(p, "expected an array, got %s", type_name(item));
+    else if (count > SYLVA_SCENARIO_MAX_OBSTACLES)
+      rc = fail(p, "%d obstacles; at most %d are allowed", count, SYLVA_SCENARIO_MAX_OBSTACLES);
+    if (!rc && count && !(s->obstacles = calloc((size_t)count, sizeof *s->obstacles)))
+      rc = fail_nomem(p);
+    int i = 0;
+    for (const cJSON *o = rc ? NULL : item->child; o && !rc; o = o->next, i++) {
+      size_t o2 = ptr_push_index(p, (size_t)i);
+      rc = parse_obstacle(p, o, &s->obstacles[i]);
+      ptr_pop(p, o2);
+      s->obstacle_count = i + 1;
+    }
+    if (!rc && count > 1) {
+      id_ref *refs = malloc((size_t)count * sizeof *refs);
+      if (!refs) {
+        rc = fail_nomem(p);
+      } else {
+        for (int k = 0; k < count; k++) refs[k] = (id_ref){s->obstacles[k].id, k};
+        int first, second;
+        if (find_duplicate(refs, count, &first, &second)) {
+          char q[80];
+          size_t o2 = ptr_push_index(p, (size_t)second);
+          rc = fail_at_key(p, "id", "duplicate obstacle id %s (also /obstacles/%d/id)",
+                           quote(q, s->obstacles[second].id), first);
+          ptr_pop(p, o2);
+        }
+        free(refs);
+      }
+    }
+    ptr_pop(p, old);
+    if (rc) return rc;
+  }
+
+  if (!voxel) {
+    /* rho / 2 of the smallest rho in use: of the planted species, or of all
+     * species when nothing is planted. */
+    double rho = HUGE_VAL;
+    for (int i = 0; i < s->plant_count; i++)
+      rho = fmin(rho, s->species[s->plants[i].species].def.rho);
+    if (s->plant_count == 0)
+      for (int i = 0; i < s->species_count; i++) rho = fmin(rho, s->species[i].def.rho);
+    s->voxel = isinf(rho) ? sylva_default_world_def().voxel : rho / 2;
+  }
+  return check_world_size(p, s);
+}
+
+int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, char *err,
+                         size_t errlen) {
+  *out = NULL;
+  if (err && errlen) err[0] = '\0';
+  char syntax[400];
+  if (sylva_json_check_ex(text, len, SYLVA_SCENARIO_MAX_DEPTH, SYLVA_JSON_NO_NUL_ESCAPE, syntax,
+                          sizeof syntax) != 0) {
+    if (err && errlen) snprintf(err, errlen, "(syntax) %s", syntax);
+    return SYLVA_EINVAL;
+  }
+  parser p = {.ptr = "", .plen = 0, .err = err, .errlen = errlen};
+  cJSON *root = cJSON_ParseWithLength(text, len);
+  if (!root) return fail_nomem(&p); /* the text is valid JSON: only memory can fail */
+  sylva_scenario *s = calloc(1, sizeof *s);
+  int rc = s ? parse_top(&p, root, s) : fail_nomem(&p);
+  cJSON_Delete(root);
+  if (rc) {
+    scenario_free_parts(s);
+    return rc;
+  }
+  *out = s;
+  return 0;
+}
+
+/* ---- canonical JSON ---- */
+
+static void put_vec3(sylva__strbuf *b, const double v[3]) {
+  for (int i = 0; i < 3; i++) {
+    sylva__strbuf_puts(b, i ? ", " : "[");
+    sylva__strbuf_shortest(b, v[i]);
+  }
+  sylva__strbuf_putc(b, ']');
+}
+
+static void put_species(sylva__strbuf *b, const sylva_species_def *d) {
+  sylva__strbuf_puts(b, "{\"rho\": ");
+  sylva__strbuf_shortest(b, d->rho);
+  sylva__strbuf_printf(b, ", \"growth\": {\"equation\": \"%s\"", sylva_equation_name(d->growth.kind));
+  const char *const *names = equation_params[d->growth.kind];
+  for (int i = 0; i < 3 && names[i]; i++) {
+    sylva__strbuf_printf(b, ", \"%s\": ", names[i]);
+    sylva__strbuf_shortest(b, d->growth.p[i]);
+  }
+  sylva__strbuf_printf(b, "}, \"allocation\": \"%s\"",
+                       d->allocation == SYLVA_ALLOC_NONE ? "none" : "lgtm");
+  for (size_t i = 0; i < sizeof species_fields / sizeof species_fields[0]; i++) {
+    const species_field *f = &species_fields[i];
+    if (strcmp(f->key, "rho") == 0) continue;
+    sylva__strbuf_printf(b, ", \"%s\": ", f->key);
+    const char *at = (const char *)d + f->offset;
+    if (f->integer) {
+      int iv;
+      memcpy(&iv, at, sizeof iv);
+      sylva__strbuf_printf(b, "%d", iv);
+    } else {
+      double dv;
+      memcpy(&dv, at, sizeof dv);
+      sylva__strbuf_shortest(b, dv);
+    }
+  }
+  sylva__strbuf_puts(b, ", \"tropism\": ");
+  put_vec3(b, d->tropism);
+  sylva__strbuf_printf(b, ", \"markers\": {\"m0\": %d, \"m_min\": %d, \"cone_angle\": ", d->m0,
+                       d->m_min);
+  sylva__strbuf_shortest(b, d->cone_angle);
+  sylva__strbuf_puts(b, ", \"cone_radius\": ");
+  sylva__strbuf_shortest(b, d->cone_radius);
+  sylva__strbuf_puts(b, "}}");
+}
+
+char *sylva_scenario_json(const sylva_scenario *s) {
+  sylva__strbuf b = {0};
+  sylva__strbuf_puts(&b, "{\n  \"format\": \"" SYLVA_SCENARIO_FORMAT "\",\n  \"name\": ");
+  sylva__strbuf_json_string(&b, s->name);
+  sylva__strbuf_printf(&b, ",\n  \"seed\": %llu,\n  \"iterations\": %d,\n  \"world\": {\"min\": ",
+                       (unsigned long long)s->seed, s->iterations);
+  put_vec3(&b, s->world_min);
+  sylva__strbuf_puts(&b, ", \"max\": ");
+  put_vec3(&b, s->world_max);
+  sylva__strbuf_puts(&b, ", \"voxel\": ");
+  sylva__strbuf_shortest(&b, s->voxel);
+  sylva__strbuf_puts(&b, "},\n  \"species\": {");
+  for (int i = 0; i < s->species_count; i++) {
+    sylva__strbuf_puts(&b, i ? ",\n    " : "\n    ");
+    sylva__strbuf_json_string(&b, s->species[i].name);
+    sylva__strbuf_puts(&b, ": ");
+    put_species(&b, &s->species[i].def);
+  }
+  sylva__strbuf_puts(&b, s->species_count ? "\n  },\n  \"plants\": [" : "},\n  \"plants\": [");
+  for (int i = 0; i < s->plant_count; i++) {
+    const sylva_scenario_plant *pl = &s->plants[i];
+    sylva__strbuf_puts(&b, i ? ",\n    {\"id\": " : "\n    {\"id\": ");
+    sylva__strbuf_json_string(&b, pl->id);
+    sylva__strbuf_puts(&b, ", \"species\": ");
+    sylva__strbuf_json_string(&b, s->species[pl->species].name);
+    sylva__strbuf_puts(&b, ", \"roots\": [");
+    for (int r = 0; r < pl->root_count; r++) {
+      if (r) sylva__strbuf_puts(&b, ", ");
+      put_vec3(&b, pl->roots[r]);
+    }
+    sylva__strbuf_puts(&b, "]}");
+  }
+  sylva__strbuf_puts(&b, s->plant_count ? "\n  ],\n  \"obstacles\": [" : "],\n  \"obstacles\": [");
+  for (int i = 0; i < s->obstacle_count; i++) {
+    const sylva_scenario_obstacle *o = &s->obstacles[i];
+    sylva__strbuf_puts(&b, i ? ",\n    {\"id\": " : "\n    {\"id\": ");
+    sylva__strbuf_json_string(&b, o->id);
+    sylva__strbuf_puts(&b, ", \"kind\": \"box\", \"min\": ");
+    put_vec3(&b, o->min);
+    sylva__strbuf_puts(&b, ", \"max\": ");
+    put_vec3(&b, o->max);
+    sylva__strbuf_putc(&b, '}');
+  }
+  sylva__strbuf_puts(&b, s->obstacle_count ? "\n  ]\n}\n" : "]\n}\n");
+  return sylva__strbuf_finish(&b);
+}
+
+/* ---- building the world ---- */
+
+int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, size_t errlen) {
+  *out = NULL;
+  if (err && errlen) err[0] = '\0';
+  parser p = {.ptr = "", .plen = 0, .err = err, .errlen = errlen};
+  sylva_world_def def = world_def_of(s, s->voxel);
+  sylva_world *w = NULL;
+  int rc = sylva_world_create(&def, &w);
+  if (rc < 0) {
+    if (rc == SYLVA_ENOMEM) return fail_nomem(&p);
+    size_t old = ptr_push(&p, "world");
+    rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
+    ptr_pop(&p, old);
+    return rc;
+  }
+  int *species_ids = malloc(((size_t)s->species_count + 1) * sizeof *species_ids);
+  if (!species_ids) {
+    sylva_world_destroy(w);
+    return fail_nomem(&p);
+  }
+  for (int i = 0; i < s->species_count; i++) {
+    rc = sylva_world_add_species(w, &s->species[i].def, s->species[i].name);
+    if (rc < 0) {
+      size_t old = ptr_push(&p, "species");
+      ptr_push(&p, s->species[i].name);
+      rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
+      ptr_pop(&p, old);
+      goto fail;
+    }
+    species_ids[i] = rc;
+  }
+  /* Obstacles first, so that a root inside one is found when its plant is added. */
+  for (int i = 0; i < s->obstacle_count; i++) {
+    const sylva_scenario_obstacle *o = &s->obstacles[i];
+    sylva_obstacle_def od = {.label = o->id};
+    memcpy(od.min, o->min, sizeof od.min);
+    memcpy(od.max, o->max, sizeof od.max);
+    rc = sylva_world_add_obstacle(w, &od);
+    if (rc < 0) {
+      size_t old = ptr_push(&p, "obstacles");
+      ptr_push_index(&p, (size_t)i);
+      rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
+      ptr_pop(&p, old);
+      goto fail;
+    }
+  }
+  for (int i = 0; i < s->plant_count; i++) {
+    const sylva_scenario_plant *pl = &s->plants[i];
+    sylva_plant_def pd = {
+        .species = species_ids[pl->species],
+        .label = pl->id,
+        .roots = (const double(*)[3])pl->roots,
+        .root_count = pl->root_count,
+    };
+    int bad_root = -1;
+    rc = sylva_world_add_plant(w, &pd, &bad_root);
+    if (rc < 0) {
+      size_t old = ptr_push(&p, "plants");
+      ptr_push_index(&p, (size_t)i);
+      if (bad_root >= 0 && bad_root < pl->root_count) {
+        ptr_push(&p, "roots");
+        ptr_push_index(&p, (size_t)bad_root);
+      }
+      if (rc == SYLVA_EBLOCKED) {
+        rc = fail_status(&p, rc, "root inside an obstacle");
+      } else if (rc == SYLVA_EOUTSIDE) {
+        char a[SYLVA_FMT_BUFSIZE * 3], b[SYLVA_FMT_BUFSIZE * 3];
+        snprintf(a, sizeof a, "[%g, %g, %g]", s->world_min[0], s->world_min[1], s->world_min[2]);
+        snprintf(b, sizeof b, "[%g, %g, %g]", s->world_max[0], s->world_max[1], s->world_max[2]);
+        rc = fail_status(&p, rc, "%s (the world spans %s to %s)", sylva_strerror(rc), a, b);
+      } else {
+        rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
+      }
+      ptr_pop(&p, old);
+      goto fail;
+    }
+  }
+  free(species_ids);
+  *out = w;
+  return 0;
+
+fail:
+  free(species_ids);
+  sylva_world_destroy(w);
+  return rc;
+}

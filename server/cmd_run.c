@@ -1,0 +1,227 @@
+/* `sylva run`: grow a scenario headless, one JSON stats line per iteration. */
+#include <errno.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "input.h"
+#include "options.h"
+#include "sylva/encode.h"
+#include "sylva/status.h"
+
+enum { OPT_SEED, OPT_ITERATIONS, OPT_EXPORT, OPT_QUIET, OPT_HELP, OPT_COUNT };
+
+static const cli_option run_options[OPT_COUNT] = {
+    [OPT_SEED] = {"seed", 0, "N", "override the scenario's seed (0 to 2^53)"},
+    [OPT_ITERATIONS] = {"iterations", 0, "N", "override the iteration limit (1 to 100000)"},
+    [OPT_EXPORT] = {"export", 0, "FILE", "write the final skeleton (sylva.skeleton/1) to FILE"},
+    [OPT_QUIET] = {"quiet-progress", 0, NULL, "no progress bar on stderr"},
+    [OPT_HELP] = {"help", 'h', NULL, "show this help"},
+};
+
+static void run_usage(FILE *f) {
+  fputs("Usage: sylva run SCENARIO.json [OPTIONS]\n"
+        "\n"
+        "Grows the scenario until every stem has finished or the iteration limit is\n"
+        "reached. stdout gets one JSON object per iteration, describing every stem after\n"
+        "that iteration:\n"
+        "  {\"iteration\": 7, \"elapsed_ms\": 12.5, \"stems\": [{\"plant\": \"t1\", \"stem\": 0,\n"
+        "   \"height\": 1.9, \"dbh\": 0.031, \"crown_width\": 1.2, \"crown_base\": 0.4,\n"
+        "   \"nodes\": 183, \"shed\": 0, \"light\": 402.1, \"cap\": 5, \"finished\": false}]}\n"
+        "and a last line {\"done\": true, \"iterations\": N, \"reason\": \"finished\"|\"limit\"}.\n"
+        "When stderr is a terminal, a progress bar is shown there.\n"
+        "\n"
+        "Options:\n",
+        f);
+  cli_print_options(f, run_options, OPT_COUNT);
+}
+
+static double now_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+/* Progress on stderr when it is a terminal; `width` remembers what to clear. */
+typedef struct progress {
+  bool enabled;
+  int width;
+} progress;
+
+static void progress_show(progress *pr, int iteration, int limit, size_t nodes) {
+  if (!pr->enabled) return;
+  int n = fprintf(stderr, "\r iteration %d/%d  nodes %zu", iteration, limit, nodes);
+  if (n > 0 && n - 1 < pr->width) fprintf(stderr, "%*s", pr->width - (n - 1), "");
+  if (n > 0 && n - 1 > pr->width) pr->width = n - 1;
+  fflush(stderr);
+}
+
+static void progress_clear(progress *pr) {
+  if (!pr->enabled || pr->width == 0) return;
+  fprintf(stderr, "\r%*s\r", pr->width + 1, "");
+  fflush(stderr);
+  pr->width = 0;
+}
+
+static bool put_line(const char *line) {
+  if (fputs(line, stdout) == EOF || fputc('\n', stdout) == EOF) return false;
+  return fflush(stdout) == 0;
+}
+
+/* Writes data to the already opened tmp file, then renames it over path. */
+static int finish_export(FILE *f, const char *tmp, const char *path, const char *data) {
+  size_t len = strlen(data);
+  bool ok = fwrite(data, 1, len, f) == len;
+  ok = fflush(f) == 0 && ok;
+  int e = ok ? 0 : errno;
+  if (fclose(f) != 0 && ok) {
+    ok = false;
+    e = errno;
+  }
+  if (ok && rename(tmp, path) != 0) {
+    ok = false;
+    e = errno;
+  }
+  if (!ok) {
+    fprintf(stderr, "sylva: %s: %s\n", path, strerror(e ? e : EIO));
+    remove(tmp);
+    return CLI_EXIT_FAILURE;
+  }
+  return CLI_EXIT_OK;
+}
+
+int cmd_run(int argc, char **argv) {
+  cli_parser p;
+  cli_parser_init(&p, "run", run_options, OPT_COUNT, argc, argv);
+  const char *seed_text = NULL, *export_path = NULL, *arg;
+  uint64_t seed = 0, iterations = 0;
+  bool quiet = false;
+  int first = argc, opt;
+  while ((opt = cli_next(&p, &arg, &first)) >= 0) {
+    switch (opt) {
+    case OPT_SEED:
+      if (cli_parse_u64("run", "seed", arg, 0, (uint64_t)SYLVA_SCENARIO_SEED_MAX, &seed))
+        return CLI_EXIT_USAGE;
+      seed_text = arg;
+      break;
+    case OPT_ITERATIONS:
+      if (cli_parse_u64("run", "iterations", arg, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &iterations))
+        return CLI_EXIT_USAGE;
+      break;
+    case OPT_EXPORT:
+      if (arg[0] == '\0') return cli_usage_error("run", "--export: empty file name");
+      export_path = arg;
+      break;
+    case OPT_QUIET: quiet = true; break;
+    default:
+      run_usage(stdout);
+      return CLI_EXIT_OK;
+    }
+  }
+  if (opt == -2) return CLI_EXIT_USAGE;
+  if (argc - first != 1)
+    return cli_usage_error("run", argc - first == 0 ? "missing SCENARIO.json"
+                                                    : "expected one SCENARIO.json");
+  const char *path = argv[first];
+
+  sylva_scenario *s;
+  int rc = cli_load_scenario(path, &s);
+  if (rc) return rc;
+  if (seed_text) s->seed = seed;
+  int limit = iterations ? (int)iterations : s->iterations;
+
+  /* Open the export file now, so that a bad path fails before a long run. */
+  char *tmp = NULL;
+  FILE *export_file = NULL;
+  if (export_path) {
+    size_t n = strlen(export_path) + 5;
+    if (!(tmp = malloc(n))) {
+      fprintf(stderr, "sylva: out of memory\n");
+      sylva_scenario_free(s);
+      return CLI_EXIT_FAILURE;
+    }
+    snprintf(tmp, n, "%s.tmp", export_path);
+    if (!(export_file = fopen(tmp, "wb"))) {
+      fprintf(stderr, "sylva: --export %s: %s\n", tmp, strerror(errno));
+      free(tmp);
+      sylva_scenario_free(s);
+      return CLI_EXIT_USAGE;
+    }
+  }
+
+  sylva_world *w = NULL;
+  rc = cli_build_world(path, s, &w);
+  progress pr = {.enabled = !quiet && isatty(STDERR_FILENO), .width = 0};
+  const char *reason = NULL;
+  while (rc == CLI_EXIT_OK) {
+    if (sylva_world_finished(w)) {
+      reason = "finished";
+      break;
+    }
+    if (sylva_world_iteration(w) >= limit) {
+      reason = "limit";
+      break;
+    }
+    const sylva_journal *j;
+    double t0 = now_ms();
+    int status = sylva_world_step(w, &j);
+    double elapsed = now_ms() - t0;
+    if (status == SYLVA_EFINISHED) {
+      reason = "finished";
+      break;
+    }
+    if (status < 0) {
+      progress_clear(&pr);
+      fprintf(stderr, "sylva: %s: iteration %d: %s\n", path, sylva_world_iteration(w) + 1,
+              sylva_strerror(status));
+      rc = CLI_EXIT_FAILURE;
+      break;
+    }
+    char *line = sylva_encode_stats_line(w, j, elapsed);
+    bool nomem = !line, ok = line && put_line(line);
+    free(line);
+    if (!ok) {
+      progress_clear(&pr);
+      fprintf(stderr, "sylva: %s\n", nomem ? "out of memory" : "cannot write to stdout");
+      rc = CLI_EXIT_FAILURE;
+      break;
+    }
+    progress_show(&pr, sylva_world_iteration(w), limit, sylva_world_node_count(w));
+  }
+  progress_clear(&pr);
+
+  if (rc == CLI_EXIT_OK) {
+    char *done = sylva_encode_done_line(sylva_world_iteration(w), reason);
+    if (!done || !put_line(done)) {
+      fprintf(stderr, "sylva: %s\n", done ? "cannot write to stdout" : "out of memory");
+      rc = CLI_EXIT_FAILURE;
+    }
+    free(done);
+  }
+  if (export_file) {
+    if (rc == CLI_EXIT_OK) {
+      char *skeleton = sylva_encode_skeleton(w);
+      if (skeleton) {
+        rc = finish_export(export_file, tmp, export_path, skeleton);
+      } else {
+        fprintf(stderr, "sylva: --export: out of memory\n");
+        fclose(export_file);
+        remove(tmp);
+        rc = CLI_EXIT_FAILURE;
+      }
+      free(skeleton);
+    } else {
+      fclose(export_file);
+      remove(tmp);
+    }
+  }
+  free(tmp);
+  if (w) sylva_world_destroy(w);
+  sylva_scenario_free(s);
+  return rc;
+}

@@ -1,0 +1,12 @@
+/* sylva server: the subcommands. Each takes argv with argv[0] = its own name and
+ * returns the process exit status. */
+#ifndef SYLVA_SERVER_COMMANDS_H
+#define SYLVA_SERVER_COMMANDS_H
+
+/** `sylva run SCENARIO.json [options]`: grow a scenario headless. */
+int cmd_run(int argc, char **argv);
+
+/** `sylva validate SCENARIO.json`: check a scenario without running it. */
+int cmd_validate(int argc, char **argv);
+
+#endif

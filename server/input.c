@@ -1,0 +1,97 @@
+#include "input.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "options.h"
+#include "sylva/status.h"
+
+int cli_read_file(const char *path, size_t max, char **data, size_t *len) {
+  *data = NULL;
+  *len = 0;
+  FILE *f = fopen(path, "rb");
+  if (!f) return errno;
+  struct stat st;
+  if (fstat(fileno(f), &st) != 0) {
+    int e = errno;
+    fclose(f);
+    return e;
+  }
+  if (S_ISDIR(st.st_mode)) {
+    fclose(f);
+    return EISDIR;
+  }
+  /* The size from fstat is only a hint (pipes, growing files): read to the end. */
+  size_t cap = S_ISREG(st.st_mode) && (size_t)st.st_size < max ? (size_t)st.st_size + 1 : 65536;
+  size_t n = 0;
+  char *buf = malloc(cap + 1);
+  int rc = buf ? 0 : ENOMEM;
+  while (!rc) {
+    if (n == cap) {
+      if (cap > max) {
+        rc = EFBIG;
+        break;
+      }
+      size_t bigger = cap * 2 > max + 1 ? max + 1 : cap * 2;
+      char *grown = realloc(buf, bigger + 1);
+      if (!grown) {
+        rc = ENOMEM;
+        break;
+      }
+      buf = grown;
+      cap = bigger;
+    }
+    size_t got = fread(buf + n, 1, cap - n, f);
+    n += got;
+    if (got == 0) {
+      if (ferror(f)) rc = errno ? errno : EIO;
+      break;
+    }
+  }
+  fclose(f);
+  if (!rc && n > max) rc = EFBIG;
+  if (rc) {
+    free(buf);
+    return rc;
+  }
+  buf[n] = '\0';
+  *data = buf;
+  *len = n;
+  return 0;
+}
+
+int cli_load_scenario(const char *path, sylva_scenario **out) {
+  *out = NULL;
+  char *text;
+  size_t len;
+  int e = cli_read_file(path, CLI_MAX_INPUT, &text, &len);
+  if (e == EFBIG) {
+    fprintf(stderr, "sylva: %s: larger than %u MiB\n", path, CLI_MAX_INPUT >> 20);
+    return CLI_EXIT_USAGE;
+  }
+  if (e) {
+    fprintf(stderr, "sylva: %s: %s\n", path, strerror(e));
+    return e == ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+  }
+  char err[1024];
+  int rc = sylva_scenario_parse(text, len, out, err, sizeof err);
+  free(text);
+  if (rc < 0) {
+    fprintf(stderr, "sylva: %s: %s\n", path, err);
+    return rc == SYLVA_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+  }
+  return CLI_EXIT_OK;
+}
+
+int cli_build_world(const char *path, const sylva_scenario *s, sylva_world **out) {
+  char err[1024];
+  int rc = sylva_scenario_build(s, out, err, sizeof err);
+  if (rc < 0) {
+    fprintf(stderr, "sylva: %s: %s\n", path, err);
+    return rc == SYLVA_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+  }
+  return CLI_EXIT_OK;
+}

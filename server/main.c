@@ -1,0 +1,53 @@
+/* sylva: the command-line entry point; dispatches to the subcommands. */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "options.h"
+
+#ifndef SYLVA_VERSION
+#define SYLVA_VERSION "unknown"
+#endif
+
+static void usage(FILE *f) {
+  fputs("Usage: sylva COMMAND [OPTIONS]\n"
+        "\n"
+        "Grow trees, shrubs and stands that compete for light in a shared voxel world\n"
+        "(Integrated Growth Modeling on Light-Guided Tree Modeling).\n"
+        "\n"
+        "Commands:\n"
+        "  run SCENARIO.json       grow a scenario headless; one JSON line per iteration\n"
+        "  validate SCENARIO.json  check a scenario without running it\n"
+        "\n"
+        "Options:\n"
+        "  -h, --help              show this help\n"
+        "      --version           show the version\n"
+        "\n"
+        "'sylva COMMAND --help' describes the options of a command.\n"
+        "Exit status: 0 success, 1 runtime failure, 2 bad usage or bad input.\n",
+        f);
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    usage(stderr);
+    return CLI_EXIT_USAGE;
+  }
+  const char *cmd = argv[1];
+  if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0) {
+    usage(stdout);
+    return CLI_EXIT_OK;
+  }
+  if (strcmp(cmd, "--version") == 0) {
+    printf("sylva %s\n", SYLVA_VERSION);
+    return CLI_EXIT_OK;
+  }
+  if (strcmp(cmd, "run") == 0) return cmd_run(argc - 1, argv + 1);
+  if (strcmp(cmd, "validate") == 0) return cmd_validate(argc - 1, argv + 1);
+  if (cmd[0] == '-')
+    fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
+  else
+    fprintf(stderr, "sylva: unknown command '%s'\n", cmd);
+  fputs("Try 'sylva --help'.\n", stderr);
+  return CLI_EXIT_USAGE;
+}
