@@ -36,7 +36,10 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
 void sylva__grid_free(sylva__grid *g) {
   if (g->chunks) {
     size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
-    for (size_t i = 0; i < nchunks; i++) free(g->chunks[i]);
+    for (size_t i = 0; i < nchunks; i++) {
+      if (g->chunks[i]) free(g->chunks[i]->column);
+      free(g->chunks[i]);
+    }
   }
   if (g->colsum) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
@@ -52,6 +55,7 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
   return nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
+         g->column_count * SYLVA__CHUNK_VOXELS * sizeof(int64_t) +
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * sizeof(sylva__obstacle);
 }
@@ -122,7 +126,13 @@ bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]) {
 int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
   int64_t s = 0;
   const sylva__chunk *c = chunk_at(g, v);
-  if (c) s = c->shade[local_index(v[0], v[1], v[2])];
+  if (c) {
+    s = c->shade[local_index(v[0], v[1], v[2])];
+    if (c->column) {
+      const int64_t *col = c->column + (((v[0] & 15) | ((v[1] & 15) << 4)) << 4);
+      for (int z = v[2] & 15; z < SYLVA__CHUNK; z++) s += col[z];
+    }
+  }
   const int64_t *col = g->colsum[(size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4)];
   if (col) {
     int xy = (v[0] & 15) | ((v[1] & 15) << 4);
@@ -169,69 +179,74 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
     (*o)--;
 }
 
-/* Adds value to voxels [x0, x1] of row (y, z); the row may cross chunk borders. */
-static int add_row(sylva__grid *g, int x0, int x1, int y, int z, int64_t value) {
-  int cy = y >> 4, cz = z >> 4;
-  int base = ((y & 15) << 4) | ((z & 15) << 8);
-  for (int x = x0; x <= x1;) {
-    int cx = x >> 4;
-    int end = (cx << 4) + 15;
-    if (end > x1) end = x1;
-    sylva__chunk *c = chunk_get(g, cx, cy, cz);
-    if (!c) return SYLVA_ENOMEM;
-    int64_t *s = c->shade + base;
-    for (int xx = x; xx <= end; xx++) s[xx & 15] += value;
-    x = end + 1;
-  }
-  return SYLVA_OK;
-}
+static int clip_lo(int v, int lo) { return v > lo ? v : lo; }
+static int clip_hi(int v, int hi) { return v < hi ? v : hi; }
 
 int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *w, int sign) {
-  /* Pyramid: q = 1..depth voxels below, half-width floor(q / 2). */
-  for (int q = 1; q <= depth; q++) {
-    int z = v[2] - q;
-    if (z < 0) return SYLVA_OK;
-    int h = q / 2;
-    int x0 = v[0] - h, x1 = v[0] + h, y0 = v[1] - h, y1 = v[1] + h;
-    if (x0 < 0) x0 = 0;
-    if (y0 < 0) y0 = 0;
-    if (x1 >= g->n[0]) x1 = g->n[0] - 1;
-    if (y1 >= g->n[1]) y1 = g->n[1] - 1;
-    int64_t value = sign * w[q - 1];
-    for (int y = y0; y <= y1; y++) {
-      int rc = add_row(g, x0, x1, y, z, value);
-      if (rc) return rc;
-    }
-  }
+  /* Pyramid: q = 1..depth voxels below, half-width floor(q / 2); walked chunk by
+   * chunk so that each chunk is looked up once per stamp. */
+  int h = depth / 2;
+  int zlo = clip_lo(v[2] - depth, 0), zhi = v[2] - 1;
+  int xlo = clip_lo(v[0] - h, 0), xhi = clip_hi(v[0] + h, g->n[0] - 1);
+  int ylo = clip_lo(v[1] - h, 0), yhi = clip_hi(v[1] + h, g->n[1] - 1);
+  for (int cz = zlo >> 4; zhi >= 0 && cz <= zhi >> 4; cz++)
+    for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
+      for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {
+        int z0 = clip_lo(zlo, cz << 4), z1 = clip_hi(zhi, (cz << 4) + 15);
+        /* the widest layer of this chunk is its lowest: skip chunks it misses */
+        int hw = (v[2] - z0) / 2;
+        if (v[0] + hw < (cx << 4) || v[0] - hw > (cx << 4) + 15 || v[1] + hw < (cy << 4) ||
+            v[1] - hw > (cy << 4) + 15)
+          continue;
+        sylva__chunk *c = chunk_get(g, cx, cy, cz);
+        if (!c) return SYLVA_ENOMEM;
+        for (int z = z0; z <= z1; z++) {
+          int q = v[2] - z, hq = q / 2;
+          int x0 = clip_lo(clip_lo(v[0] - hq, cx << 4), 0);
+          int x1 = clip_hi(clip_hi(v[0] + hq, (cx << 4) + 15), g->n[0] - 1);
+          int y0 = clip_lo(clip_lo(v[1] - hq, cy << 4), 0);
+          int y1 = clip_hi(clip_hi(v[1] + hq, (cy << 4) + 15), g->n[1] - 1);
+          if (x0 > x1 || y0 > y1) continue; /* this layer misses the chunk */
+          int64_t value = sign * w[q - 1];
+          int64_t *layer = c->shade + ((z & 15) << 8);
+          for (int y = y0; y <= y1; y++) {
+            int64_t *row = layer + ((y & 15) << 4);
+            for (int x = x0 & 15; x <= (x1 & 15); x++) row[x] += value;
+          }
+        }
+      }
   /* Column: every voxel of the base footprint from depth + 1 below down to the
-   * ground gets w[depth - 1]. Stored as an in-block suffix (voxels of the top
-   * block at or below ztop) plus one block sum that every lower block reads, so
+   * ground gets w[depth - 1]. Stored as one entry at its top voxel (summed by the
+   * voxels of that chunk below it) plus one block sum read by every lower chunk, so
    * the cost does not depend on the height of the tree. */
   int ztop = v[2] - depth - 1;
   if (ztop < 0) return SYLVA_OK;
-  int h = depth / 2;
-  int x0 = v[0] - h, x1 = v[0] + h, y0 = v[1] - h, y1 = v[1] + h;
-  if (x0 < 0) x0 = 0;
-  if (y0 < 0) y0 = 0;
-  if (x1 >= g->n[0]) x1 = g->n[0] - 1;
-  if (y1 >= g->n[1]) y1 = g->n[1] - 1;
   int64_t value = sign * w[depth - 1];
-  int bz = ztop >> 4, zb = bz << 4;
-  for (int y = y0; y <= y1; y++) {
-    for (int x = x0; x <= x1;) {
-      int cx = x >> 4, end = (cx << 4) + 15;
-      if (end > x1) end = x1;
-      sylva__chunk *c = chunk_get(g, cx, y >> 4, bz);
-      int64_t *col = bz > 0 ? colsum_get(g, cx, y >> 4) : NULL;
-      if (!c || (bz > 0 && !col)) return SYLVA_ENOMEM;
-      for (int xx = x; xx <= end; xx++) {
-        int xy = (xx & 15) | ((y & 15) << 4);
-        for (int z = zb; z <= ztop; z++) c->shade[xy | ((z & 15) << 8)] += value;
-        if (col) col[(size_t)bz * 256 + (size_t)xy] += value;
+  int bz = ztop >> 4, zl = ztop & 15;
+  for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
+    for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {
+      sylva__chunk *c = chunk_get(g, cx, cy, bz);
+      if (!c) return SYLVA_ENOMEM;
+      if (!c->column) {
+        c->column = calloc(SYLVA__CHUNK_VOXELS, sizeof *c->column);
+        if (!c->column) return SYLVA_ENOMEM;
+        g->column_count++;
       }
-      x = end + 1;
+      int64_t *sum = NULL;
+      if (bz > 0) {
+        sum = colsum_get(g, cx, cy);
+        if (!sum) return SYLVA_ENOMEM;
+        sum += (size_t)bz * 256;
+      }
+      int y0 = clip_lo(ylo, cy << 4), y1 = clip_hi(yhi, (cy << 4) + 15);
+      int x0 = clip_lo(xlo, cx << 4), x1 = clip_hi(xhi, (cx << 4) + 15);
+      for (int y = y0; y <= y1; y++)
+        for (int x = x0; x <= x1; x++) {
+          int xy = (x & 15) | ((y & 15) << 4);
+          c->column[(xy << 4) | zl] += value;
+          if (sum) sum[xy] += value;
+        }
     }
-  }
   return SYLVA_OK;
 }
 

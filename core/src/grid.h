@@ -20,8 +20,12 @@
 #define SYLVA__OCC_COUNT_MAX 4095u
 
 typedef struct sylva__chunk {
-  int64_t shade[SYLVA__CHUNK_VOXELS]; /* index x + 16 y + 256 z */
+  int64_t shade[SYLVA__CHUNK_VOXELS]; /* pyramids; index x + 16 y + 256 z */
   uint32_t occ[SYLVA__CHUNK_VOXELS];
+  /* Columns that start in this chunk: (x + 16 y) * 16 + z holds the shade of the
+   * columns whose top voxel is z; a voxel sums the entries at or above it. NULL
+   * until a column starts here. */
+  int64_t *column;
 } sylva__chunk;
 
 typedef struct sylva__obstacle {
@@ -40,7 +44,7 @@ typedef struct sylva__grid {
   /* Per chunk column (c0*c1): NULL or c2 blocks x 256 columns of shade that applies
    * to every voxel of blocks strictly below. */
   int64_t **colsum;
-  size_t chunk_count, colsum_count;
+  size_t chunk_count, colsum_count, column_count;
   sylva__obstacle *obstacles;
   int obstacle_count, obstacle_cap, next_obstacle_id;
   /* Per-column obstacle top: (x, y) -> highest hi[2] of live obstacles covering it,

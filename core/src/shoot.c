@@ -153,8 +153,8 @@ static bool contested(const sylva_world *w, const index_ctx *ix, const double p[
 
 /* ---- one shoot ----------------------------------------------------------------- */
 
-/* Optimal direction Vo: light-weighted mean of unit vectors to usable marker points
- * drawn uniformly in the cone (spherical sector) around vd. */
+/* Optimal direction Vo = sum of l_j v_j: unit vectors to the usable marker points,
+ * drawn uniformly in the cone (spherical sector) around vd, weighted by their light. */
 static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_species_def *d,
                               int markers, const double tip[3], const double vd[3],
                               int32_t self, double vo[3]) {
@@ -181,7 +181,6 @@ static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_s
     double l = sylva__grid_light(&w->grid, v);
     for (int i = 0; i < 3; i++) vo[i] += l * dir[i];
   }
-  for (int i = 0; i < 3; i++) vo[i] /= (double)markers;
 }
 
 static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int iteration) {

@@ -1,0 +1,48 @@
+/* Small assert macros for the test suites: each failure prints both values and
+ * the place; a suite ends with "N passed, N failed" and exits non-zero on failure. */
+#ifndef SYLVA_TEST_CHECK_H
+#define SYLVA_TEST_CHECK_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+static int check_passed, check_failed;
+
+#define CHECK(cond)                                                          \
+  do {                                                                       \
+    if (cond) check_passed++;                                                \
+    else {                                                                   \
+      check_failed++;                                                        \
+      fprintf(stderr, "%s:%d: CHECK(%s) failed\n", __FILE__, __LINE__, #cond); \
+    }                                                                        \
+  } while (0)
+
+#define CHECK_INT(a, b)                                                                     \
+  do {                                                                                      \
+    long long check_a_ = (long long)(a), check_b_ = (long long)(b);                         \
+    if (check_a_ == check_b_) check_passed++;                                               \
+    else {                                                                                  \
+      check_failed++;                                                                       \
+      fprintf(stderr, "%s:%d: %s == %s failed: %lld != %lld\n", __FILE__, __LINE__, #a, #b, \
+              check_a_, check_b_);                                                          \
+    }                                                                                       \
+  } while (0)
+
+#define CHECK_NEAR(a, b, tol)                                                                \
+  do {                                                                                       \
+    double check_a_ = (double)(a), check_b_ = (double)(b);                                   \
+    if (fabs(check_a_ - check_b_) <= (tol)) check_passed++;                                  \
+    else {                                                                                   \
+      check_failed++;                                                                        \
+      fprintf(stderr, "%s:%d: %s ~= %s failed: %.12g != %.12g (tol %g)\n", __FILE__, __LINE__, \
+              #a, #b, check_a_, check_b_, (double)(tol));                                    \
+    }                                                                                        \
+  } while (0)
+
+/* Ends a suite: prints the summary line and gives the exit status. */
+static inline int check_summary(const char *suite) {
+  printf("%s: %d passed, %d failed\n", suite, check_passed, check_failed);
+  return check_failed ? 1 : 0;
+}
+#endif

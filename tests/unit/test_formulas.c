@@ -1,0 +1,215 @@
+/* Every formula of MODEL.md against hand-worked values: growth equations and their
+ * derivatives, the cap/stop rule, BH shares, priority weights, light sensitivity,
+ * lateral directions, the generator, and one hand-worked allocation. */
+#include <string.h>
+
+#include "../check.h"
+#include "allocate.h"
+#include "light.h"
+#include "rng.h"
+#include "shoot.h"
+#include "sylva/sylva.h"
+#include "world_impl.h"
+
+static void test_derivatives(void) {
+  sylva_equation eqs[] = {
+      {SYLVA_EQ_LOGISTIC, {2.0, 100.0, 0.34}},
+      {SYLVA_EQ_BERTALANFFY, {90.0, 0.12, 0.0}},
+      {SYLVA_EQ_WEIBULL, {80.0, 0.01, 2.2}},
+      {SYLVA_EQ_WEIBULL, {80.0, 0.2, 0.8}},
+      {SYLVA_EQ_GOMPERTZ, {100.0, 4.0, 0.25}},
+  };
+  for (size_t e = 0; e < sizeof eqs / sizeof eqs[0]; e++) {
+    for (double t = 0.5; t < 40.0; t += 0.75) {
+      double h = 1e-5;
+      double fd = (sylva_equation_value(&eqs[e], t + h) - sylva_equation_value(&eqs[e], t - h)) /
+                  (2 * h);
+      double an = sylva_equation_rate(&eqs[e], t);
+      CHECK_NEAR(an, fd, 1e-6 * (1.0 + fabs(an)));
+    }
+  }
+  /* hand-worked values of the logistic default: X(0) = X0, dX/dt(0) = 100*0.34*49/50^2 */
+  CHECK_NEAR(sylva_equation_value(&eqs[0], 0.0), 2.0, 1e-12);
+  CHECK_NEAR(sylva_equation_rate(&eqs[0], 0.0), 0.6664, 1e-12);
+  CHECK_NEAR(sylva_equation_limit(&eqs[0]), 100.0, 0.0);
+  CHECK_NEAR(sylva_equation_limit(&eqs[1]), 90.0, 0.0);
+  CHECK_NEAR(sylva_equation_value(&eqs[1], 0.0), 0.0, 0.0);
+}
+
+static void test_cap_and_stop(void) {
+  sylva_equation lg = {SYLVA_EQ_LOGISTIC, {2.0, 100.0, 0.34}};
+  /* c(T) = round(X'(T - 1)): worked by hand from X' (see MODEL.md section 3) */
+  int expect[] = {0, 1, 1, 1, 2, 2, 3, 4, 5, 6, 7, 8, 8, 8, 8, 7, 6, 5, 4, 3, 2, 2, 1, 1, 1, 0, 0};
+  for (int T = 1; T <= 26; T++) CHECK_INT(sylva_equation_cap(&lg, T), expect[T]);
+  /* finished at the first T whose cap is 0 past the inflection: T = 25 */
+  for (int T = 1; T <= 24; T++) CHECK(!sylva_equation_stops(&lg, T));
+  CHECK(sylva_equation_stops(&lg, 25));
+  CHECK(sylva_equation_decreasing(&lg, 20));
+  CHECK(!sylva_equation_decreasing(&lg, 5));
+  /* round half up: Weibull with omega3 = 1 has X'(0) = omega1 * omega2 = 2.5 */
+  sylva_equation half = {SYLVA_EQ_WEIBULL, {5.0, 0.5, 1.0}};
+  CHECK_INT(sylva_equation_cap(&half, 1), 3);
+  /* a rate that starts at 0 (Weibull omega3 > 1) does not grow yet, is not finished */
+  sylva_equation late = {SYLVA_EQ_WEIBULL, {80.0, 0.01, 2.2}};
+  CHECK_INT(sylva_equation_cap(&late, 1), 0);
+  CHECK(!sylva_equation_stops(&late, 1));
+  CHECK(!sylva_equation_stops(&late, 2));
+  int first_growth = 0;
+  for (int T = 1; T < 100 && !first_growth; T++)
+    if (sylva_equation_cap(&late, T) > 0) first_growth = T;
+  CHECK(first_growth >= 2);
+  int stop = 0;
+  for (int T = 1; T < 400 && !stop; T++)
+    if (sylva_equation_stops(&late, T)) stop = T;
+  CHECK(stop > first_growth);
+}
+
+static void test_bh_and_priority(void) {
+  /* (Lm + Ll)(1 - l) Ll / (l Lm + (1 - l) Ll) */
+  CHECK_NEAR(sylva__bh_share(3.0, 1.0, 0.5), 1.0, 1e-15);
+  CHECK_NEAR(sylva__bh_share(3.0, 1.0, 0.52), 1.92 / 2.04, 1e-15);
+  CHECK_NEAR(sylva__bh_share(0.0, 2.0, 0.52), 2.0, 1e-15); /* apex: its own light */
+  CHECK_NEAR(sylva__bh_share(0.0, 0.0, 0.52), 0.0, 0.0);   /* 0 denominator */
+  /* excurrent lambda gives laterals less than decurrent */
+  CHECK(sylva__bh_share(5.0, 1.0, 0.6) < sylva__bh_share(5.0, 1.0, 0.4));
+  /* w(r): w1 below k, then linear w2 -> w3 over [k, 1) */
+  CHECK_NEAR(sylva__priority_weight(0, 10, 0.5, 1.0, 0.6, 0.3), 1.0, 0.0);
+  CHECK_NEAR(sylva__priority_weight(4, 10, 0.5, 1.0, 0.6, 0.3), 1.0, 0.0);
+  CHECK_NEAR(sylva__priority_weight(5, 10, 0.5, 1.0, 0.6, 0.3), 0.6, 1e-15);
+  CHECK_NEAR(sylva__priority_weight(7, 10, 0.5, 1.0, 0.6, 0.3), 0.48, 1e-15);
+  CHECK_NEAR(sylva__priority_weight(9, 10, 0.5, 1.0, 0.6, 0.3), 0.36, 1e-15);
+  CHECK_NEAR(sylva__priority_weight(9, 10, 1.0, 1.0, 0.6, 0.3), 1.0, 0.0);
+  CHECK_NEAR(sylva__priority_weight(0, 4, 0.0, 1.0, 0.6, 0.3), 0.6, 1e-15);
+}
+
+static void test_light_sensitivity(void) {
+  /* L = alpha * l ^ (age ^ sigma) */
+  CHECK_NEAR(sylva__collected(4.0, 0.25, pow(4.0, 0.5)), 0.25, 1e-15);
+  CHECK_NEAR(sylva__collected(4.0, 0.25, pow(1.0, 0.5)), 1.0, 1e-15);
+  CHECK_NEAR(sylva__collected(6.0, 0.5, pow(9.0, 1.0)), 6.0 / 512.0, 1e-15);
+  CHECK_NEAR(sylva__collected(4.0, 0.0, 1.0), 0.0, 0.0);
+  CHECK_NEAR(sylva__collected(4.0, 1.0, 3.0), 4.0, 0.0);
+  CHECK_NEAR(sylva__collected(4.0, 0.3, 0.0), 4.0, 0.0); /* a newborn node */
+  /* a lower sigma makes old nodes less sensitive to shade */
+  CHECK(sylva__collected(4.0, 0.5, pow(9.0, 0.5)) > sylva__collected(4.0, 0.5, pow(9.0, 1.0)));
+}
+
+static void test_lateral_direction(void) {
+  double up[3] = {0, 0, 1}, out[3];
+  sylva__lateral_direction(up, 45.0, 0.0, out);
+  CHECK_NEAR(out[2], cos(45.0 * 3.14159265358979323846 / 180.0), 1e-12);
+  CHECK_NEAR(out[0] * out[0] + out[1] * out[1] + out[2] * out[2], 1.0, 1e-12);
+  /* phyllotaxis: the divergence turns the lateral around the axis */
+  double a[3], b[3];
+  sylva__lateral_direction(up, 45.0, 0.0, a);
+  sylva__lateral_direction(up, 45.0, 137.5, b);
+  double ang = acos((a[0] * b[0] + a[1] * b[1]) / (sqrt(a[0] * a[0] + a[1] * a[1]) *
+                                                    sqrt(b[0] * b[0] + b[1] * b[1])));
+  CHECK_NEAR(ang * 180.0 / 3.14159265358979323846, 137.5, 1e-9);
+  double side[3] = {1, 0, 0};
+  sylva__lateral_direction(side, 90.0, 30.0, out);
+  CHECK_NEAR(out[0], 0.0, 1e-12);
+}
+
+static void test_rng(void) {
+  sylva__rng a, b, c;
+  sylva__rng_seed(&a, 42);
+  sylva__rng_seed(&b, 42);
+  sylva__rng_seed(&c, 43);
+  int same = 1, differ = 0;
+  for (int i = 0; i < 1000; i++) {
+    uint64_t x = sylva__rng_next(&a), y = sylva__rng_next(&b), z = sylva__rng_next(&c);
+    same &= x == y;
+    differ += x != z;
+  }
+  CHECK(same);
+  CHECK(differ > 990);
+  /* known first value pins the generator across builds */
+  sylva__rng_seed(&a, 1);
+  uint64_t first = sylva__rng_next(&a);
+  sylva__rng_seed(&a, 1);
+  CHECK(first == sylva__rng_next(&a));
+  double sum = 0;
+  for (int i = 0; i < 100000; i++) {
+    double u = sylva__rng_unit(&a);
+    CHECK(u >= 0.0 && u < 1.0 ? 1 : 0);
+    sum += u;
+  }
+  CHECK_NEAR(sum / 100000, 0.5, 0.01);
+  int counts[7] = {0};
+  for (int i = 0; i < 70000; i++) counts[sylva__rng_below(&a, 7)]++;
+  for (int i = 0; i < 7; i++) CHECK_NEAR(counts[i], 10000, 500);
+  int32_t perm[50];
+  sylva__rng_permutation(&a, perm, 50);
+  int seen[50] = {0};
+  for (int i = 0; i < 50; i++) seen[perm[i]]++;
+  int ok = 1;
+  for (int i = 0; i < 50; i++) ok &= seen[i] == 1;
+  CHECK(ok);
+}
+
+/* One hand-worked allocation on a trunk a-b-c (apex c) with no laterals:
+ * L = 1, 2, 4 -> Q = 7, 6, 4; R_trunk = 10; lambda 0.5, k 0.5, tau 0.
+ * RBH: a = 7*.5*1/3.5 = 1, b = 6*.5*2/3 = 2, c = 4*.5*4/2 = 4; ranks c, b, a;
+ * w = 1, 1, 0.6 - 0.3 * (2/3 - 1/2) / (1/2) = 0.5 -> weighted 4, 2, 0.5 (sum 6.5);
+ * R = 6.15, 3.08, 0.77 -> the apex grows 6, b sprouts a lateral of 3, a nothing. */
+static void test_allocation_hand_worked(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  sylva_species_def sp = sylva_default_species_def();
+  sp.lambda = 0.5;
+  sp.tau = 0;
+  sp.initial_nodes = 3;
+  int s = sylva_world_add_species(w, &sp, "x");
+  double root[1][3] = {{0, 0, 0}};
+  sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1};
+  CHECK_INT(sylva_world_add_plant(w, &pd, NULL), 0);
+  CHECK_INT(sylva__reserve_scratch(w), 0);
+  sylva__skeleton *k = &w->nodes;
+  CHECK_INT(k->count, 4);
+  double L[4] = {0, 1, 2, 4};
+  for (int i = 1; i < 4; i++) w->light[i] = L[i];
+  k->q[3] = 4, k->q[2] = 6, k->q[1] = 7, k->q[0] = 10;
+  CHECK_INT(sylva__allocate(w, 12), 0); /* c(12) = 8 */
+  CHECK_INT(w->sprouts.len, 2);
+  if (w->sprouts.len == 2) {
+    CHECK_INT(w->sprouts.data[0].slot, 3);
+    CHECK(w->sprouts.data[0].apex);
+    CHECK_INT(w->sprouts.data[0].n, 6);
+    CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 6.5, 1e-12);
+    CHECK_INT(w->sprouts.data[1].slot, 2);
+    CHECK(!w->sprouts.data[1].apex);
+    CHECK_INT(w->sprouts.data[1].n, 3);
+    CHECK_NEAR(w->sprouts.data[1].r, 10.0 * 2.0 / 6.5, 1e-12);
+  }
+  /* the cap limits a rich shoot: c(3) = 1 */
+  CHECK_INT(sylva__allocate(w, 3), 0);
+  CHECK_INT(w->sprouts.len, 2);
+  if (w->sprouts.len) CHECK_INT(w->sprouts.data[0].n, 1);
+  /* apical control (T <= tau): the apex is ranked first even with the least light */
+  w->species[0].def.tau = 20;
+  w->light[3] = 0.1, w->light[2] = 5, w->light[1] = 5;
+  k->q[3] = 0.1, k->q[2] = 5.1, k->q[1] = 10.1, k->q[0] = 100;
+  CHECK_INT(sylva__allocate(w, 12), 0);
+  double apex_r = 0;
+  for (size_t i = 0; i < w->sprouts.len; i++)
+    if (w->sprouts.data[i].apex) apex_r = w->sprouts.data[i].r;
+  /* RBH apex 0.1 w1; the others ranked 1, 2 of 3 */
+  double rb_b = sylva__bh_share(0.1, 5, 0.5), rb_a = sylva__bh_share(5.1, 5, 0.5);
+  double hi = rb_a > rb_b ? rb_a : rb_b, lo = rb_a > rb_b ? rb_b : rb_a;
+  double sum = 0.1 * 1.0 + hi * 1.0 + lo * 0.5;
+  CHECK_NEAR(apex_r, 100.0 * 0.1 / sum, 1e-12);
+  sylva_world_destroy(w);
+}
+
+int main(void) {
+  test_derivatives();
+  test_cap_and_stop();
+  test_bh_and_priority();
+  test_light_sensitivity();
+  test_lateral_direction();
+  test_rng();
+  test_allocation_hand_worked();
+  return check_summary("formulas");
+}

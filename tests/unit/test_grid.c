@@ -1,0 +1,202 @@
+/* The voxel environment: pyramid and column shade on a small grid, light, exact
+ * removal, occupancy, obstacles, and a 500-million-voxel site that costs memory only
+ * where something is. */
+#include <string.h>
+
+#include "../check.h"
+#include "grid.h"
+#include "rng.h"
+
+static int64_t fixed(double v) { return (int64_t)floor(v * SYLVA__SHADE_ONE + 0.5); }
+
+static void test_pyramid_and_column(void) {
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {2, 2, 2};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  CHECK_INT(g.n[0], 40);
+  int64_t w[4];
+  for (int q = 1; q <= 4; q++) w[q - 1] = fixed(pow(2.0, -q)); /* b = 2 */
+  int v[3] = {20, 20, 30};
+  CHECK_INT(sylva__grid_stamp(&g, v, 4, w, +1), 0);
+#define S(x, y, z) sylva__grid_shade_raw(&g, (int[3]){x, y, z})
+  CHECK_INT(S(20, 20, 30), 0);         /* own voxel */
+  CHECK_INT(S(20, 20, 31), 0);         /* above */
+  CHECK_INT(S(20, 20, 29), w[0]);      /* q = 1: one voxel */
+  CHECK_INT(S(21, 20, 29), 0);
+  CHECK_INT(S(21, 21, 28), w[1]);      /* q = 2: half-width 1 */
+  CHECK_INT(S(22, 20, 28), 0);
+  CHECK_INT(S(19, 21, 27), w[2]);      /* q = 3: half-width 1 */
+  CHECK_INT(S(22, 20, 27), 0);
+  CHECK_INT(S(22, 22, 26), w[3]);      /* q = 4: half-width 2 */
+  CHECK_INT(S(23, 20, 26), 0);
+  /* column below the base: w[3] per voxel down to the ground */
+  CHECK_INT(S(22, 22, 25), w[3]);
+  CHECK_INT(S(18, 18, 10), w[3]);
+  CHECK_INT(S(20, 20, 0), w[3]);
+  CHECK_INT(S(20, 20, 16), w[3]); /* across block borders */
+  CHECK_INT(S(20, 20, 15), w[3]);
+  CHECK_INT(S(23, 20, 10), 0);
+  CHECK_NEAR(sylva__grid_light(&g, (int[3]){20, 20, 29}), 0.5, 1e-9);
+  CHECK_NEAR(sylva__grid_light(&g, (int[3]){20, 20, 5}), 1.0 - 1.0 / 16.0, 1e-9);
+  /* a second node above adds: light falls, never below 0 */
+  int v2[3] = {20, 20, 31};
+  CHECK_INT(sylva__grid_stamp(&g, v2, 4, w, +1), 0);
+  CHECK_INT(S(20, 20, 29), w[0] + w[1]);
+  for (int i = 0; i < 4; i++) CHECK_INT(sylva__grid_stamp(&g, v2, 4, w, +1), 0);
+  CHECK_NEAR(sylva__grid_light(&g, (int[3]){20, 20, 30}), 0.0, 0.0);
+  /* near the world's edge the pyramid is clipped, nothing crashes */
+  int edge[3] = {0, 39, 3};
+  CHECK_INT(sylva__grid_stamp(&g, edge, 4, w, +1), 0);
+  CHECK_INT(S(0, 39, 2), w[0]);
+  CHECK_INT(S(1, 38, 1), w[1]);
+#undef S
+  sylva__grid_free(&g);
+}
+
+/* Every voxel of two grids equal (over the chunks either one has). */
+static int grids_equal(const sylva__grid *a, const sylva__grid *b) {
+  for (int z = 0; z < a->n[2]; z++)
+    for (int y = 0; y < a->n[1]; y++)
+      for (int x = 0; x < a->n[0]; x++) {
+        int v[3] = {x, y, z};
+        if (sylva__grid_shade_raw(a, v) != sylva__grid_shade_raw(b, v)) return 0;
+      }
+  return 1;
+}
+
+static void test_exact_removal(void) {
+  sylva__grid g, h, empty;
+  double mn[3] = {-1, -1, 0}, mx[3] = {1, 1, 3};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  CHECK_INT(sylva__grid_init(&h, mn, mx, 0.05), 0);
+  CHECK_INT(sylva__grid_init(&empty, mn, mx, 0.05), 0);
+  sylva__rng r;
+  sylva__rng_seed(&r, 7);
+  enum { N = 300 };
+  int vox[N][3];
+  int64_t w[N][20];
+  int depth[N];
+  for (int i = 0; i < N; i++) {
+    for (int a = 0; a < 3; a++) vox[i][a] = (int)sylva__rng_below(&r, (uint32_t)g.n[a]);
+    depth[i] = 1 + (int)sylva__rng_below(&r, 20);
+    double b = 1.8 + 0.7 * sylva__rng_unit(&r);
+    for (int q = 1; q <= 20; q++) w[i][q - 1] = fixed(pow(b, -q));
+    CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], +1), 0);
+  }
+  /* remove the odd ones in reverse order; stamp only the even ones into h */
+  for (int i = N - 1; i >= 0; i--)
+    if (i % 2) CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], -1), 0);
+  for (int i = 0; i < N; i += 2) CHECK_INT(sylva__grid_stamp(&h, vox[i], depth[i], w[i], +1), 0);
+  CHECK(grids_equal(&g, &h));
+  for (int i = 0; i < N; i += 2) CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], -1), 0);
+  CHECK(grids_equal(&g, &empty)); /* equal to never having added */
+  sylva__grid_free(&g);
+  sylva__grid_free(&h);
+  sylva__grid_free(&empty);
+}
+
+/* The grid against the definition, voxel by voxel: random nodes (near chunk borders
+ * and the world's edges too), each voxel's S summed directly from MODEL.md. */
+static void test_against_definition(void) {
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {2.2, 1.9, 3.3};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  sylva__rng r;
+  sylva__rng_seed(&r, 11);
+  enum { N = 60 };
+  int vox[N][3], depth[N];
+  int64_t w[N][20];
+  for (int i = 0; i < N; i++) {
+    for (int a = 0; a < 3; a++) vox[i][a] = (int)sylva__rng_below(&r, (uint32_t)g.n[a]);
+    depth[i] = 1 + (int)sylva__rng_below(&r, 20);
+    for (int q = 1; q <= 20; q++) w[i][q - 1] = fixed(pow(1.8 + 0.01 * i, -q));
+    CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], +1), 0);
+  }
+  long bad = 0;
+  for (int z = 0; z < g.n[2]; z++)
+    for (int y = 0; y < g.n[1]; y++)
+      for (int x = 0; x < g.n[0]; x++) {
+        int64_t expect = 0;
+        for (int i = 0; i < N; i++) {
+          int q = vox[i][2] - z, dx = abs(x - vox[i][0]), dy = abs(y - vox[i][1]);
+          if (q >= 1 && q <= depth[i] && dx <= q / 2 && dy <= q / 2) expect += w[i][q - 1];
+          if (q > depth[i] && dx <= depth[i] / 2 && dy <= depth[i] / 2) expect += w[i][depth[i] - 1];
+        }
+        bad += sylva__grid_shade_raw(&g, (int[3]){x, y, z}) != expect;
+      }
+  CHECK_INT(bad, 0);
+  sylva__grid_free(&g);
+}
+
+static void test_occupancy(void) {
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {1, 1, 1};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.1), 0);
+  int v[3] = {3, 4, 5};
+  CHECK_INT(sylva__grid_occupant(&g, v), -1);
+  CHECK_INT(sylva__grid_occupy(&g, v, 7), 0);
+  CHECK_INT(sylva__grid_occupant(&g, v), 7);
+  CHECK_INT(sylva__grid_occupy(&g, v, 8), SYLVA_EOCCUPIED); /* another stem */
+  CHECK_INT(sylva__grid_occupy(&g, v, 7), 0);               /* same stem again */
+  sylva__grid_vacate(&g, v);
+  CHECK_INT(sylva__grid_occupant(&g, v), 7); /* one node of stem 7 is still there */
+  sylva__grid_vacate(&g, v);
+  CHECK_INT(sylva__grid_occupant(&g, v), -1);
+  CHECK_INT(sylva__grid_occupy(&g, v, 8), 0);
+  sylva__grid_free(&g);
+}
+
+static void test_obstacles(void) {
+  sylva__grid g;
+  double mn[3] = {-1, -1, 0}, mx[3] = {1, 1, 2};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.1), 0);
+  double bmn[3] = {0, 0, 1.0}, bmx[3] = {0.5, 0.5, 1.05}; /* a board thinner than a voxel */
+  int id = sylva__grid_add_obstacle(&g, "board", bmn, bmx);
+  CHECK(id >= 0);
+  CHECK_INT(sylva__grid_add_obstacle(&g, "board", bmn, bmx), SYLVA_EINVAL); /* duplicate */
+  CHECK_INT(sylva__grid_find_obstacle(&g, "board"), id);
+  int in[3] = {12, 12, 10}, under[3] = {12, 12, 0}, beside[3] = {8, 12, 5}, above[3] = {12, 12, 11};
+  CHECK(sylva__grid_blocked(&g, in));
+  CHECK(!sylva__grid_blocked(&g, under));
+  CHECK_NEAR(sylva__grid_light(&g, in), 0.0, 0.0);
+  CHECK_NEAR(sylva__grid_light(&g, under), 0.0, 0.0); /* full shadow below */
+  CHECK_NEAR(sylva__grid_light(&g, beside), 1.0, 0.0);
+  CHECK_NEAR(sylva__grid_light(&g, above), 1.0, 0.0);
+  CHECK_INT(sylva__grid_remove_obstacle(&g, id), 0);
+  CHECK_NEAR(sylva__grid_light(&g, under), 1.0, 0.0);
+  CHECK_INT(sylva__grid_remove_obstacle(&g, id), SYLVA_ENOTFOUND);
+  sylva__grid_free(&g);
+}
+
+static void test_sparse_site(void) {
+  /* 50 m x 50 m x 25 m at 5 cm: 500 million voxels */
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {50, 50, 25};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  CHECK_INT((long long)g.n[0] * g.n[1] * g.n[2], 500000000LL);
+  size_t empty = sylva__grid_bytes(&g);
+  CHECK(empty < 4u << 20); /* the chunk table only */
+  int64_t w[20];
+  for (int q = 1; q <= 20; q++) w[q - 1] = fixed(pow(2.0, -q));
+  int v[3] = {500, 500, 400};
+  CHECK_INT(sylva__grid_stamp(&g, v, 20, w, +1), 0);
+  CHECK_INT(sylva__grid_occupy(&g, v, 0), 0);
+  size_t one = sylva__grid_bytes(&g) - empty;
+  CHECK(one < 2u << 20); /* a handful of chunks, not the column to the ground */
+  CHECK_NEAR(sylva__grid_light(&g, (int[3]){500, 500, 3}), 1.0 - pow(2.0, -20), 1e-9);
+  printf("sparse site: %zu bytes empty, %zu more for one node\n", empty, one);
+  sylva__grid_free(&g);
+  /* a box too large for the voxel edge is refused */
+  double big[3] = {10000, 10000, 1000};
+  CHECK_INT(sylva__grid_init(&g, mn, big, 0.01), SYLVA_ETOOBIG);
+}
+
+int main(void) {
+  test_pyramid_and_column();
+  test_against_definition();
+  test_exact_removal();
+  test_occupancy();
+  test_obstacles();
+  test_sparse_site();
+  return check_summary("grid");
+}
