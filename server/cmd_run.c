@@ -147,7 +147,7 @@ int cmd_run(int argc, char **argv) {
     }
     snprintf(tmp, n, "%s.tmp", export_path);
     if (!(export_file = fopen(tmp, "wb"))) {
-      fprintf(stderr, "sylva: --export %s: %s\n", tmp, strerror(errno));
+      fprintf(stderr, "sylva: --export: cannot create %s: %s\n", tmp, strerror(errno));
       free(tmp);
       sylva_scenario_free(s);
       return CLI_EXIT_USAGE;

@@ -368,12 +368,10 @@ static const char *equation_param_list(sylva_equation_kind kind) {
 static int parse_growth(parser *p, const cJSON *obj, sylva_equation *eq) {
   int rc = want_object(p, obj);
   if (rc) return rc;
+  static const char *const keys[] = {"equation", "X0",     "Xm",     "r", "beta1", "beta2",
+                                     "omega1",   "omega2", "omega3", "A", "B",     "C"};
+  if ((rc = check_keys(p, obj, keys, sizeof keys / sizeof keys[0]))) return rc;
   sylva_equation_kind kind = eq->kind;
-  for (const cJSON *it = obj->child; it; it = it->next) {
-    for (const cJSON *prev = obj->child; prev != it; prev = prev->next)
-      if (strcmp(prev->string, it->string) == 0)
-        return fail_at_key(p, it->string, "duplicate key");
-  }
   const cJSON *name = member(obj, "equation");
   if (name) {
     size_t old = ptr_push(p, "equation");
@@ -394,14 +392,9 @@ static int parse_growth(parser *p, const cJSON *obj, sylva_equation *eq) {
   const char *const *names = equation_params[kind];
   for (const cJSON *it = obj->child; it; it = it->next) {
     if (strcmp(it->string, "equation") == 0) continue;
-    bool ours = false, known = false;
-    for (int k = 0; k < SYLVA_EQ_COUNT; k++)
-      for (int i = 0; i < 3; i++)
-        if (equation_params[k][i] && strcmp(equation_params[k][i], it->string) == 0) {
-          known = true;
-          ours = ours || k == (int)kind;
-        }
-    if (!known) return fail_at_key(p, it->string, "unknown key");
+    bool ours = false;
+    for (int i = 0; i < 3; i++)
+      if (names[i] && strcmp(names[i], it->string) == 0) ours = true;
     if (!ours)
       return fail_at_key(p, it->string, "not a parameter of the %s equation (%s)",
                          sylva_equation_name(kind), equation_param_list(kind));
@@ -931,7 +924,14 @@ int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, cha
   }
   parser p = {.ptr = "", .plen = 0, .err = err, .errlen = errlen};
   cJSON *root = cJSON_ParseWithLength(text, len);
-  if (!root) return fail_nomem(&p); /* the text is valid JSON: only memory can fail */
+  if (!root) {
+    /* The text is valid JSON, so this is memory, or a limit of cJSON itself. */
+    const char *at = cJSON_GetErrorPtr();
+    size_t offset = at && at >= text && at <= text + len ? (size_t)(at - text) : len;
+    if (err && errlen)
+      snprintf(err, errlen, "out of memory while parsing JSON (or cJSON could not read the text near byte %zu)", offset);
+    return SYLVA_ENOMEM;
+  }
   sylva_scenario *s = calloc(1, sizeof *s);
   int rc = s ? parse_top(&p, root, s) : fail_nomem(&p);
   cJSON_Delete(root);

@@ -1,0 +1,256 @@
+/* Replays the shipped scenarios through parse -> canonical JSON -> parse, and
+ * checks that both forms build the same world and grow it identically; then a
+ * few fixed cases of the scenario rules and of the encoders. */
+#include <dirent.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sylva/encode.h"
+#include "sylva/json_check.h"
+#include "sylva/scenario.h"
+
+static int passed, failed;
+
+#define EXPECT(cond, ...)                                                   \
+  do {                                                                      \
+    if (cond) {                                                             \
+      passed++;                                                             \
+    } else {                                                                \
+      failed++;                                                             \
+      printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                \
+      printf(__VA_ARGS__);                                                  \
+      printf("\n");                                                         \
+    }                                                                       \
+  } while (0)
+
+static char *read_file(const char *path, size_t *len) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  size_t cap = 1 << 16, n = 0;
+  char *data = malloc(cap);
+  while (data) {
+    n += fread(data + n, 1, cap - n, f);
+    if (n < cap) break;
+    char *bigger = realloc(data, cap * 2);
+    if (!bigger) {
+      free(data);
+      data = NULL;
+      break;
+    }
+    data = bigger;
+    cap *= 2;
+  }
+  fclose(f);
+  *len = n;
+  return data;
+}
+
+static sylva_scenario *parse_ok(const char *what, const char *text, size_t len) {
+  sylva_scenario *s = NULL;
+  char err[512] = "";
+  int rc = sylva_scenario_parse(text, len, &s, err, sizeof err);
+  EXPECT(rc == 0 && s, "%s: %s", what, err);
+  return rc == 0 ? s : NULL;
+}
+
+static void roundtrip(const char *path) {
+  size_t len;
+  char *text = read_file(path, &len);
+  EXPECT(text != NULL, "%s: cannot read", path);
+  if (!text) return;
+  sylva_scenario *a = parse_ok(path, text, len);
+  free(text);
+  if (!a) return;
+  char *ja = sylva_scenario_json(a);
+  EXPECT(ja != NULL, "%s: canonical JSON", path);
+  sylva_scenario *b = ja ? parse_ok("canonical JSON", ja, strlen(ja)) : NULL;
+  char *jb = b ? sylva_scenario_json(b) : NULL;
+  if (ja && jb) EXPECT(strcmp(ja, jb) == 0, "%s: canonical JSON changes on re-parse:\n%s\n%s", path, ja, jb);
+  if (ja) {
+    char err[256] = "";
+    EXPECT(sylva_json_check(ja, strlen(ja), 64, err, sizeof err) == 0, "%s: %s", path, err);
+  }
+
+  sylva_world *wa = NULL, *wb = NULL;
+  char err[512] = "";
+  EXPECT(sylva_scenario_build(a, &wa, err, sizeof err) == 0, "%s: build: %s", path, err);
+  if (b) EXPECT(sylva_scenario_build(b, &wb, err, sizeof err) == 0, "%s: build canonical: %s", path, err);
+  if (wa && wb) {
+    EXPECT(sylva_world_hash(wa) == sylva_world_hash(wb), "%s: worlds differ before growing", path);
+    for (int t = 0; t < 3 && !sylva_world_finished(wa); t++) {
+      const sylva_journal *j1, *j2;
+      int r1 = sylva_world_step(wa, &j1), r2 = sylva_world_step(wb, &j2);
+      EXPECT(r1 == 0 && r2 == 0, "%s: step %d: %d %d", path, t + 1, r1, r2);
+      if (r1 || r2) break;
+      char *l1 = sylva_encode_stats_line(wa, j1, 0), *l2 = sylva_encode_stats_line(wb, j2, 0);
+      EXPECT(l1 && l2 && strcmp(l1, l2) == 0, "%s: stats lines differ:\n%s\n%s", path,
+             l1 ? l1 : "(null)", l2 ? l2 : "(null)");
+      if (l1) {
+        char e2[256] = "";
+        EXPECT(sylva_json_check(l1, strlen(l1), 64, e2, sizeof e2) == 0, "%s: stats line: %s", path, e2);
+      }
+      free(l1);
+      free(l2);
+    }
+    char *k1 = sylva_encode_skeleton(wa), *k2 = sylva_encode_skeleton(wb);
+    EXPECT(k1 && k2 && strcmp(k1, k2) == 0, "%s: skeletons differ", path);
+    if (k1) {
+      char e2[256] = "";
+      EXPECT(sylva_json_check(k1, strlen(k1), 64, e2, sizeof e2) == 0, "%s: skeleton: %s", path, e2);
+      EXPECT(k1[strlen(k1) - 1] == '\n', "%s: skeleton does not end with a newline", path);
+    }
+    free(k1);
+    free(k2);
+  }
+  if (wa) sylva_world_destroy(wa);
+  if (wb) sylva_world_destroy(wb);
+  free(ja);
+  free(jb);
+  sylva_scenario_free(a);
+  sylva_scenario_free(b);
+}
+
+static int cmp_names(const void *x, const void *y) {
+  return strcmp(*(char *const *)x, *(char *const *)y);
+}
+
+static void replay_dir(const char *dir) {
+  DIR *d = opendir(dir);
+  EXPECT(d != NULL, "cannot open %s", dir);
+  if (!d) return;
+  char *names[256];
+  int count = 0;
+  struct dirent *e;
+  while ((e = readdir(d)) && count < 256) {
+    size_t n = strlen(e->d_name);
+    if (n > 5 && strcmp(e->d_name + n - 5, ".json") == 0 && (names[count] = strdup(e->d_name)))
+      count++;
+  }
+  closedir(d);
+  qsort(names, (size_t)count, sizeof names[0], cmp_names);
+  EXPECT(count > 0, "no scenarios in %s", dir);
+  for (int i = 0; i < count; i++) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+    roundtrip(path);
+    free(names[i]);
+  }
+}
+
+#define MINIMAL_WORLD "\"world\": {\"min\": [-2, -2, 0], \"max\": [2, 2, 4]}"
+
+static void fixed_cases(void) {
+  /* Defaults. */
+  const char *minimal = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD "}";
+  sylva_scenario *s = parse_ok("minimal", minimal, strlen(minimal));
+  if (s) {
+    EXPECT(strcmp(s->name, "untitled") == 0, "name %s", s->name);
+    EXPECT(s->seed == 1 && s->iterations == 40, "seed %llu iterations %d",
+           (unsigned long long)s->seed, s->iterations);
+    EXPECT(s->voxel == 0.05, "voxel %g", s->voxel);
+    sylva_scenario_free(s);
+  }
+  /* The voxel follows the smallest rho among planted species only; the initial
+   * trunk follows the final growth equation; growth overrides keep the rest. */
+  const char *text =
+      "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD ", \"species\": {"
+      "\"tiny\": {\"rho\": 0.01},"
+      "\"a\": {\"preset\": \"igm-fig15-left\", \"rho\": 0.08, \"growth\": {\"X0\": 4.6}},"
+      "\"b\": {\"growth\": {\"equation\": \"weibull\", \"omega1\": 60, \"omega2\": 0.01, \"omega3\": 2}}},"
+      "\"plants\": [{\"id\": \"p\", \"species\": \"a\", \"roots\": [[0, 0, 0]]},"
+      "{\"id\": \"q\", \"species\": \"b\", \"roots\": [[1, 1, 0]]}]}";
+  s = parse_ok("resolution", text, strlen(text));
+  if (s) {
+    EXPECT(s->voxel == 0.04, "voxel %g, want 0.04", s->voxel);
+    const sylva_species_def *a = &s->species[1].def, *b = &s->species[2].def;
+    EXPECT(a->growth.p[0] == 4.6 && a->growth.p[1] == 70 && a->growth.p[2] == 0.34,
+           "growth %g %g %g", a->growth.p[0], a->growth.p[1], a->growth.p[2]);
+    EXPECT(a->initial_nodes == 5, "initial_nodes %d, want round(4.6) = 5", a->initial_nodes);
+    EXPECT(a->lambda == 0.48 && a->alpha == 3 && a->r_s == 0.20 && a->b_max == 2.5,
+           "preset igm-fig15-left not applied");
+    EXPECT(b->growth.kind == SYLVA_EQ_WEIBULL && b->initial_nodes == 2, "kind %d initial %d",
+           (int)b->growth.kind, b->initial_nodes);
+    sylva_scenario_free(s);
+  }
+  /* Every preset exists and passes the core's range check. */
+  EXPECT(sylva_preset_count() == 10, "%d presets", sylva_preset_count());
+  for (int i = 0; i < sylva_preset_count(); i++) {
+    sylva_species_def d;
+    const char *field = NULL;
+    EXPECT(sylva_preset_find(sylva_preset_name(i), &d) == 0, "%s", sylva_preset_name(i));
+    EXPECT(sylva_species_check(&d, &field) == 0, "%s: %s", sylva_preset_name(i), field);
+  }
+  EXPECT(sylva_preset_find("nope", NULL) < 0, "unknown preset found");
+  EXPECT(sylva_preset_name(-1) == NULL && sylva_preset_name(10) == NULL, "name out of range");
+
+  /* Errors leave *out NULL and a NUL-terminated message, even in a tiny buffer. */
+  char small[12];
+  s = (sylva_scenario *)1;
+  EXPECT(sylva_scenario_parse("{", 1, &s, small, sizeof small) < 0 && s == NULL &&
+             strlen(small) == sizeof small - 1,
+         "tiny buffer: '%s'", small);
+  EXPECT(sylva_scenario_parse("[]", 2, &s, NULL, 0) < 0 && s == NULL, "NULL buffer");
+
+  /* Formatters. */
+  char buf[SYLVA_FMT_BUFSIZE];
+  struct {
+    double v;
+    int decimals;
+    const char *want;
+  } fixed[] = {{1.9, 4, "1.9"},   {0.031, 4, "0.031"},  {2.0, 4, "2"},       {-0.00001, 4, "0"},
+               {-0.0, 3, "0"},    {402.1, 3, "402.1"},  {12.46, 1, "12.5"},  {NAN, 4, "null"},
+               {INFINITY, 4, "null"}, {-1.25, 1, "-1.2"}, {1234567.0, 0, "1234567"}};
+  for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++) {
+    sylva_fmt_fixed(buf, sizeof buf, fixed[i].v, fixed[i].decimals);
+    EXPECT(strcmp(buf, fixed[i].want) == 0, "fixed(%g, %d) = %s, want %s", fixed[i].v,
+           fixed[i].decimals, buf, fixed[i].want);
+  }
+  struct {
+    double v;
+    const char *want;
+  } shortest[] = {{100, "100"}, {0.1, "0.1"}, {0.021, "0.021"}, {1e-7, "1e-07"},
+                  {-0.0, "0"},  {2e6, "2000000"}, {1e17, "1e+17"}, {NAN, "null"}};
+  for (size_t i = 0; i < sizeof shortest / sizeof shortest[0]; i++) {
+    sylva_fmt_shortest(buf, sizeof buf, shortest[i].v);
+    EXPECT(strcmp(buf, shortest[i].want) == 0, "shortest(%g) = %s, want %s", shortest[i].v, buf,
+           shortest[i].want);
+  }
+  char *done = sylva_encode_done_line(24, "finished");
+  EXPECT(done && strcmp(done, "{\"done\": true, \"iterations\": 24, \"reason\": \"finished\"}") == 0,
+         "%s", done ? done : "(null)");
+  free(done);
+
+  /* A label with quotes, a backslash and a newline is escaped in the stats line. */
+  const char *odd = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD
+                    ", \"species\": {\"s\": {}}, \"plants\": [{\"id\": \"a\\\"b\\\\c\\nd\", "
+                    "\"species\": \"s\", \"roots\": [[0, 0, 0]]}]}";
+  s = parse_ok("odd label", odd, strlen(odd));
+  sylva_world *w = NULL;
+  char err[256] = "";
+  if (s) EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
+  if (w) {
+    const sylva_journal *j;
+    EXPECT(sylva_world_step(w, &j) == 0, "step");
+    char *line = sylva_encode_stats_line(w, j, 12.46);
+    EXPECT(line && strstr(line, "{\"iteration\": 1, \"elapsed_ms\": 12.5, \"stems\": [{\"plant\": "
+                                "\"a\\\"b\\\\c\\nd\", \"stem\": 0, \"height\": ") == line,
+           "%s", line ? line : "(null)");
+    free(line);
+    sylva_world_destroy(w);
+  }
+  sylva_scenario_free(s);
+}
+
+int main(int argc, char **argv) {
+  if (argc != 2) {
+    fprintf(stderr, "usage: %s SCENARIO_DIR\n", argv[0]);
+    return 2;
+  }
+  fixed_cases();
+  replay_dir(argv[1]);
+  printf("%d passed, %d failed\n", passed, failed);
+  return failed ? 1 : 0;
+}
