@@ -63,7 +63,7 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
 bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v[3]) {
   double p[3] = {x, y, z};
   for (int a = 0; a < 3; a++) {
-    double f = floor((p[a] - g->min[a]) * g->inv_voxel);
+    double f = floor((p[a] - g->min[a]) / g->voxel);
     if (!(f >= 0.0) || f >= (double)g->n[a]) return false;
     v[a] = (int)f;
   }
@@ -127,10 +127,12 @@ int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
   int64_t s = 0;
   const sylva__chunk *c = chunk_at(g, v);
   if (c) {
-    s = c->shade[local_index(v[0], v[1], v[2])];
+    int i = local_index(v[0], v[1], v[2]);
+    const int64_t *row = c->shade + (i & ~15);
+    for (int x = 0; x <= (i & 15); x++) s += row[x];
     if (c->column) {
-      const int64_t *col = c->column + (((v[0] & 15) | ((v[1] & 15) << 4)) << 4);
-      for (int z = v[2] & 15; z < SYLVA__CHUNK; z++) s += col[z];
+      const int64_t *col = c->column + (i & 255);
+      for (int z = v[2] & 15; z < SYLVA__CHUNK; z++) s += col[z << 8];
     }
   }
   const int64_t *col = g->colsum[(size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4)];
@@ -209,9 +211,11 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *
           if (x0 > x1 || y0 > y1) continue; /* this layer misses the chunk */
           int64_t value = sign * w[q - 1];
           int64_t *layer = c->shade + ((z & 15) << 8);
+          int e = (x1 & 15) + 1; /* the difference ends after x1, unless at the row's end */
           for (int y = y0; y <= y1; y++) {
             int64_t *row = layer + ((y & 15) << 4);
-            for (int x = x0 & 15; x <= (x1 & 15); x++) row[x] += value;
+            row[x0 & 15] += value;
+            if (e < SYLVA__CHUNK) row[e] -= value;
           }
         }
       }
@@ -243,7 +247,7 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *
       for (int y = y0; y <= y1; y++)
         for (int x = x0; x <= x1; x++) {
           int xy = (x & 15) | ((y & 15) << 4);
-          c->column[(xy << 4) | zl] += value;
+          c->column[(zl << 8) | xy] += value;
           if (sum) sum[xy] += value;
         }
     }
@@ -252,8 +256,8 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *
 
 static void obstacle_voxels(const sylva__grid *g, sylva__obstacle *o) {
   for (int a = 0; a < 3; a++) {
-    double lo = floor((o->min[a] - g->min[a]) * g->inv_voxel);
-    double hi = ceil((o->max[a] - g->min[a]) * g->inv_voxel);
+    double lo = floor((o->min[a] - g->min[a]) / g->voxel);
+    double hi = ceil((o->max[a] - g->min[a]) / g->voxel);
     if (hi <= lo) hi = lo + 1.0;
     if (lo < 0.0) lo = 0.0;
     if (hi > (double)g->n[a]) hi = (double)g->n[a];

@@ -20,10 +20,13 @@
 #define SYLVA__OCC_COUNT_MAX 4095u
 
 typedef struct sylva__chunk {
-  int64_t shade[SYLVA__CHUNK_VOXELS]; /* pyramids; index x + 16 y + 256 z */
+  /* Pyramid shade as differences along x within each chunk row (index x + 16 y +
+   * 256 z): a voxel's value is the sum of its row from x = 0 up to itself, so a
+   * square layer costs two writes per row. */
+  int64_t shade[SYLVA__CHUNK_VOXELS];
   uint32_t occ[SYLVA__CHUNK_VOXELS];
-  /* Columns that start in this chunk: (x + 16 y) * 16 + z holds the shade of the
-   * columns whose top voxel is z; a voxel sums the entries at or above it. NULL
+  /* Columns that start in this chunk, same index: the shade of the columns whose
+   * top voxel it is; a voxel sums the entries at or above it in the chunk. NULL
    * until a column starts here. */
   int64_t *column;
 } sylva__chunk;

@@ -1,0 +1,342 @@
+/* The behaviours MODEL.md promises, on the ready scenarios: simplified IGM follows
+ * its growth equation, S-shaped height below Xm * rho, nodes never in obstacles or
+ * outside, crowns away from walls and out of a board's shadow, one stem per voxel,
+ * competition, determinism, the per-iteration stem order, and snapshots that
+ * continue bit-identically. */
+#include <stdint.h>
+#include <string.h>
+
+#include "../check.h"
+#include "sylva/encode.h"
+#include "sylva/scenario.h"
+#include "sylva/sylva.h"
+
+static sylva_scenario *load(const char *name) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/scenarios/%s", SOURCE_ROOT, name);
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    fprintf(stderr, "cannot open %s\n", path);
+    exit(1);
+  }
+  static char buf[1 << 20];
+  size_t n = fread(buf, 1, sizeof buf, f);
+  fclose(f);
+  sylva_scenario *s = NULL;
+  char err[512];
+  if (sylva_scenario_parse(buf, n, &s, err, sizeof err) < 0) {
+    fprintf(stderr, "%s: %s\n", path, err);
+    exit(1);
+  }
+  return s;
+}
+
+static sylva_world *build(const sylva_scenario *s) {
+  sylva_world *w = NULL;
+  char err[512];
+  if (sylva_scenario_build(s, &w, err, sizeof err) < 0) {
+    fprintf(stderr, "build: %s\n", err);
+    exit(1);
+  }
+  return w;
+}
+
+/* Grows until finished or the limit; returns the iterations done. */
+static int grow(sylva_world *w, int limit) {
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < limit)
+    if (sylva_world_step(w, NULL)) break;
+  return sylva_world_iteration(w);
+}
+
+/* Every live node inside the world and outside every obstacle. */
+static int nodes_placed_legally(const sylva_world *w) {
+  const sylva_world_def *d = sylva_world_get_def(w);
+  size_t n = sylva_world_node_count(w);
+  int nob = sylva_world_obstacle_count(w);
+  for (size_t i = 0; i < n; i++) {
+    sylva_node_info ni;
+    sylva_world_node_at(w, i, &ni);
+    double p[3] = {ni.x, ni.y, ni.z};
+    for (int a = 0; a < 3; a++)
+      if (p[a] < d->min[a] || p[a] >= d->max[a]) return 0;
+    /* voxel of the node must not be an obstacle voxel */
+    for (int o = 0; o < nob; o++) {
+      sylva_obstacle_def ob;
+      sylva_world_obstacle_at(w, o, NULL, &ob);
+      int inside = 1;
+      for (int a = 0; a < 3; a++) {
+        double v = floor((p[a] - d->min[a]) / d->voxel);
+        double lo = floor((ob.min[a] - d->min[a]) / d->voxel);
+        double hi = ceil((ob.max[a] - d->min[a]) / d->voxel);
+        if (v < lo || v >= hi) inside = 0;
+      }
+      if (inside) return 0;
+    }
+  }
+  return 1;
+}
+
+static void test_simplified(void) {
+  sylva_scenario *s = load("simplified.json");
+  sylva_world *w = build(s);
+  const sylva_species_def *sp = sylva_world_species(w, 0);
+  double rho = sp->rho, path = sp->initial_nodes;
+  int ok5 = 1, monotone = 1;
+  double prev_h = 0, incs[200] = {0};
+  int T = 0;
+  const sylva_journal *j;
+  while (!sylva_world_finished(w) && T < 200) {
+    CHECK_INT(sylva_world_step(w, &j), 0);
+    T = j->iteration;
+    path += j->stats[0].cap;
+    double h = j->stats[0].height;
+    if (fabs(h - rho * path) > 0.05 * rho * path) {
+      ok5 = 0;
+      fprintf(stderr, "T=%d height %.3f, running sum of c(T) %.3f\n", T, h, rho * path);
+    }
+    monotone &= h >= prev_h;
+    incs[T] = h - prev_h;
+    prev_h = h;
+    CHECK(h <= sp->growth.p[1] * rho + 1e-9);
+  }
+  CHECK(ok5);
+  CHECK(monotone);
+  CHECK(sylva_world_finished(w)); /* stops by itself, by the growth equation */
+  CHECK(T < 60);
+  /* S-shaped: the largest increments are in the middle, small at both ends */
+  int argmax = 1;
+  for (int t = 1; t <= T; t++)
+    if (incs[t] > incs[argmax]) argmax = t;
+  CHECK(argmax > T / 5 && argmax < 4 * T / 5);
+  CHECK(incs[1] < incs[argmax] / 2 && incs[T] < incs[argmax] / 2);
+  printf("simplified: finished at T=%d, height %.2f m, largest increment at T=%d\n", T, prev_h,
+         argmax);
+  sylva_world_destroy(w);
+  sylva_scenario_free(s);
+}
+
+/* Wall at +x: the crown leans to -x; nothing grows into the wall. */
+static void test_wall(void) {
+  sylva_scenario *s = load("wall.json");
+  sylva_world *w = build(s);
+  int legal = 1;
+  double hmax = 0, xm = sylva_world_species(w, 0)->growth.p[1] * sylva_world_species(w, 0)->rho;
+  const sylva_journal *j;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < 14) {
+    CHECK_INT(sylva_world_step(w, &j), 0);
+    legal &= nodes_placed_legally(w);
+    if (j->stats[0].height > hmax) hmax = j->stats[0].height;
+  }
+  CHECK(legal);
+  CHECK(hmax <= xm);
+  size_t n = sylva_world_node_count(w);
+  double sx = 0;
+  size_t toward = 0, away = 0;
+  for (size_t i = 0; i < n; i++) {
+    sylva_node_info ni;
+    sylva_world_node_at(w, i, &ni);
+    sx += ni.x;
+    toward += ni.x > 0.2;
+    away += ni.x < -0.2;
+  }
+  printf("wall: mean x %.3f m, %zu nodes toward the wall, %zu away\n", sx / (double)n, toward, away);
+  CHECK(sx / (double)n < -0.1);
+  CHECK(away > 2 * toward);
+  sylva_world_destroy(w);
+  sylva_scenario_free(s);
+}
+
+/* Board over x in [0.3, 3]: fewer nodes below it than in the mirrored open region. */
+static void test_board(void) {
+  sylva_scenario *s = load("board.json");
+  sylva_world *w = build(s);
+  int legal = 1;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < 16) {
+    CHECK_INT(sylva_world_step(w, NULL), 0);
+    legal &= nodes_placed_legally(w);
+  }
+  CHECK(legal);
+  sylva_obstacle_def b;
+  sylva_world_obstacle_at(w, 0, NULL, &b);
+  size_t n = sylva_world_node_count(w), shadow = 0, open = 0;
+  for (size_t i = 0; i < n; i++) {
+    sylva_node_info ni;
+    sylva_world_node_at(w, i, &ni);
+    if (ni.z >= b.min[2] || ni.y < b.min[1] || ni.y > b.max[1]) continue;
+    if (ni.x >= b.min[0] && ni.x <= b.max[0]) shadow++;
+    if (-ni.x >= b.min[0] && -ni.x <= b.max[0]) open++;
+  }
+  printf("board: %zu nodes in the board's shadow, %zu on the open side\n", shadow, open);
+  CHECK(shadow * 2 < open);
+  sylva_world_destroy(w);
+  sylva_scenario_free(s);
+}
+
+/* In a stand, no voxel holds nodes of two stems. */
+static int cmp_u64(const void *a, const void *b) {
+  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return (x > y) - (x < y);
+}
+
+static void test_stand(void) {
+  sylva_scenario *s = load("stand.json");
+  sylva_world *w = build(s);
+  const sylva_world_def *d = sylva_world_get_def(w);
+  int dims[3];
+  sylva_world_dims(w, dims);
+  int shared = 0, legal = 1;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < 12) {
+    CHECK_INT(sylva_world_step(w, NULL), 0);
+    legal &= nodes_placed_legally(w);
+    size_t n = sylva_world_node_count(w);
+    uint64_t *keys = malloc(n * sizeof *keys);
+    for (size_t i = 0; i < n; i++) {
+      sylva_node_info ni;
+      sylva_world_node_at(w, i, &ni);
+      uint64_t v[3];
+      double p[3] = {ni.x, ni.y, ni.z};
+      for (int a = 0; a < 3; a++) v[a] = (uint64_t)floor((p[a] - d->min[a]) / d->voxel);
+      uint64_t voxel = (v[2] * (uint64_t)dims[1] + v[1]) * (uint64_t)dims[0] + v[0];
+      int stem = sylva_world_stem_index(w, ni.plant, ni.stem);
+      keys[i] = voxel << 20 | (uint64_t)stem;
+    }
+    qsort(keys, n, sizeof *keys, cmp_u64);
+    for (size_t i = 1; i < n; i++)
+      if (keys[i] >> 20 == keys[i - 1] >> 20 && keys[i] != keys[i - 1]) shared++;
+    free(keys);
+  }
+  CHECK_INT(shared, 0);
+  CHECK(legal);
+  CHECK_INT(sylva_world_stem_count(w), 5);
+  sylva_world_destroy(w);
+  sylva_scenario_free(s);
+}
+
+/* A tree grown beside a taller competitor ends lower than the same tree alone. */
+static void test_competition(void) {
+  sylva_scenario *s = load("competition.json");
+  sylva_world *both = build(s);
+  grow(both, s->iterations);
+  sylva_stem_stats with;
+  sylva_world_stem_stats(both, 0, &with);
+  sylva_stem_stats rival;
+  sylva_world_stem_stats(both, 1, &rival);
+  s->plant_count = 1; /* the same scenario without the right-hand tree */
+  s->stem_count = 1;
+  sylva_world *alone = build(s);
+  grow(alone, s->iterations);
+  sylva_stem_stats without;
+  sylva_world_stem_stats(alone, 0, &without);
+  s->plant_count = 2;
+  s->stem_count = 2;
+  printf("competition: left %.2f m beside a %.2f m rival, %.2f m alone\n", with.height,
+         rival.height, without.height);
+  CHECK(rival.height > with.height);
+  CHECK(with.height < without.height);
+  sylva_world_destroy(both);
+  sylva_world_destroy(alone);
+  sylva_scenario_free(s);
+}
+
+/* Stats lines and final skeleton of a run, as one string. */
+static char *run_output(sylva_scenario *s, uint64_t seed, int limit, int32_t orders[][8]) {
+  s->seed = seed;
+  sylva_world *w = build(s);
+  size_t cap = 1 << 16, len = 0;
+  char *out = malloc(cap);
+  out[0] = 0;
+  const sylva_journal *j;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < limit) {
+    CHECK_INT(sylva_world_step(w, &j), 0);
+    if (orders)
+      for (size_t k = 0; k < j->stem_count && k < 8; k++) orders[j->iteration][k] = j->order[k];
+    char *line = sylva_encode_stats_line(w, j, 0.0);
+    char *sk = j->iteration == limit ? sylva_encode_skeleton(w) : NULL;
+    size_t need = len + strlen(line) + (sk ? strlen(sk) : 0) + 2;
+    if (need > cap) {
+      while (cap < need) cap *= 2;
+      out = realloc(out, cap);
+    }
+    len += (size_t)sprintf(out + len, "%s\n%s", line, sk ? sk : "");
+    free(line);
+    free(sk);
+  }
+  sylva_world_destroy(w);
+  return out;
+}
+
+static void test_determinism_and_order(void) {
+  sylva_scenario *s = load("stand.json");
+  static int32_t o1[16][8], o2[16][8], o3[16][8];
+  char *a = run_output(s, 7, 9, o1), *b = run_output(s, 7, 9, o2), *c = run_output(s, 8, 9, o3);
+  CHECK(strcmp(a, b) == 0); /* same seed: the same bytes */
+  CHECK(strcmp(a, c) != 0); /* another seed: another stand */
+  int same_seed_same = 1, changes = 0, differs_by_seed = 0;
+  for (int t = 1; t <= 9; t++) {
+    same_seed_same &= memcmp(o1[t], o2[t], 5 * sizeof(int32_t)) == 0;
+    if (t > 1) changes += memcmp(o1[t], o1[t - 1], 5 * sizeof(int32_t)) != 0;
+    differs_by_seed += memcmp(o1[t], o3[t], 5 * sizeof(int32_t)) != 0;
+  }
+  CHECK(same_seed_same);
+  CHECK(changes >= 6); /* 5 stems: a repeat has probability 1/120 per iteration */
+  CHECK(differs_by_seed >= 6);
+  /* every order is a permutation of the stems */
+  for (int t = 1; t <= 9; t++) {
+    int seen = 0;
+    for (int k = 0; k < 5; k++) seen |= 1 << o1[t][k];
+    CHECK_INT(seen, 31);
+  }
+  free(a);
+  free(b);
+  free(c);
+  sylva_scenario_free(s);
+}
+
+/* Snapshots taken at every iteration continue bit-identically (hash every step). */
+static void test_snapshot_continuation(void) {
+  sylva_scenario *s = load("urban.json");
+  sylva_world *w = build(s);
+  enum { N = 10 };
+  uint64_t ref[N + 1];
+  uint8_t *img[N + 1];
+  size_t len[N + 1];
+  int last = 0;
+  for (int t = 0; t <= N; t++) {
+    ref[t] = sylva_world_hash(w);
+    CHECK_INT(sylva_snapshot_save(w, &img[t], &len[t]), 0);
+    last = t;
+    if (t == N || sylva_world_finished(w)) break;
+    CHECK_INT(sylva_world_step(w, NULL), 0);
+    CHECK(nodes_placed_legally(w));
+  }
+  int mismatches = 0;
+  for (int t = 0; t <= last; t++) {
+    sylva_world *r = NULL;
+    CHECK_INT(sylva_snapshot_load(img[t], len[t], NULL, NULL, &r), 0);
+    if (!r) continue;
+    mismatches += sylva_world_hash(r) != ref[t];
+    for (int k = t + 1; k <= last; k++) {
+      CHECK_INT(sylva_world_step(r, NULL), 0);
+      mismatches += sylva_world_hash(r) != ref[k];
+    }
+    sylva_world_destroy(r);
+    free(img[t]);
+  }
+  CHECK_INT(mismatches, 0);
+  sylva_world_destroy(w);
+  sylva_scenario_free(s);
+}
+
+int main(int argc, char **argv) {
+  const char *only = argc > 1 ? argv[1] : NULL;
+#define RUN(name) \
+  if (!only || strcmp(only, #name) == 0) test_##name()
+  RUN(simplified);
+  RUN(wall);
+  RUN(board);
+  RUN(stand);
+  RUN(competition);
+  RUN(determinism_and_order);
+  RUN(snapshot_continuation);
+  return check_summary("behaviour");
+}
