@@ -44,8 +44,8 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
   if (SYLVA__VEC_RESERVE(w->ranked, (size_t)nb)) return SYLVA_ENOMEM;
   for (int i = 0; i < nb; i++) {
     int32_t n = w->axis.data[i];
-    double lm = s->axis_child[n] >= 0 ? s->q[s->axis_child[n]] : 0.0;
-    double ll = s->lateral_child[n] >= 0 ? s->q[s->lateral_child[n]] : w->light[n];
+    double lm = s->axis_child[n] >= 0 ? w->q[s->axis_child[n]] : 0.0;
+    double ll = s->lateral_child[n] >= 0 ? w->q[s->lateral_child[n]] : w->light[n];
     /* a scar (shed branch) has no bud left to feed */
     double rbh = (s->flags[n] & SYLVA__NODE_SCAR) ? 0.0 : sylva__bh_share(lm, ll, d->lambda);
     w->ranked.data[i] = (sylva__ranked){rbh, i};
@@ -93,7 +93,7 @@ static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap) {
   sylva__skeleton *s = &w->nodes;
   int32_t root = w->stems[stem].root_slot;
   w->work.len = w->work_r.len = 0;
-  int rc = allocate_axis(w, stem, s->axis_child[root], s->q[root], true, local, cap);
+  int rc = allocate_axis(w, stem, s->axis_child[root], w->q[root], true, local, cap);
   while (!rc && w->work.len) {
     int32_t first = w->work.data[--w->work.len];
     double r = w->work_r.data[--w->work_r.len];

@@ -127,9 +127,9 @@ int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
   int64_t s = 0;
   const sylva__chunk *c = chunk_at(g, v);
   if (c) {
+    const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
+    for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
     int i = local_index(v[0], v[1], v[2]);
-    const int64_t *row = c->shade + (i & ~15);
-    for (int x = 0; x <= (i & 15); x++) s += row[x];
     if (c->column) {
       const int64_t *col = c->column + (i & 255);
       for (int z = v[2] & 15; z < SYLVA__CHUNK; z++) s += col[z << 8];
@@ -212,10 +212,11 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *
           int64_t value = sign * w[q - 1];
           int64_t *layer = c->shade + ((z & 15) << 8);
           int e = (x1 & 15) + 1; /* the difference ends after x1, unless at the row's end */
-          for (int y = y0; y <= y1; y++) {
-            int64_t *row = layer + ((y & 15) << 4);
-            row[x0 & 15] += value;
-            if (e < SYLVA__CHUNK) row[e] -= value;
+          int64_t *start = layer + ((x0 & 15) << 4);
+          for (int y = y0 & 15; y <= (y1 & 15); y++) start[y] += value;
+          if (e < SYLVA__CHUNK) {
+            int64_t *stop = layer + (e << 4);
+            for (int y = y0 & 15; y <= (y1 & 15); y++) stop[y] -= value;
           }
         }
       }

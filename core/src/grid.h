@@ -20,9 +20,9 @@
 #define SYLVA__OCC_COUNT_MAX 4095u
 
 typedef struct sylva__chunk {
-  /* Pyramid shade as differences along x within each chunk row (index x + 16 y +
-   * 256 z): a voxel's value is the sum of its row from x = 0 up to itself, so a
-   * square layer costs two writes per row. */
+  /* Pyramid shade as differences along x within each chunk row, stored with y
+   * fastest (index y + 16 x + 256 z): a voxel's value is the sum of its row from
+   * x = 0 up to itself, and a square layer is two contiguous runs of writes. */
   int64_t shade[SYLVA__CHUNK_VOXELS];
   uint32_t occ[SYLVA__CHUNK_VOXELS];
   /* Columns that start in this chunk, same index: the shade of the columns whose

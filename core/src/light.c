@@ -19,11 +19,11 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
     double l = sylva__grid_light(&w->grid, v);
     int age = iteration - s->birth[i];
     double L = sylva__collected(sp->def.alpha, l, age > 0 ? sylva__species_age_pow(sp, age) : 0.0);
-    s->q[i] = L;
+    w->q[i] = L;
     if (light) light[i] = L;
   }
   /* Children sit in higher slots than their parents: one reverse sweep adds each
    * finished subtree total into its parent. */
   for (size_t i = s->count; i-- > 0;)
-    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) s->q[s->parent[i]] += s->q[i];
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) w->q[s->parent[i]] += w->q[i];
 }

@@ -23,7 +23,7 @@ int sylva__shed(sylva_world *w, int iteration) {
       doomed++;
     } else if (s->flags[i] & SYLVA__NODE_LATERAL) {
       const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
-      double e = s->q[i] / (d->alpha * (double)n[i]);
+      double e = w->q[i] / (d->alpha * (double)n[i]);
       if (e < d->r_s) {
         s->flags[i] |= SYLVA__NODE_DOOMED;
         doomed++;

@@ -5,7 +5,7 @@
 
 #define SYLVA__SKELETON_FIELDS(X)                                                          \
   X(id) X(x) X(y) X(z) X(radius) X(parent) X(axis_child) X(lateral_child) X(birth) X(stem) \
-  X(depth) X(flags) X(q)
+  X(depth) X(flags)
 
 void sylva__skeleton_free(sylva__skeleton *s) {
 #define SYLVA__FREE(f) free(s->f);
@@ -17,7 +17,7 @@ void sylva__skeleton_free(sylva__skeleton *s) {
 int sylva__skeleton_reserve(sylva__skeleton *s, size_t n) {
   if (s->count + n <= s->cap) return 0;
   size_t cap = s->cap ? s->cap : 1024;
-  while (cap < s->count + n) cap += cap / 2;
+  while (cap < s->count + n) cap += cap / 4; /* modest steps keep the bytes per node low */
   if (cap > (size_t)INT32_MAX) return -1;
   /* Each array is grown on its own; a failure part way leaves the grown ones
    * larger, which is harmless because cap is only raised when all succeeded. */
@@ -49,7 +49,6 @@ int32_t sylva__skeleton_append(sylva__skeleton *s, int32_t id, int32_t parent, f
   s->stem[i] = stem;
   s->depth[i] = depth;
   s->flags[i] = (uint8_t)(flags | SYLVA__NODE_ALIVE);
-  s->q[i] = 0.0;
   s->live++;
   return (int32_t)i;
 }
@@ -75,6 +74,20 @@ void sylva__skeleton_compact(sylva__skeleton *s, int32_t *remap) {
       if (*links[k] >= 0) *links[k] = remap[*links[k]];
   }
   s->count = j;
+  /* give back memory after a large shedding */
+  if (s->cap > 4096 && s->cap > j + j / 2) {
+    size_t cap = j + j / 4 + 1024;
+    /* an array whose shrink fails keeps its larger block: cap is then the least
+     * capacity of all, which is what appends may rely on */
+#define SYLVA__SHRINK(f)                                    \
+  {                                                         \
+    void *p = realloc(s->f, cap * sizeof *s->f);            \
+    if (p) s->f = p;                                        \
+  }
+    SYLVA__SKELETON_FIELDS(SYLVA__SHRINK)
+#undef SYLVA__SHRINK
+    s->cap = cap;
+  }
 }
 
 int32_t sylva__skeleton_find(const sylva__skeleton *s, int32_t id) {

@@ -22,11 +22,10 @@ typedef struct sylva__skeleton {
   int32_t *parent, *axis_child, *lateral_child; /* slots, -1 for none */
   int32_t *birth, *stem, *depth;
   uint8_t *flags;
-  double *q; /* light collected by the node and its subtree (last light pass) */
 } sylva__skeleton;
 
 /** Bytes held per slot. */
-#define SYLVA__NODE_BYTES (4 * 10 + 1 + 8)
+#define SYLVA__NODE_BYTES (4 * 10 + 1)
 
 void sylva__skeleton_free(sylva__skeleton *s);
 /** Makes room for n more slots. */

@@ -417,6 +417,8 @@ static int read_world(reader *r, double (*clock)(void *), void *clock_ctx, sylva
     orc = sylva__shade_node(w, (int32_t)i, +1);
     if (orc) SYLVA__FAIL(orc);
   }
+  rc = sylva__reserve_scratch(w);
+  if (rc) goto fail;
   sylva__light_collect(w, w->iteration + 1, NULL);
   *out = w;
   return SYLVA_OK;

@@ -69,7 +69,7 @@ void sylva__stats(sylva_world *w, int iteration) {
       if (isnan(o->dbh) && p >= 0 && h >= 1.3 && s->z[p] - rz < 1.3) o->dbh = 2.0 * s->radius[n];
       if (isnan(o->crown_base) && s->lateral_child[n] >= 0) o->crown_base = h;
     }
-    o->light = s->q[t->root_slot];
+    o->light = w->q[t->root_slot];
     int local = sylva__stem_local(t, iteration);
     o->cap = local >= 1 ? sylva_equation_cap(&sp->def.growth, local) : 0;
     o->finished = t->finished;

@@ -59,6 +59,7 @@ void sylva_world_destroy(sylva_world *w) {
   free(w->plants);
   free(w->stems);
   free(w->light);
+  free(w->q);
   free(w->resource);
   free(w->count);
   free(w->sprouts.data);
@@ -261,6 +262,8 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       prev = slot;
     }
   }
+  int rc = sylva__reserve_scratch(w);
+  if (rc) return w->status = rc;
   sylva__light_collect(w, w->iteration + 1, NULL);
   sylva__stats(w, w->iteration);
   return pid;
@@ -290,6 +293,9 @@ static int reserve_scratch(sylva_world *w) {
   double *l = realloc(w->light, n * sizeof *l);
   if (!l) return SYLVA_ENOMEM;
   w->light = l;
+  double *q = realloc(w->q, n * sizeof *q);
+  if (!q) return SYLVA_ENOMEM;
+  w->q = q;
   double *r = realloc(w->resource, n * sizeof *r);
   if (!r) return SYLVA_ENOMEM;
   w->resource = r;
@@ -379,8 +385,9 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
   sylva__stats(w, T);
   if (SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count)) return w->status = SYLVA_ENOMEM;
   for (int s = 0; s < w->stem_count; s++) w->stats.data[s] = w->stems[s].stats;
-  /* Keep the skeleton dense: drop dead slots once they are a quarter of all. */
-  if (w->nodes.count - w->nodes.live > w->nodes.count / 4) {
+  /* Keep the skeleton dense after every step: slots are node order, so queries
+   * index live nodes directly. */
+  if (w->nodes.count != w->nodes.live) {
     sylva__skeleton_compact(&w->nodes, w->count);
     for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->count[w->stems[s].root_slot];
   }
@@ -446,13 +453,7 @@ size_t sylva_world_node_count(const sylva_world *w) { return w->nodes.live; }
 
 void sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
   const sylva__skeleton *s = &w->nodes;
-  /* Dense after compaction; otherwise skip dead slots (rare: below a quarter). */
-  size_t slot = i;
-  if (s->count != s->live) {
-    size_t seen = 0;
-    for (slot = 0; slot < s->count; slot++)
-      if ((s->flags[slot] & SYLVA__NODE_ALIVE) && seen++ == i) break;
-  }
+  size_t slot = i; /* the skeleton is dense between steps */
   const sylva__stem *st = &w->stems[s->stem[slot]];
   out->id = s->id[slot];
   out->parent = s->parent[slot] >= 0 ? s->id[s->parent[slot]] : -1;
@@ -477,7 +478,7 @@ void sylva_world_dims(const sylva_world *w, int dims[3]) { memcpy(dims, w->grid.
 void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (2 * sizeof(double) + sizeof(int32_t)) +
+  out->other = w->scratch_cap * (3 * sizeof(double) + sizeof(int32_t)) +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->radii.cap * sizeof(sylva_radius_change) +
                w->cells.cap * sizeof(sylva__keyed) + w->table.cap * sizeof(int64_t) +

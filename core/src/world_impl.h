@@ -77,6 +77,7 @@ struct sylva_world {
 
   /* Per-step scratch, reused across steps. */
   double *light;         /* L_i by slot */
+  double *q;             /* Q_i by slot: light of the node and its subtree (last light pass) */
   double *resource;      /* R_i by slot */
   int32_t *count;        /* subtree node count / remap, by slot */
   size_t scratch_cap;

@@ -170,7 +170,7 @@ static void test_allocation_hand_worked(void) {
   CHECK_INT(k->count, 4);
   double L[4] = {0, 1, 2, 4};
   for (int i = 1; i < 4; i++) w->light[i] = L[i];
-  k->q[3] = 4, k->q[2] = 6, k->q[1] = 7, k->q[0] = 10;
+  w->q[3] = 4, w->q[2] = 6, w->q[1] = 7, w->q[0] = 10;
   CHECK_INT(sylva__allocate(w, 12), 0); /* c(12) = 8 */
   CHECK_INT(w->sprouts.len, 2);
   if (w->sprouts.len == 2) {
@@ -190,7 +190,7 @@ static void test_allocation_hand_worked(void) {
   /* apical control (T <= tau): the apex is ranked first even with the least light */
   w->species[0].def.tau = 20;
   w->light[3] = 0.1, w->light[2] = 5, w->light[1] = 5;
-  k->q[3] = 0.1, k->q[2] = 5.1, k->q[1] = 10.1, k->q[0] = 100;
+  w->q[3] = 0.1, w->q[2] = 5.1, w->q[1] = 10.1, w->q[0] = 100;
   CHECK_INT(sylva__allocate(w, 12), 0);
   double apex_r = 0;
   for (size_t i = 0; i < w->sprouts.len; i++)

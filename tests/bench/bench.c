@@ -1,0 +1,234 @@
+/* sylva benchmark: grows the fig. 17b tree, the five-tree stand and a generated
+ * stand of 100 trees to at least 1,000,000 live internodes, printing per iteration
+ * the live and new internodes, the time of each phase and the memory, then a
+ * summary; and measures the cost of shading one internode at several heights.
+ *
+ *   bench [all|fig17b|stand5|stand100|shade] [--scenarios DIR] */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+#include "grid.h"
+#include "sylva/encode.h"
+#include "sylva/scenario.h"
+#include "sylva/sylva.h"
+
+static double now(void *ctx) {
+  (void)ctx;
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
+}
+
+static long peak_rss_kb(void) {
+  struct rusage u;
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
+}
+
+typedef struct summary {
+  const char *name;
+  int iterations;
+  size_t live, created;
+  double seconds, phase[SYLVA_PHASE_COUNT];
+  size_t peak_voxels, peak_skeleton, peak_other;
+  double shade_us_per_node_early, shade_us_per_node_late;
+} summary;
+
+static const char *phase_names[SYLVA_PHASE_COUNT] = {"light", "alloc", "shoots", "shade",
+                                                     "radii", "shed", "stats"};
+
+/* Grows w until finished, `limit` iterations, or `target` live internodes. */
+static summary grow(const char *name, sylva_world *w, int limit, size_t target) {
+  summary s = {.name = name};
+  printf("\n== %s\n%4s %9s %8s %8s", name, "T", "live", "new", "ms");
+  for (int p = 0; p < SYLVA_PHASE_COUNT; p++) printf(" %7s", phase_names[p]);
+  printf(" %9s %9s\n", "voxelMB", "skelMB");
+  double t0 = now(NULL);
+  const sylva_journal *j;
+  double early_shade = 0, late_shade = 0;
+  size_t early_nodes = 0, late_nodes = 0;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < limit) {
+    double a = now(NULL);
+    if (sylva_world_step(w, &j)) break;
+    double ms = (now(NULL) - a) * 1e3;
+    s.iterations = j->iteration;
+    s.live = sylva_world_node_count(w);
+    s.created += j->added_count;
+    sylva_memory m;
+    sylva_world_memory(w, &m);
+    if (m.voxels > s.peak_voxels) s.peak_voxels = m.voxels;
+    if (m.skeleton > s.peak_skeleton) s.peak_skeleton = m.skeleton;
+    if (m.other > s.peak_other) s.peak_other = m.other;
+    printf("%4d %9zu %8zu %8.1f", j->iteration, s.live, j->added_count, ms);
+    for (int p = 0; p < SYLVA_PHASE_COUNT; p++) {
+      s.phase[p] += j->phase_seconds[p];
+      printf(" %7.1f", j->phase_seconds[p] * 1e3);
+    }
+    printf(" %9.1f %9.1f\n", (double)m.voxels / 1048576.0, (double)m.skeleton / 1048576.0);
+    /* shade cost per new internode while the trees are short vs tall */
+    if (j->added_count > 1000) {
+      if (j->iteration <= 10) {
+        early_shade += j->phase_seconds[SYLVA_PHASE_SHADE];
+        early_nodes += j->added_count;
+      } else {
+        late_shade += j->phase_seconds[SYLVA_PHASE_SHADE];
+        late_nodes += j->added_count;
+      }
+    }
+    if (target && s.live >= target) break;
+  }
+  s.seconds = now(NULL) - t0;
+  s.shade_us_per_node_early = early_nodes ? early_shade * 1e6 / (double)early_nodes : 0;
+  s.shade_us_per_node_late = late_nodes ? late_shade * 1e6 / (double)late_nodes : 0;
+  return s;
+}
+
+static void report(const summary *s) {
+  printf("-- %s: %d iterations, %zu live internodes (%zu grown), %.2f s wall, %.0f internodes/s\n",
+         s->name, s->iterations, s->live, s->created, s->seconds,
+         (double)s->created / (s->seconds > 0 ? s->seconds : 1));
+  printf("   phases (s):");
+  for (int p = 0; p < SYLVA_PHASE_COUNT; p++) printf(" %s %.2f", phase_names[p], s->phase[p]);
+  printf("\n   peak memory: voxels %.1f MB, skeleton %.1f MB (%.1f bytes per live internode), "
+         "scratch %.1f MB, process peak RSS %.1f MB\n",
+         (double)s->peak_voxels / 1048576.0, (double)s->peak_skeleton / 1048576.0,
+         s->live ? (double)s->peak_skeleton / (double)s->live : 0.0,
+         (double)s->peak_other / 1048576.0, (double)peak_rss_kb() / 1024.0);
+  printf("   shade per new internode: %.2f us (T <= 10), %.2f us (T > 10)\n",
+         s->shade_us_per_node_early, s->shade_us_per_node_late);
+}
+
+static sylva_world *from_file(const char *dir, const char *file, int *limit) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", dir, file);
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    fprintf(stderr, "bench: cannot open %s\n", path);
+    exit(1);
+  }
+  static char buf[1 << 20];
+  size_t n = fread(buf, 1, sizeof buf, f);
+  fclose(f);
+  sylva_scenario *s;
+  char err[512];
+  sylva_world *w;
+  if (sylva_scenario_parse(buf, n, &s, err, sizeof err) < 0 ||
+      sylva_scenario_build(s, &w, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: %s: %s\n", path, err);
+    exit(1);
+  }
+  *limit = s->iterations;
+  sylva_scenario_free(s);
+  return w;
+}
+
+/* A world of `rows` x `rows` igm-fig17b trees `spacing` metres apart. */
+static sylva_world *generated_stand(int rows, double spacing) {
+  sylva_world_def d = sylva_default_world_def();
+  double half = rows * spacing / 2.0 + 3.0;
+  d.min[0] = d.min[1] = -half;
+  d.max[0] = d.max[1] = half;
+  d.max[2] = 14.0;
+  d.voxel = 0.05;
+  d.seed = 2024;
+  d.clock = now;
+  sylva_world *w;
+  if (sylva_world_create(&d, &w)) exit(1);
+  sylva_species_def sp;
+  if (sylva_preset_find("igm-fig17b", &sp)) exit(1);
+  int s = sylva_world_add_species(w, &sp, "fig17b");
+  for (int i = 0; i < rows * rows; i++) {
+    double root[1][3] = {{(i % rows - (rows - 1) / 2.0) * spacing, (i / rows - (rows - 1) / 2.0) * spacing, 0}};
+    char label[16];
+    snprintf(label, sizeof label, "t%d", i);
+    sylva_plant_def p = {s, label, (const double(*)[3])root, 1};
+    if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
+  }
+  return w;
+}
+
+static sylva_world *single(const char *preset) {
+  sylva_world_def d = sylva_default_world_def();
+  d.min[0] = d.min[1] = -6;
+  d.max[0] = d.max[1] = 6;
+  d.max[2] = 12;
+  d.clock = now;
+  d.seed = 17;
+  sylva_world *w;
+  if (sylva_world_create(&d, &w)) exit(1);
+  sylva_species_def sp;
+  if (sylva_preset_find(preset, &sp)) exit(1);
+  int s = sylva_world_add_species(w, &sp, preset);
+  double root[1][3] = {{0, 0, 0}};
+  sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1};
+  if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
+  return w;
+}
+
+/* Shading one internode at heights from 1 to 20 m: the cost must not grow. */
+static void shade_by_height(void) {
+  printf("\n== shade cost by height (pyramid depth 20, 5 cm voxels)\n");
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {20, 20, 25};
+  if (sylva__grid_init(&g, mn, mx, 0.05)) exit(1);
+  int64_t w[20];
+  for (int q = 1; q <= 20; q++) w[q - 1] = (int64_t)(pow(2.0, -q) * SYLVA__SHADE_ONE);
+  double heights[] = {1, 2, 5, 10, 20};
+  for (size_t h = 0; h < sizeof heights / sizeof heights[0]; h++) {
+    int n = 20000;
+    double t0 = now(NULL);
+    for (int i = 0; i < n; i++) {
+      int v[3] = {100 + (i * 7) % 200, 100 + (i * 13) % 200, (int)(heights[h] / 0.05)};
+      sylva__grid_stamp(&g, v, 20, w, +1);
+    }
+    double t1 = now(NULL);
+    printf("   at %4.1f m: %.2f us per internode\n", heights[h], (t1 - t0) * 1e6 / n);
+  }
+  sylva__grid_free(&g);
+}
+
+int main(int argc, char **argv) {
+  const char *what = "all", *dir = SOURCE_ROOT "/scenarios";
+  for (int i = 1; i < argc; i++) {
+    if (strcmp(argv[i], "--scenarios") == 0 && i + 1 < argc)
+      dir = argv[++i];
+    else
+      what = argv[i];
+  }
+  bool all = strcmp(what, "all") == 0;
+  if (all || strcmp(what, "shade") == 0) shade_by_height();
+  if (all || strcmp(what, "fig17b") == 0) {
+    sylva_world *w = single("igm-fig17b");
+    summary s = grow("fig. 17b tree", w, 40, 0);
+    report(&s);
+    sylva_world_destroy(w);
+  }
+  if (all || strcmp(what, "stand5") == 0) {
+    int limit;
+    sylva_world *w = from_file(dir, "stand.json", &limit);
+    sylva_world_destroy(w);
+    /* rebuild with a clock for phase timing */
+    uint8_t *img;
+    size_t n;
+    w = from_file(dir, "stand.json", &limit);
+    sylva_snapshot_save(w, &img, &n);
+    sylva_world_destroy(w);
+    sylva_snapshot_load(img, n, now, NULL, &w);
+    free(img);
+    summary s = grow("five-tree stand (scenarios/stand.json)", w, limit, 0);
+    report(&s);
+    sylva_world_destroy(w);
+  }
+  if (all || strcmp(what, "stand100") == 0) {
+    sylva_world *w = generated_stand(10, 2.0);
+    summary s = grow("100-tree stand to 1,000,000 live internodes", w, 60, 1000000);
+    report(&s);
+    if (s.live < 1000000) printf("   (finished before 1,000,000 live internodes)\n");
+    sylva_world_destroy(w);
+  }
+  return 0;
+}
