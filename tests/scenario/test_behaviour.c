@@ -129,6 +129,10 @@ static void test_wall(void) {
   }
   CHECK(legal);
   CHECK(hmax <= xm);
+  /* the trunk stands: it crosses breast height, so the tree has a dbh */
+  sylva_stem_stats st;
+  sylva_world_stem_stats(w, 0, &st);
+  CHECK(!isnan(st.dbh) && st.dbh > 0.0);
   size_t n = sylva_world_node_count(w);
   double sx = 0;
   size_t toward = 0, away = 0;
