@@ -556,7 +556,13 @@ static bool find_duplicate(id_ref *refs, int count, int *first, int *second) {
   return found;
 }
 
-static int parse_plant(parser *p, const cJSON *obj, sylva_scenario *s, sylva_scenario_plant *pl) {
+static int cmp_id_ref_name(const void *key, const void *elem) {
+  return strcmp((const char *)key, ((const id_ref *)elem)->id);
+}
+
+/* by_name: the species sorted by name, for lookups in O(log n). */
+static int parse_plant(parser *p, const cJSON *obj, sylva_scenario *s, const id_ref *by_name,
+                       sylva_scenario_plant *pl) {
   static const char *const keys[] = {"id", "species", "roots"};
   int rc = want_object(p, obj);
   if (!rc) rc = check_keys(p, obj, keys, 3);
@@ -572,10 +578,11 @@ static int parse_plant(parser *p, const cJSON *obj, sylva_scenario *s, sylva_sce
   const char *name = "";
   rc = want_string(p, member(obj, "species"), &name);
   if (!rc) {
-    pl->species = -1;
-    for (int i = 0; i < s->species_count; i++)
-      if (strcmp(s->species[i].name, name) == 0) pl->species = i;
-    if (pl->species < 0) {
+    const id_ref *found = s->species_count ? bsearch(name, by_name, (size_t)s->species_count,
+                                                     sizeof *by_name, cmp_id_ref_name)
+                                           : NULL;
+    pl->species = found ? found->index : -1;
+    if (!found) {
       char q[80];
       rc = fail(p, "unknown species %s (not a key of /species)", quote(q, name));
     }
@@ -835,13 +842,21 @@ static int parse_top(parser *p, const cJSON *root, sylva_scenario *s) {
     else if (count > SYLVA_MAX_STEMS)
       rc = fail(p, "%d plants; a world holds at most %d stems", count, SYLVA_MAX_STEMS);
     if (!rc && count && !(s->plants = calloc((size_t)count, sizeof *s->plants))) rc = fail_nomem(p);
+    id_ref *by_name = NULL;
+    if (!rc && count && !(by_name = malloc(((size_t)s->species_count + 1) * sizeof *by_name)))
+      rc = fail_nomem(p);
+    if (by_name) {
+      for (int k = 0; k < s->species_count; k++) by_name[k] = (id_ref){s->species[k].name, k};
+      qsort(by_name, (size_t)s->species_count, sizeof *by_name, cmp_id_ref);
+    }
     int i = 0;
     for (const cJSON *pl = rc ? NULL : item->child; pl && !rc; pl = pl->next, i++) {
       size_t o2 = ptr_push_index(p, (size_t)i);
       s->plant_count = i + 1; /* so that a partial plant is freed */
-      rc = parse_plant(p, pl, s, &s->plants[i]);
+      rc = parse_plant(p, pl, s, by_name, &s->plants[i]);
       ptr_pop(p, o2);
     }
+    free(by_name);
     if (!rc && count > 1) {
       id_ref *refs = malloc((size_t)count * sizeof *refs);
       if (!refs) {
