@@ -78,7 +78,8 @@ typedef struct sylva_scenario {
  *  returned. On failure *out is NULL, the status is negative (SYLVA_EINVAL for
  *  bad input, SYLVA_ETOOBIG for a world with too many voxels, SYLVA_ENOMEM) and
  *  err holds a message that starts with the JSON pointer of the offending value
- *  ("/plants/0/species: unknown species \"pine\"") or with "(syntax)" for a JSON
+ *  ("/plants/0/species: unknown species \"pine\""; "(root)" for the document
+ *  itself, as the empty pointer would not be readable) or with "(syntax)" for a JSON
  *  syntax error ("(syntax) line 3, column 14 (byte 52): leading zero in number"). */
 int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, char *err,
                          size_t errlen);
