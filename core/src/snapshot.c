@@ -325,8 +325,8 @@ static int read_world(reader *r, double (*clock)(void *), void *clock_ctx, sylva
     if (p->species < 0 || p->species >= w->species_count || p->stem_count < 1 ||
         nstems + p->stem_count > SYLVA_MAX_STEMS)
       SYLVA__FAIL(SYLVA_EBADIMAGE);
-    for (uint32_t j = 0; j < i; j++)
-      if (strcmp(w->plants[j].label, p->label) == 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    if (sylva__find_plant(w, p->label) >= 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    if (sylva__index_plant(w, (int)i)) SYLVA__FAIL(SYLVA_ENOMEM);
     nstems += p->stem_count;
     w->plant_count++;
   }
@@ -417,9 +417,6 @@ static int read_world(reader *r, double (*clock)(void *), void *clock_ctx, sylva
     orc = sylva__shade_node(w, (int32_t)i, +1);
     if (orc) SYLVA__FAIL(orc);
   }
-  rc = sylva__reserve_scratch(w);
-  if (rc) goto fail;
-  sylva__light_collect(w, w->iteration + 1, NULL);
   *out = w;
   return SYLVA_OK;
 fail:

@@ -1,6 +1,7 @@
 /* Per-stem measures of MODEL.md: height, dbh, crown width and base, nodes, light. */
 #include <math.h>
 
+#include "light.h"
 #include "world_impl.h"
 
 void sylva__stats(sylva_world *w, int iteration) {
@@ -73,5 +74,34 @@ void sylva__stats(sylva_world *w, int iteration) {
     int local = sylva__stem_local(t, iteration);
     o->cap = local >= 1 ? sylva_equation_cap(&sp->def.growth, local) : 0;
     o->finished = t->finished;
+  }
+}
+
+void sylva__stats_planted(sylva_world *w, int stem) {
+  const sylva__skeleton *s = &w->nodes;
+  sylva__stem *st = &w->stems[stem];
+  sylva__species *sp = &w->species[st->species];
+  sylva_stem_stats *o = &st->stats;
+  o->plant = st->plant;
+  o->stem = st->index;
+  o->nodes = 0;
+  o->shed = 0;
+  o->light = 0.0;
+  o->dbh = NAN;
+  o->crown_base = NAN;
+  o->crown_width = 0.0;
+  o->cap = 0;
+  o->finished = st->finished;
+  double rz = s->z[st->root_slot];
+  for (int32_t n = st->root_slot; n >= 0; n = s->axis_child[n]) {
+    o->nodes++;
+    o->height = s->z[n] - rz;
+    int32_t p = s->parent[n];
+    if (isnan(o->dbh) && p >= 0 && o->height >= 1.3 && s->z[p] - rz < 1.3) o->dbh = 2.0 * s->radius[n];
+    int v[3];
+    sylva__node_voxel(w, n, v);
+    /* as the first iteration will collect it: every node one iteration old */
+    o->light += sylva__collected(sp->def.alpha, sylva__grid_light(&w->grid, v),
+                                 sylva__species_age_pow(sp, 1));
   }
 }

@@ -57,6 +57,7 @@ void sylva_world_destroy(sylva_world *w) {
   for (int i = 0; i < w->species_count; i++) free(w->species[i].age_pow);
   free(w->species);
   free(w->plants);
+  free(w->plant_index);
   free(w->stems);
   free(w->light);
   free(w->q);
@@ -174,6 +175,39 @@ int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const doub
 
 /* ---- plants and obstacles -------------------------------------------------- */
 
+static size_t label_hash(const char *s) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (; *s; s++) h = (h ^ (unsigned char)*s) * 0x100000001b3ULL;
+  return (size_t)(h ^ (h >> 32));
+}
+
+int sylva__find_plant(const sylva_world *w, const char *label) {
+  if (!w->plant_index_cap) return -1;
+  size_t mask = w->plant_index_cap - 1;
+  for (size_t h = label_hash(label) & mask; w->plant_index[h] >= 0; h = (h + 1) & mask)
+    if (strcmp(w->plants[w->plant_index[h]].label, label) == 0) return w->plant_index[h];
+  return -1;
+}
+
+int sylva__index_plant(sylva_world *w, int p) {
+  if (2 * (size_t)(w->plant_count + 1) > w->plant_index_cap) {
+    size_t cap = w->plant_index_cap ? 2 * w->plant_index_cap : 16;
+    while (cap < 2 * (size_t)(w->plant_count + 1)) cap *= 2;
+    int32_t *idx = malloc(cap * sizeof *idx);
+    if (!idx) return SYLVA_ENOMEM;
+    for (size_t i = 0; i < cap; i++) idx[i] = -1;
+    free(w->plant_index);
+    w->plant_index = idx;
+    w->plant_index_cap = cap;
+    for (int i = 0; i < w->plant_count; i++)
+      if (i != p) sylva__index_plant(w, i); /* cannot fail: the table is large enough */
+  }
+  size_t mask = w->plant_index_cap - 1, h = label_hash(w->plants[p].label) & mask;
+  while (w->plant_index[h] >= 0) h = (h + 1) & mask;
+  w->plant_index[h] = p;
+  return SYLVA_OK;
+}
+
 static int check_trunk(const sylva_world *w, const sylva_species_def *sp, const double root[3],
                        int (*taken)[3], int ntaken, int *nout, int (*out)[3]) {
   int count = 0;
@@ -198,8 +232,7 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   if (!def || def->species < 0 || def->species >= w->species_count || def->root_count < 1 ||
       !def->roots || !def->label || !def->label[0] || strlen(def->label) >= SYLVA_LABEL_MAX)
     return SYLVA_EINVAL;
-  for (int i = 0; i < w->plant_count; i++)
-    if (strcmp(w->plants[i].label, def->label) == 0) return SYLVA_EINVAL;
+  if (sylva__find_plant(w, def->label) >= 0) return SYLVA_EINVAL;
   if (w->stem_count + def->root_count > SYLVA_MAX_STEMS) return SYLVA_ETOOBIG;
   const sylva_species_def *sp = &w->species[def->species].def;
   /* Check every trunk before changing anything: the voxels of earlier roots of the
@@ -235,10 +268,12 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
     w->stem_cap = cap;
   }
   if (sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per)) return SYLVA_ENOMEM;
-  int pid = w->plant_count++;
+  int pid = w->plant_count;
   sylva__plant *pl = &w->plants[pid];
   memset(pl, 0, sizeof *pl);
   strcpy(pl->label, def->label);
+  if (sylva__index_plant(w, pid)) return SYLVA_ENOMEM;
+  w->plant_count++;
   pl->species = def->species;
   pl->first_stem = w->stem_count;
   pl->stem_count = def->root_count;
@@ -262,10 +297,7 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       prev = slot;
     }
   }
-  int rc = sylva__reserve_scratch(w);
-  if (rc) return w->status = rc;
-  sylva__light_collect(w, w->iteration + 1, NULL);
-  sylva__stats(w, w->iteration);
+  for (int r = 0; r < def->root_count; r++) sylva__stats_planted(w, pl->first_stem + r);
   return pid;
 }
 

@@ -72,6 +72,8 @@ struct sylva_world {
   int species_count, species_cap;
   sylva__plant *plants;
   int plant_count, plant_cap;
+  int32_t *plant_index;  /* open-addressing hash of plant labels -> plant, -1 empty */
+  size_t plant_index_cap; /* a power of two, at least twice the plants */
   sylva__stem *stems;
   int stem_count, stem_cap;
 
@@ -120,6 +122,11 @@ bool sylva__voxel_of(const sylva_world *w, const double p[3], float f[3], int v[
 /** Voxel of a slot's node (always inside the grid). */
 void sylva__node_voxel(const sylva_world *w, int32_t slot, int v[3]);
 
+/** The plant with this label, or -1. */
+int sylva__find_plant(const sylva_world *w, const char *label);
+/** Files plant p under its label; 0 or SYLVA_ENOMEM. */
+int sylva__index_plant(sylva_world *w, int p);
+
 /** Sizes the per-slot scratch arrays to the skeleton's capacity. */
 int sylva__reserve_scratch(sylva_world *w);
 
@@ -138,6 +145,9 @@ int sylva__radii(sylva_world *w, int iteration);
 int sylva__shed(sylva_world *w, int iteration);
 /** Per-stem measures into stems[].stats. */
 void sylva__stats(sylva_world *w, int iteration);
+/** Measures of a stem just planted (its vertical initial trunk), without a pass
+ *  over the other stems' nodes. */
+void sylva__stats_planted(sylva_world *w, int stem);
 /** Adds a node: occupancy and skeleton; returns slot or a negative status. */
 int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const double p[3],
                         int32_t stem, int iteration);

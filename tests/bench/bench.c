@@ -140,6 +140,7 @@ static sylva_world *generated_stand(int rows, double spacing) {
   if (sylva_world_create(&d, &w)) exit(1);
   sylva_species_def sp;
   if (sylva_preset_find("igm-fig17b", &sp)) exit(1);
+  sp.tropism[2] = 1.0; /* upright, as the ready scenarios */
   int s = sylva_world_add_species(w, &sp, "fig17b");
   for (int i = 0; i < rows * rows; i++) {
     double root[1][3] = {{(i % rows - (rows - 1) / 2.0) * spacing, (i / rows - (rows - 1) / 2.0) * spacing, 0}};
@@ -162,6 +163,7 @@ static sylva_world *single(const char *preset) {
   if (sylva_world_create(&d, &w)) exit(1);
   sylva_species_def sp;
   if (sylva_preset_find(preset, &sp)) exit(1);
+  sp.tropism[2] = 1.0; /* upright, as the ready scenarios */
   int s = sylva_world_add_species(w, &sp, preset);
   double root[1][3] = {{0, 0, 0}};
   sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1};

@@ -214,8 +214,22 @@ static void test_add_plant_errors(void) {
   sylva_plant_def d = {0, "d", (const double(*)[3])two, 2};
   CHECK_INT(sylva_world_add_plant(w, &d, &bad), SYLVA_EOCCUPIED);
   CHECK_INT(bad, 1);
+  double free_spot[1][3] = {{2, -2, 0}};
+  sylva_plant_def e = {0, "t1", (const double(*)[3])free_spot, 1}; /* a label in use */
+  CHECK_INT(sylva_world_add_plant(w, &e, &bad), SYLVA_EINVAL);
   CHECK(sylva_world_hash(w) == h); /* nothing changed */
   CHECK_INT(sylva_world_plant_count(w), 3);
+  /* many plants: labels stay unique and findable as the index grows */
+  for (int i = 0; i < 300; i++) {
+    char label[16];
+    snprintf(label, sizeof label, "p%d", i);
+    double root[1][3] = {{-2.5 + (i % 20) * 0.25, -2.5 + (i / 20) * 0.25, 0}};
+    sylva_plant_def pd = {0, label, (const double(*)[3])root, 1};
+    int rc = sylva_world_add_plant(w, &pd, NULL);
+    if (rc < 0 && rc != SYLVA_EOCCUPIED && rc != SYLVA_EBLOCKED) CHECK_INT(rc, 0);
+  }
+  sylva_plant_def again = {0, "p7", (const double(*)[3])free_spot, 1};
+  CHECK_INT(sylva_world_add_plant(w, &again, &bad), SYLVA_EINVAL);
   sylva_world_destroy(w);
 }
 
