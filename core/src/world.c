@@ -340,23 +340,27 @@ static int reserve_scratch(sylva_world *w) {
 
 int sylva__reserve_scratch(sylva_world *w) { return reserve_scratch(w); }
 
+static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {
+  const sylva__skeleton *s = &w->nodes;
+  const sylva__stem *st = &w->stems[s->stem[slot]];
+  out->id = s->id[slot];
+  out->parent = s->parent[slot] >= 0 ? s->id[s->parent[slot]] : -1;
+  out->plant = st->plant;
+  out->stem = st->index;
+  out->birth = s->birth[slot];
+  out->x = s->x[slot];
+  out->y = s->y[slot];
+  out->z = s->z[slot];
+  out->radius = s->radius[slot];
+}
+
 static int collect_journal(sylva_world *w, int T) {
   sylva__skeleton *s = &w->nodes;
   w->added.len = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->birth[i] != T) continue;
     if (SYLVA__VEC_RESERVE(w->added, w->added.len + 1)) return SYLVA_ENOMEM;
-    sylva_node_info *n = &w->added.data[w->added.len++];
-    const sylva__stem *st = &w->stems[s->stem[i]];
-    n->id = s->id[i];
-    n->parent = s->parent[i] >= 0 ? s->id[s->parent[i]] : -1;
-    n->plant = st->plant;
-    n->stem = st->index;
-    n->birth = s->birth[i];
-    n->x = s->x[i];
-    n->y = s->y[i];
-    n->z = s->z[i];
-    n->radius = s->radius[i];
+    node_info(w, i, &w->added.data[w->added.len++]);
   }
   /* radii changes of nodes shed later in the same iteration are dropped */
   size_t k = 0;
@@ -484,18 +488,7 @@ void sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacl
 size_t sylva_world_node_count(const sylva_world *w) { return w->nodes.live; }
 
 void sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
-  const sylva__skeleton *s = &w->nodes;
-  size_t slot = i; /* the skeleton is dense between steps */
-  const sylva__stem *st = &w->stems[s->stem[slot]];
-  out->id = s->id[slot];
-  out->parent = s->parent[slot] >= 0 ? s->id[s->parent[slot]] : -1;
-  out->plant = st->plant;
-  out->stem = st->index;
-  out->birth = s->birth[slot];
-  out->x = s->x[slot];
-  out->y = s->y[slot];
-  out->z = s->z[slot];
-  out->radius = s->radius[slot];
+  node_info(w, i, out); /* the skeleton is dense between steps: slot i is node i */
 }
 
 double sylva_world_light_at(const sylva_world *w, const double p[3]) {
