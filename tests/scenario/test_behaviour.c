@@ -11,6 +11,10 @@
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
 
+#define GOLDEN_WALL 0xbba286921422fa8dULL
+#define GOLDEN_STAND 0xc1fb01c34fc9c642ULL
+#define GOLDEN_SHRUB 0x22e5c444f1bd3580ULL
+
 static sylva_scenario *load(const char *name) {
   char path[512];
   snprintf(path, sizeof path, "%s/scenarios/%s", SOURCE_ROOT, name);
@@ -331,6 +335,37 @@ static void test_snapshot_continuation(void) {
   sylva_scenario_free(s);
 }
 
+/* Golden hashes pin the results of reference scenarios: the same bytes in every
+ * build (release and sanitizer, any optimisation level) and on every machine with
+ * IEEE doubles. A change to the model changes them on purpose; update them then. */
+static uint64_t fnv_text(const char *t) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (; *t; t++) h = (h ^ (unsigned char)*t) * 0x100000001b3ULL;
+  return h;
+}
+
+static void test_golden(void) {
+  struct {
+    const char *file;
+    int iterations;
+    uint64_t hash;
+  } golden[] = {
+      {"wall.json", 8, GOLDEN_WALL},
+      {"stand.json", 8, GOLDEN_STAND},
+      {"shrub.json", 6, GOLDEN_SHRUB},
+  };
+  for (size_t i = 0; i < sizeof golden / sizeof golden[0]; i++) {
+    sylva_scenario *s = load(golden[i].file);
+    char *out = run_output(s, s->seed, golden[i].iterations, NULL);
+    uint64_t h = fnv_text(out);
+    if (h != golden[i].hash)
+      fprintf(stderr, "golden %s: %016llx\n", golden[i].file, (unsigned long long)h);
+    CHECK(h == golden[i].hash);
+    free(out);
+    sylva_scenario_free(s);
+  }
+}
+
 int main(int argc, char **argv) {
   const char *only = argc > 1 ? argv[1] : NULL;
 #define RUN(name) \
@@ -342,5 +377,6 @@ int main(int argc, char **argv) {
   RUN(competition);
   RUN(determinism_and_order);
   RUN(snapshot_continuation);
+  RUN(golden);
   return check_summary("behaviour");
 }
