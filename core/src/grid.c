@@ -123,9 +123,9 @@ bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]) {
   return false;
 }
 
-int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
+/* Shade of voxel v given its chunk c (may be NULL). */
+static int64_t shade_in(const sylva__grid *g, const sylva__chunk *c, const int v[3]) {
   int64_t s = 0;
-  const sylva__chunk *c = chunk_at(g, v);
   if (c) {
     const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
     for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
@@ -143,10 +143,24 @@ int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
   return s;
 }
 
-double sylva__grid_light(const sylva__grid *g, const int v[3]) {
+int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
+  return shade_in(g, chunk_at(g, v), v);
+}
+
+static double light_in(const sylva__grid *g, const sylva__chunk *c, const int v[3]) {
   if (g->obstacle_count && sylva__grid_under_obstacle(g, v)) return 0.0;
-  double l = 1.0 - (double)sylva__grid_shade_raw(g, v) / SYLVA__SHADE_ONE;
+  double l = 1.0 - (double)shade_in(g, c, v) / SYLVA__SHADE_ONE;
   return l > 0.0 ? l : 0.0;
+}
+
+double sylva__grid_light(const sylva__grid *g, const int v[3]) {
+  return light_in(g, chunk_at(g, v), v);
+}
+
+double sylva__grid_free_light(const sylva__grid *g, const int v[3]) {
+  const sylva__chunk *c = chunk_at(g, v);
+  if (c && c->occ[local_index(v[0], v[1], v[2])]) return -1.0;
+  return light_in(g, c, v);
 }
 
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]) {

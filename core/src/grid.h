@@ -68,6 +68,8 @@ bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]);
 int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]);
 /** Light max(0, 1 - S) of voxel v, 0 under or in an obstacle. */
 double sylva__grid_light(const sylva__grid *g, const int v[3]);
+/** Light of voxel v if no stem occupies it, else -1 (one chunk lookup for both). */
+double sylva__grid_free_light(const sylva__grid *g, const int v[3]);
 /** Stem occupying voxel v, or -1. */
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]);
 /** Adds one node of stem to voxel v. SYLVA_EOCCUPIED if another stem holds it or

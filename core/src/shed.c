@@ -1,5 +1,7 @@
 /* Phase 6b: shedding of lateral branches whose mean relative light E = Q / (alpha N)
  * is below r_s (after Takenaka 1994). */
+#include <stdlib.h>
+
 #include "world_impl.h"
 
 enum { SYLVA__NODE_DOOMED = 128 };
@@ -35,12 +37,25 @@ int sylva__shed(sylva_world *w, int iteration) {
     }
   }
   if (!doomed) return SYLVA_OK;
+  /* Shade sums are exact integers, so the removals may run in any order: take them
+   * chunk by chunk (z, y, x of 16-voxel chunks) so that neighbouring pyramids share
+   * the cache. */
+  if (SYLVA__VEC_RESERVE(w->cells, doomed)) return SYLVA_ENOMEM;
+  w->cells.len = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-    int rc = sylva__shade_node(w, (int32_t)i, -1);
-    if (rc) return rc;
     int v[3];
     sylva__node_voxel(w, (int32_t)i, v);
+    int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
+    w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
+  }
+  qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
+  for (size_t k = 0; k < w->cells.len; k++) {
+    int32_t i = w->cells.data[k].item;
+    int rc = sylva__shade_node(w, i, -1);
+    if (rc) return rc;
+    int v[3];
+    sylva__node_voxel(w, i, v);
     sylva__grid_vacate(&w->grid, v);
     s->flags[i] = 0;
     s->live--;

@@ -57,97 +57,104 @@ static void internode_direction(const sylva__skeleton *s, int32_t n, double d[3]
   if (!normalize(d)) d[0] = 0.0, d[1] = 0.0, d[2] = 1.0;
 }
 
-/* ---- competition index: sprouting nodes hashed by cell ------------------------ */
+/* ---- competition index: sprouting nodes in a dense grid of cells ------------- */
 
 typedef struct index_ctx {
-  double inv_cell;
-  size_t mask;
+  double min[3], cell;
+  int64_t dims[3];
 } index_ctx;
 
-static int64_t cell_key(double x, double y, double z, double inv_cell) {
-  const int64_t off = 1 << 20, m = (1 << 21) - 1;
-  int64_t cx = (int64_t)floor(x * inv_cell), cy = (int64_t)floor(y * inv_cell),
-          cz = (int64_t)floor(z * inv_cell);
-  return (((cx + off) & m) << 42) | (((cy + off) & m) << 21) | ((cz + off) & m);
-}
-
-static size_t hash_key(int64_t k) {
-  uint64_t x = (uint64_t)k * 0x9e3779b97f4a7c15ULL;
-  return (size_t)(x ^ (x >> 29));
-}
-
-static int cmp_keyed(const void *a, const void *b) {
+int sylva__keyed_cmp(const void *a, const void *b) {
   const sylva__keyed *x = a, *y = b;
   if (x->key != y->key) return (x->key > y->key) - (x->key < y->key);
   return (x->item > y->item) - (x->item < y->item);
 }
 
+static int64_t cell_of(const index_ctx *ix, int a, double v) {
+  double f = floor((v - ix->min[a]) / ix->cell);
+  if (f < 0.0) return 0;
+  if (f >= (double)ix->dims[a]) return ix->dims[a] - 1;
+  return (int64_t)f;
+}
+
+/* Counting sort of the sprouts into cells of at least the longest marker cone over
+ * their bounding box; positions are copied beside them for scanning. */
 static int build_index(sylva_world *w, index_ctx *ix) {
   size_t n = w->sprouts.len;
+  const sylva__skeleton *s = &w->nodes;
   double cell = 0.0;
   for (int k = 0; k < w->species_count; k++) {
     double c = w->species[k].def.cone_radius * w->species[k].def.rho;
     if (c > cell) cell = c;
   }
-  ix->inv_cell = 1.0 / (cell > 0.0 ? cell : 1.0);
-  size_t tsize = 16;
-  while (tsize < 2 * n) tsize *= 2;
-  if (SYLVA__VEC_RESERVE(w->cells, n + 1) || SYLVA__VEC_RESERVE(w->table, tsize))
-    return SYLVA_ENOMEM;
-  const sylva__skeleton *s = &w->nodes;
-  sylva__keyed *cells = w->cells.data;
+  double mn[3] = {0, 0, 0}, mx[3] = {0, 0, 0};
   for (size_t i = 0; i < n; i++) {
     int32_t slot = w->sprouts.data[i].slot;
-    cells[i].key = cell_key(s->x[slot], s->y[slot], s->z[slot], ix->inv_cell);
-    cells[i].item = (int32_t)i;
+    double p[3] = {s->x[slot], s->y[slot], s->z[slot]};
+    for (int a = 0; a < 3; a++) {
+      if (i == 0 || p[a] < mn[a]) mn[a] = p[a];
+      if (i == 0 || p[a] > mx[a]) mx[a] = p[a];
+    }
   }
-  w->cells.len = n;
-  qsort(cells, n, sizeof *cells, cmp_keyed);
-  ix->mask = tsize - 1;
-  for (size_t i = 0; i < tsize; i++) w->table.data[i] = -1;
+  ix->cell = cell > 0.0 ? cell : 1.0;
+  for (;;) {
+    double cells = 1.0;
+    for (int a = 0; a < 3; a++) cells *= floor((mx[a] - mn[a]) / ix->cell) + 1.0;
+    if (cells <= (double)(1 << 22)) break;
+    ix->cell *= 2.0; /* any cell size is correct; larger only scans more */
+  }
+  size_t ncells = 1;
+  for (int a = 0; a < 3; a++) {
+    ix->min[a] = mn[a];
+    ix->dims[a] = (int64_t)floor((mx[a] - mn[a]) / ix->cell) + 1;
+    ncells *= (size_t)ix->dims[a];
+  }
+  if (SYLVA__VEC_RESERVE(w->cell_first, ncells + 1) || SYLVA__VEC_RESERVE(w->cell_items, n + 1) ||
+      SYLVA__VEC_RESERVE(w->cell_pos, 3 * n + 3) || SYLVA__VEC_RESERVE(w->cell_of, n + 1))
+    return SYLVA_ENOMEM;
+  int32_t *first = w->cell_first.data, *of = w->cell_of.data;
+  for (size_t c = 0; c <= ncells; c++) first[c] = 0;
   for (size_t i = 0; i < n; i++) {
-    if (i > 0 && cells[i].key == cells[i - 1].key) continue;
-    size_t h = hash_key(cells[i].key) & ix->mask;
-    while (w->table.data[h] >= 0) h = (h + 1) & ix->mask;
-    w->table.data[h] = (int64_t)i;
+    int32_t slot = w->sprouts.data[i].slot;
+    int64_t c = (cell_of(ix, 2, s->z[slot]) * ix->dims[1] + cell_of(ix, 1, s->y[slot])) *
+                    ix->dims[0] + cell_of(ix, 0, s->x[slot]);
+    of[i] = (int32_t)c;
+    first[c + 1]++;
   }
+  for (size_t c = 0; c < ncells; c++) first[c + 1] += first[c];
+  /* place items stably: cell_of doubles as the running fill position */
+  for (size_t i = 0; i < n; i++) {
+    int32_t at = first[of[i]]++;
+    int32_t slot = w->sprouts.data[i].slot;
+    w->cell_items.data[at] = (int32_t)i;
+    w->cell_pos.data[3 * at] = s->x[slot];
+    w->cell_pos.data[3 * at + 1] = s->y[slot];
+    w->cell_pos.data[3 * at + 2] = s->z[slot];
+  }
+  for (size_t c = ncells; c > 0; c--) first[c] = first[c - 1];
+  first[0] = 0;
   return SYLVA_OK;
 }
 
 /* True when a sprouting node other than self is closer to p than d2 (squared). */
 static bool contested(const sylva_world *w, const index_ctx *ix, const double p[3], double d2,
                       int32_t self) {
-  const sylva__skeleton *s = &w->nodes;
   double d = sqrt(d2);
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
-    lo[a] = (int64_t)floor((p[a] - d) * ix->inv_cell);
-    hi[a] = (int64_t)floor((p[a] + d) * ix->inv_cell);
+    lo[a] = cell_of(ix, a, p[a] - d);
+    hi[a] = cell_of(ix, a, p[a] + d);
   }
-  const sylva__keyed *cells = w->cells.data;
-  size_t n = w->cells.len;
-  double cell = 1.0 / ix->inv_cell;
+  const int32_t *first = w->cell_first.data, *items = w->cell_items.data;
+  const float *pos = w->cell_pos.data;
   for (int64_t cz = lo[2]; cz <= hi[2]; cz++)
-    for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
-      for (int64_t cx = lo[0]; cx <= hi[0]; cx++) {
-        /* the key of a cell, from a point inside it */
-        int64_t key = cell_key(((double)cx + 0.5) * cell, ((double)cy + 0.5) * cell,
-                               ((double)cz + 0.5) * cell, ix->inv_cell);
-        size_t h = hash_key(key) & ix->mask;
-        int64_t first = -1;
-        for (; w->table.data[h] >= 0; h = (h + 1) & ix->mask)
-          if (cells[w->table.data[h]].key == key) {
-            first = w->table.data[h];
-            break;
-          }
-        if (first < 0) continue;
-        for (size_t i = (size_t)first; i < n && cells[i].key == key; i++) {
-          if (cells[i].item == self) continue;
-          int32_t slot = w->sprouts.data[cells[i].item].slot;
-          double dx = s->x[slot] - p[0], dy = s->y[slot] - p[1], dz = s->z[slot] - p[2];
-          if (dx * dx + dy * dy + dz * dz < d2) return true;
-        }
+    for (int64_t cy = lo[1]; cy <= hi[1]; cy++) {
+      int64_t row = (cz * ix->dims[1] + cy) * ix->dims[0];
+      for (int32_t k = first[row + lo[0]]; k < first[row + hi[0] + 1]; k++) {
+        double dx = pos[3 * k] - p[0], dy = pos[3 * k + 1] - p[1], dz = pos[3 * k + 2] - p[2];
+        if (dx * dx + dy * dy + dz * dz < d2 && items[k] != self) return true;
       }
+    }
   return false;
 }
 
@@ -176,9 +183,10 @@ static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_s
     double p[3] = {tip[0] + r * dir[0], tip[1] + r * dir[1], tip[2] + r * dir[2]};
     int v[3];
     if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) continue;
-    if (sylva__grid_blocked(&w->grid, v) || sylva__grid_occupant(&w->grid, v) >= 0) continue;
+    if (w->grid.obstacle_count && sylva__grid_blocked(&w->grid, v)) continue;
+    double l = sylva__grid_free_light(&w->grid, v);
+    if (l < 0.0) continue; /* occupied */
     if (contested(w, ix, p, r * r, self)) continue;
-    double l = sylva__grid_light(&w->grid, v);
     for (int i = 0; i < 3; i++) vo[i] += l * dir[i];
   }
 }

@@ -76,7 +76,10 @@ void sylva_world_destroy(sylva_world *w) {
   free(w->stats.data);
   free(w->stem_first.data);
   free(w->cells.data);
-  free(w->table.data);
+  free(w->cell_first.data);
+  free(w->cell_items.data);
+  free(w->cell_pos.data);
+  free(w->cell_of.data);
   free(w);
 }
 
@@ -506,7 +509,9 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->other = w->scratch_cap * (3 * sizeof(double) + sizeof(int32_t)) +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->radii.cap * sizeof(sylva_radius_change) +
-               w->cells.cap * sizeof(sylva__keyed) + w->table.cap * sizeof(int64_t) +
+               w->cells.cap * sizeof(sylva__keyed) +
+               (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap) * sizeof(int32_t) +
+               w->cell_pos.cap * sizeof(float) +
                (size_t)w->stem_cap * sizeof(sylva__stem);
 }
 

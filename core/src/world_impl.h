@@ -53,6 +53,9 @@ typedef struct sylva__keyed {
   int32_t item;
 } sylva__keyed;
 
+/** Orders keyed items by key, then item. */
+int sylva__keyed_cmp(const void *a, const void *b);
+
 /** Growable scratch array of one element type. */
 #define SYLVA__VEC(T)   \
   struct {              \
@@ -95,8 +98,11 @@ struct sylva_world {
   SYLVA__VEC(sylva_radius_change) radii;
   SYLVA__VEC(int32_t) shed;
   SYLVA__VEC(sylva_stem_stats) stats;
-  SYLVA__VEC(sylva__keyed) cells; /* competition index: sprouts sorted by cell */
-  SYLVA__VEC(int64_t) table;       /* hash of cell key -> first position in cells */
+  SYLVA__VEC(sylva__keyed) cells;   /* shed nodes sorted by chunk */
+  SYLVA__VEC(int32_t) cell_first;    /* competition index: first item of each cell */
+  SYLVA__VEC(int32_t) cell_items;    /* sprout indices, cell by cell */
+  SYLVA__VEC(float) cell_pos;        /* their positions, x y z */
+  SYLVA__VEC(int32_t) cell_of;       /* cell of each sprout while building */
   sylva_journal journal;
 };
 
