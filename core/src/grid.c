@@ -106,7 +106,7 @@ static int64_t *colsum_get(sylva__grid *g, int cx, int cy) {
 bool sylva__grid_blocked(const sylva__grid *g, const int v[3]) {
   for (int i = 0; i < g->obstacle_count; i++) {
     const sylva__obstacle *o = &g->obstacles[i];
-    if (o->live && v[0] >= o->lo[0] && v[0] < o->hi[0] && v[1] >= o->lo[1] && v[1] < o->hi[1] &&
+    if (v[0] >= o->lo[0] && v[0] < o->hi[0] && v[1] >= o->lo[1] && v[1] < o->hi[1] &&
         v[2] >= o->lo[2] && v[2] < o->hi[2])
       return true;
   }
@@ -116,7 +116,7 @@ bool sylva__grid_blocked(const sylva__grid *g, const int v[3]) {
 bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]) {
   for (int i = 0; i < g->obstacle_count; i++) {
     const sylva__obstacle *o = &g->obstacles[i];
-    if (o->live && v[0] >= o->lo[0] && v[0] < o->hi[0] && v[1] >= o->lo[1] && v[1] < o->hi[1] &&
+    if (v[0] >= o->lo[0] && v[0] < o->hi[0] && v[1] >= o->lo[1] && v[1] < o->hi[1] &&
         v[2] < o->hi[2])
       return true;
   }
@@ -285,7 +285,7 @@ static void obstacle_voxels(const sylva__grid *g, sylva__obstacle *o) {
 
 int sylva__grid_find_obstacle(const sylva__grid *g, const char *label) {
   for (int i = 0; i < g->obstacle_count; i++)
-    if (g->obstacles[i].live && strcmp(g->obstacles[i].label, label) == 0)
+    if (strcmp(g->obstacles[i].label, label) == 0)
       return g->obstacles[i].id;
   return SYLVA_ENOTFOUND;
 }
@@ -306,7 +306,6 @@ int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min
   sylva__obstacle *o = &g->obstacles[g->obstacle_count++];
   memset(o, 0, sizeof *o);
   o->id = g->next_obstacle_id++;
-  o->live = true;
   strcpy(o->label, label);
   memcpy(o->min, min, sizeof o->min);
   memcpy(o->max, max, sizeof o->max);
@@ -316,7 +315,7 @@ int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min
 
 int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
   for (int i = 0; i < g->obstacle_count; i++) {
-    if (g->obstacles[i].live && g->obstacles[i].id == id) {
+    if (g->obstacles[i].id == id) {
       memmove(&g->obstacles[i], &g->obstacles[i + 1],
               (size_t)(g->obstacle_count - i - 1) * sizeof *g->obstacles);
       g->obstacle_count--;

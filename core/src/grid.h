@@ -33,7 +33,6 @@ typedef struct sylva__chunk {
 
 typedef struct sylva__obstacle {
   int id;
-  bool live;
   char label[SYLVA_LABEL_MAX];
   double min[3], max[3];
   int lo[3], hi[3]; /* voxel box [lo, hi), clipped to the grid */

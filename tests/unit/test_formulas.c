@@ -203,6 +203,32 @@ static void test_allocation_hand_worked(void) {
   sylva_world_destroy(w);
 }
 
+/* b = b_min while T <= tau, then linear to b_max at the first T with X(T) >= 0.95 limit. */
+static void test_shade_base(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  sylva_species_def sp = sylva_default_species_def(); /* tau 6, b 1.8 .. 2.2 */
+  CHECK(sylva_world_add_species(w, &sp, "x") == 0);
+  sylva__species *s = &w->species[0];
+  /* X(T) = 100 / (1 + 49 e^(-0.34 T)): X(20) = 94.82, X(21) = 96.27, so T95 = 21 */
+  CHECK_INT(s->t95, 21);
+  CHECK_NEAR(sylva__species_b(s, 0), 1.8, 0.0);
+  CHECK_NEAR(sylva__species_b(s, 6), 1.8, 0.0);
+  CHECK_NEAR(sylva__species_b(s, 7), 1.8 + 0.4 / 15.0, 1e-15);
+  CHECK_NEAR(sylva__species_b(s, 13), 1.8 + 0.4 * 7.0 / 15.0, 1e-15);
+  CHECK_NEAR(sylva__species_b(s, 20), 1.8 + 0.4 * 14.0 / 15.0, 1e-15);
+  CHECK_NEAR(sylva__species_b(s, 21), 2.2, 0.0);
+  CHECK_NEAR(sylva__species_b(s, 60), 2.2, 0.0);
+  /* the fixed-point pyramid weights are b^-q in units of 2^-32, rounded */
+  double b = 1.8 + 0.4 * 7.0 / 15.0;
+  const int64_t *wt = sylva__species_shade_weights(s, 13);
+  CHECK_INT(wt[0], (int64_t)floor(SYLVA__SHADE_ONE / b + 0.5));
+  CHECK_INT(wt[2], (int64_t)floor(SYLVA__SHADE_ONE / (b * b * b) + 0.5));
+  CHECK_INT(wt[19], (int64_t)floor(pow(b, -20.0) * SYLVA__SHADE_ONE + 0.5));
+  sylva_world_destroy(w);
+}
+
 int main(void) {
   test_derivatives();
   test_cap_and_stop();
@@ -211,5 +237,6 @@ int main(void) {
   test_lateral_direction();
   test_rng();
   test_allocation_hand_worked();
+  test_shade_base();
   return check_summary("formulas");
 }

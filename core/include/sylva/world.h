@@ -122,33 +122,43 @@ int sylva_world_find_obstacle(const sylva_world *w, const char *label);
 int sylva_world_step(sylva_world *w, const sylva_journal **journal);
 
 /* Queries. */
+/** The def the world was created with. */
 const sylva_world_def *sylva_world_get_def(const sylva_world *w);
+/** Iterations grown so far (0 before the first step). */
 int sylva_world_iteration(const sylva_world *w);
+/** True when every stem has finished by its growth equation (or there are none). */
 bool sylva_world_finished(const sylva_world *w);
+/** Number of species, and a species' parameters and label by id. */
 int sylva_world_species_count(const sylva_world *w);
 const sylva_species_def *sylva_world_species(const sylva_world *w, int species);
 const char *sylva_world_species_label(const sylva_world *w, int species);
+/** Number of plants, and a plant's label, species and stem count by id. */
 int sylva_world_plant_count(const sylva_world *w);
 const char *sylva_world_plant_label(const sylva_world *w, int plant);
 int sylva_world_plant_species(const sylva_world *w, int plant);
 int sylva_world_plant_stem_count(const sylva_world *w, int plant);
 /** Global index of a plant's stem (stems are numbered in plant order). */
 int sylva_world_stem_index(const sylva_world *w, int plant, int stem);
+/** Number of stems of all plants. */
 int sylva_world_stem_count(const sylva_world *w);
 /** Root position of a global stem. */
 void sylva_world_stem_root(const sylva_world *w, int stem, double root[3]);
 /** Current measures of a global stem (as after the last iteration). */
 void sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out);
+/** Number of obstacles. */
 int sylva_world_obstacle_count(const sylva_world *w);
-/** The i-th live obstacle (0 <= i < count), in the order they were added. */
+/** The i-th obstacle (0 <= i < count), in the order they were added; the label
+ *  points into the world and is valid until the obstacle is removed. */
 void sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out);
-/** Live nodes, in id order (parents before children). */
+/** Number of live nodes. */
 size_t sylva_world_node_count(const sylva_world *w);
+/** The i-th live node (0 <= i < count), in id order: parents before children. */
 void sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out);
 /** Light (0..1) of the voxel holding point p; 0 outside the world. */
 double sylva_world_light_at(const sylva_world *w, const double p[3]);
-/** Voxel grid size. */
+/** Voxels per axis. */
 void sylva_world_dims(const sylva_world *w, int dims[3]);
+/** Memory held now: voxels, skeleton and per-step scratch. */
 void sylva_world_memory(const sylva_world *w, sylva_memory *out);
 /** A 64-bit hash of the whole state (skeleton, generator, iteration). */
 uint64_t sylva_world_hash(const sylva_world *w);
