@@ -257,7 +257,7 @@ static void get_stats(reader *r, sylva_stem_stats *s) {
     goto fail;            \
   } while (0)
 
-static int read_world(reader *r, double (*clock)(void *), void *clock_ctx, sylva_world **out) {
+static int read_world(reader *r, sylva_world **out) {
   int rc = SYLVA_OK;
   sylva_world *w = NULL;
   sylva_world_def def = sylva_default_world_def();
@@ -265,8 +265,6 @@ static int read_world(reader *r, double (*clock)(void *), void *clock_ctx, sylva
   for (int a = 0; a < 3; a++) def.max[a] = get_f64(r);
   def.voxel = get_f64(r);
   def.seed = get_u64(r);
-  def.clock = clock;
-  def.clock_ctx = clock_ctx;
   if (r->bad) return SYLVA_ETRUNCATED;
   if (sylva_world_create(&def, &w)) return SYLVA_EBADIMAGE;
   int32_t iteration = get_i32(r);
@@ -424,8 +422,7 @@ fail:
   return rc;
 }
 
-int sylva_snapshot_load(const uint8_t *data, size_t size, double (*clock)(void *),
-                        void *clock_ctx, sylva_world **out) {
+int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   *out = NULL;
   if (!data || size < HEADER) return SYLVA_ETRUNCATED;
   if (memcmp(data, magic, 8) != 0) return SYLVA_EBADIMAGE;
@@ -440,5 +437,5 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, double (*clock)(void *
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};
-  return read_world(&r, clock, clock_ctx, out);
+  return read_world(&r, out);
 }

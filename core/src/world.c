@@ -320,6 +320,11 @@ int sylva_world_find_obstacle(const sylva_world *w, const char *label) {
 
 /* ---- step --------------------------------------------------------------------- */
 
+void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx) {
+  w->def.clock = clock;
+  w->def.clock_ctx = ctx;
+}
+
 static double now(const sylva_world *w) { return w->def.clock ? w->def.clock(w->def.clock_ctx) : 0.0; }
 
 static int reserve_scratch(sylva_world *w) {

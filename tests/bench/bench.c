@@ -11,6 +11,7 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include "../scenario_file.h"
 #include "grid.h"
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
@@ -103,22 +104,11 @@ static void report(const summary *s) {
 }
 
 static sylva_world *from_file(const char *dir, const char *file, int *limit) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/%s", dir, file);
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    fprintf(stderr, "bench: cannot open %s\n", path);
-    exit(1);
-  }
-  static char buf[1 << 20];
-  size_t n = fread(buf, 1, sizeof buf, f);
-  fclose(f);
-  sylva_scenario *s;
+  sylva_scenario *s = scenario_file(dir, file);
   char err[512];
   sylva_world *w;
-  if (sylva_scenario_parse(buf, n, &s, err, sizeof err) < 0 ||
-      sylva_scenario_build(s, &w, err, sizeof err) < 0) {
-    fprintf(stderr, "bench: %s: %s\n", path, err);
+  if (sylva_scenario_build(s, &w, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: %s/%s: %s\n", dir, file, err);
     exit(1);
   }
   *limit = s->iterations;
@@ -212,15 +202,7 @@ int main(int argc, char **argv) {
   if (all || strcmp(what, "stand5") == 0) {
     int limit;
     sylva_world *w = from_file(dir, "stand.json", &limit);
-    sylva_world_destroy(w);
-    /* rebuild with a clock for phase timing */
-    uint8_t *img;
-    size_t n;
-    w = from_file(dir, "stand.json", &limit);
-    sylva_snapshot_save(w, &img, &n);
-    sylva_world_destroy(w);
-    sylva_snapshot_load(img, n, now, NULL, &w);
-    free(img);
+    sylva_world_set_clock(w, now, NULL);
     summary s = grow("five-tree stand (scenarios/stand.json)", w, limit, 0);
     report(&s);
     sylva_world_destroy(w);

@@ -137,7 +137,7 @@ static void test_snapshot_lockstep(void) {
     size_t n;
     CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
     sylva_world *r;
-    CHECK_INT(sylva_snapshot_load(img, n, NULL, NULL, &r), 0);
+    CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
     free(img);
     if (!r) break;
     CHECK(sylva_world_hash(r) == sylva_world_hash(w));
@@ -160,22 +160,22 @@ static void test_snapshot_bad_images(void) {
   size_t n;
   CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
   sylva_world *r = (sylva_world *)1;
-  CHECK_INT(sylva_snapshot_load(img, 10, NULL, NULL, &r), SYLVA_ETRUNCATED);
+  CHECK_INT(sylva_snapshot_load(img, 10, &r), SYLVA_ETRUNCATED);
   CHECK(r == NULL);
-  CHECK_INT(sylva_snapshot_load(img, n - 1, NULL, NULL, &r), SYLVA_ETRUNCATED);
+  CHECK_INT(sylva_snapshot_load(img, n - 1, &r), SYLVA_ETRUNCATED);
   uint8_t *bad = malloc(n);
   memcpy(bad, img, n);
   bad[0] = 'X';
-  CHECK_INT(sylva_snapshot_load(bad, n, NULL, NULL, &r), SYLVA_EBADIMAGE);
+  CHECK_INT(sylva_snapshot_load(bad, n, &r), SYLVA_EBADIMAGE);
   memcpy(bad, img, n);
   bad[8] = 99;
-  CHECK_INT(sylva_snapshot_load(bad, n, NULL, NULL, &r), SYLVA_EVERSION);
+  CHECK_INT(sylva_snapshot_load(bad, n, &r), SYLVA_EVERSION);
   /* any flipped byte of the payload is caught by the checksum */
   int caught = 0;
   for (size_t pos = 32; pos < n; pos += 1 + n / 200) {
     memcpy(bad, img, n);
     bad[pos] ^= 0x5a;
-    caught += sylva_snapshot_load(bad, n, NULL, NULL, &r) == SYLVA_ECHECKSUM;
+    caught += sylva_snapshot_load(bad, n, &r) == SYLVA_ECHECKSUM;
   }
   CHECK(caught > 150);
   /* a forged image with a valid checksum but broken content never crashes */
@@ -186,7 +186,7 @@ static void test_snapshot_bad_images(void) {
     uint64_t sum = 0xcbf29ce484222325ULL;
     for (size_t i = 32; i < n; i++) sum = (sum ^ bad[i]) * 0x100000001b3ULL;
     for (int i = 0; i < 8; i++) bad[24 + i] = (uint8_t)(sum >> (8 * i));
-    int rc = sylva_snapshot_load(bad, n, NULL, NULL, &r);
+    int rc = sylva_snapshot_load(bad, n, &r);
     if (rc == 0) {
       for (int k = 0; k < 2; k++) sylva_world_step(r, NULL);
       sylva_world_destroy(r);

@@ -14,8 +14,7 @@
 int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size);
 /** Builds a new world from an image. A bad image (magic, version, checksum,
  *  truncation, inconsistent content) returns a negative status and creates nothing.
- *  The clock of the restored world is taken from clock/clock_ctx (may be NULL). */
-int sylva_snapshot_load(const uint8_t *data, size_t size, double (*clock)(void *),
-                        void *clock_ctx, sylva_world **out);
+ *  The restored world has no clock (see sylva_world_set_clock). */
+int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out);
 
 #endif

@@ -118,6 +118,9 @@ int sylva_world_remove_obstacle(sylva_world *w, int obstacle);
 /** Id of the obstacle with this label, or SYLVA_ENOTFOUND. */
 int sylva_world_find_obstacle(const sylva_world *w, const char *label);
 
+/** Sets (or clears, with NULL) the clock that times the phases of each step. */
+void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx);
+
 /** Grows one iteration. SYLVA_EFINISHED when every stem has finished. */
 int sylva_world_step(sylva_world *w, const sylva_journal **journal);
 
