@@ -1,0 +1,475 @@
+/* Mesh export (OBJ, PLY) of a world's branches as generalized cylinders; see mesh.h.
+ *
+ * Two passes over the live nodes. The plan pass maps parent ids to node indices
+ * (ids increase and parents come first, so a binary search over the ids seen so
+ * far), marks each node's first child and sorts the nodes by stem (counting sort,
+ * stable, so id order holds within a stem). The write pass streams ring after ring;
+ * it keeps one frame (u, t) per node so children can carry their parent's frame. */
+#include "mesh.h"
+
+#include <assert.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MESH_TAU 6.283185307179586476925286766559
+
+/* The nodes of a world, indexed by their position i in id order. */
+typedef struct mesh_plan {
+  size_t n;              /* live nodes */
+  int stems;             /* stems of all plants */
+  int32_t *ids;          /* ids[i]: id of node i */
+  int32_t *parent;       /* node index of the parent, or -1 */
+  int32_t *first_child;  /* node index of the first (lowest id) child, or -1 */
+  int32_t *order;        /* node indices sorted by (global stem, id) */
+  int32_t *ring;         /* ring number (global, in layout order), or -1 without geometry */
+  size_t *stem_start;    /* stems + 1 offsets into order */
+  size_t rings, internodes, caps;
+} mesh_plan;
+
+static void plan_free(mesh_plan *p) {
+  free(p->ids);
+  free(p->parent);
+  free(p->first_child);
+  free(p->order);
+  free(p->ring);
+  free(p->stem_start);
+  memset(p, 0, sizeof *p);
+}
+
+static bool has_geometry(const mesh_plan *p, size_t i) {
+  return p->parent[i] >= 0 || p->first_child[i] >= 0;
+}
+
+static int32_t find_index(const int32_t *ids, size_t count, int32_t id) {
+  size_t lo = 0, hi = count;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (ids[mid] < id) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < count && ids[lo] == id ? (int32_t)lo : -1;
+}
+
+static int plan_build(const sylva_world *w, mesh_plan *p) {
+  memset(p, 0, sizeof *p);
+  size_t n = sylva_world_node_count(w);
+  /* node ids are int32, so the indices fit too */
+  assert(n <= (size_t)INT32_MAX);
+  p->n = n;
+  p->stems = sylva_world_stem_count(w);
+  size_t m = n ? n : 1;
+  p->ids = malloc(m * sizeof *p->ids);
+  p->parent = malloc(m * sizeof *p->parent);
+  p->first_child = malloc(m * sizeof *p->first_child);
+  p->order = malloc(m * sizeof *p->order);
+  p->ring = malloc(m * sizeof *p->ring);
+  p->stem_start = calloc((size_t)p->stems + 1, sizeof *p->stem_start);
+  if (!p->ids || !p->parent || !p->first_child || !p->order || !p->ring || !p->stem_start) {
+    plan_free(p);
+    return SYLVA_ENOMEM;
+  }
+  sylva_node_info info;
+  for (size_t i = 0; i < n; i++) {
+    sylva_world_node_at(w, i, &info);
+    assert(i == 0 || info.id > p->ids[i - 1]);
+    p->ids[i] = info.id;
+    p->first_child[i] = -1;
+    p->parent[i] = -1;
+    if (info.parent >= 0) {
+      int32_t q = find_index(p->ids, i, info.parent);
+      assert(q >= 0); /* a live node's parent is live and comes first */
+      p->parent[i] = q;
+      if (p->first_child[q] < 0) p->first_child[q] = (int32_t)i;
+    }
+    int s = sylva_world_stem_index(w, info.plant, info.stem);
+    assert(s >= 0 && s < p->stems);
+    p->stem_start[s + 1]++;
+  }
+  for (int s = 0; s < p->stems; s++) p->stem_start[s + 1] += p->stem_start[s];
+  /* stem_start[s] is stem s's insertion point while placing and ends at the start of
+   * stem s + 1; shifting by one entry restores the starts */
+  for (size_t i = 0; i < n; i++) {
+    sylva_world_node_at(w, i, &info);
+    int s = sylva_world_stem_index(w, info.plant, info.stem);
+    p->order[p->stem_start[s]++] = (int32_t)i;
+  }
+  for (int s = p->stems; s > 0; s--) p->stem_start[s] = p->stem_start[s - 1];
+  p->stem_start[0] = 0;
+  for (size_t k = 0; k < n; k++) {
+    size_t i = (size_t)p->order[k];
+    if (!has_geometry(p, i)) {
+      p->ring[i] = -1;
+      continue;
+    }
+    p->ring[i] = (int32_t)p->rings++;
+    if (p->parent[i] >= 0) p->internodes++;
+    /* a tip, or a root with children: both ends of a stem's cylinders are closed */
+    if ((p->parent[i] >= 0) != (p->first_child[i] >= 0)) p->caps++;
+  }
+  return 0;
+}
+
+static bool options_ok(sylva_mesh_format format, const sylva_mesh_options *opt) {
+  return (format == SYLVA_MESH_OBJ || format == SYLVA_MESH_PLY) &&
+         opt->sides >= SYLVA_MESH_MIN_SIDES && opt->sides <= SYLVA_MESH_MAX_SIDES;
+}
+
+static void plan_counts(const mesh_plan *p, const sylva_world *w, const sylva_mesh_options *opt,
+                        size_t *vertices, size_t *faces) {
+  size_t sides = (size_t)opt->sides;
+  size_t boxes = opt->obstacles ? (size_t)sylva_world_obstacle_count(w) : 0;
+  *vertices = sides * p->rings + 8 * boxes;
+  *faces = 2 * sides * p->internodes + (sides - 2) * p->caps + 12 * boxes;
+}
+
+sylva_mesh_options sylva_mesh_default_options(void) {
+  sylva_mesh_options o = {.sides = 8, .obstacles = false};
+  return o;
+}
+
+int sylva_mesh_count(const sylva_world *w, sylva_mesh_format format,
+                     const sylva_mesh_options *opt, size_t *vertices, size_t *faces) {
+  sylva_mesh_options defaults = sylva_mesh_default_options();
+  if (!opt) opt = &defaults;
+  *vertices = *faces = 0;
+  if (!options_ok(format, opt)) return SYLVA_EINVAL;
+  mesh_plan p;
+  int rc = plan_build(w, &p);
+  if (rc < 0) return rc;
+  plan_counts(&p, w, opt, vertices, faces);
+  plan_free(&p);
+  return 0;
+}
+
+/* Vector helpers on double[3]. */
+static double dot3(const double a[3], const double b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double a[3], const double b[3], double out[3]) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Scales v to unit length; false (v unchanged) when it is too short to have a direction. */
+static bool normalize3(double v[3]) {
+  double len = sqrt(dot3(v, v));
+  if (!(len > 1e-12)) return false;
+  for (int a = 0; a < 3; a++) v[a] /= len;
+  return true;
+}
+
+/* A fixed unit vector perpendicular to the unit vector t (+x for t = +z). */
+static void first_perpendicular(const double t[3], double u[3]) {
+  double e[3] = {0, 0, 0};
+  e[fabs(t[0]) < 0.9 ? 0 : 1] = 1;
+  double d = dot3(e, t);
+  for (int a = 0; a < 3; a++) u[a] = e[a] - d * t[a];
+  normalize3(u);
+}
+
+/* Parallel transport of the frame vector u0 (perpendicular to t0) to the tangent t1:
+ * the smallest rotation that takes t0 to t1, applied to u0 (Rodrigues, with
+ * a = t0 x t1 and c = t0 . t1: R v = c v + a x v + a (a . v) / (1 + c)). */
+static void transport(const double u0[3], const double t0[3], const double t1[3], double u1[3]) {
+  double c = dot3(t0, t1);
+  if (1.0 + c < 1e-12) {
+    /* a reversal: half a turn about u0 takes t0 to -t0 and keeps u0 */
+    memcpy(u1, u0, 3 * sizeof *u1);
+  } else {
+    double a[3], axu[3];
+    cross3(t0, t1, a);
+    cross3(a, u0, axu);
+    double k = dot3(a, u0) / (1.0 + c);
+    for (int i = 0; i < 3; i++) u1[i] = c * u0[i] + axu[i] + k * a[i];
+  }
+  /* keep the frame orthonormal against rounding drift along long stems */
+  double d = dot3(u1, t1);
+  for (int i = 0; i < 3; i++) u1[i] -= d * t1[i];
+  if (!normalize3(u1)) first_perpendicular(t1, u1);
+}
+
+/* The state of one write. */
+typedef struct mesh_writer {
+  FILE *out;
+  const sylva_world *w;
+  const mesh_plan *p;
+  sylva_mesh_format format;
+  int sides;
+  bool obstacles;
+  double (*frame)[6]; /* per node: u (0..2), t (3..5) */
+  double cosk[SYLVA_MESH_MAX_SIDES], sink[SYLVA_MESH_MAX_SIDES];
+  size_t box_base; /* global index of the first obstacle vertex */
+} mesh_writer;
+
+static bool stream_ok(const mesh_writer *mw) { return !ferror(mw->out); }
+
+/* Copies a label for a name token: whitespace and control bytes become '_'. */
+static void name_token(const char *label, char out[SYLVA_LABEL_MAX]) {
+  size_t i = 0;
+  for (; label && label[i] && i + 1 < SYLVA_LABEL_MAX; i++) {
+    unsigned char c = (unsigned char)label[i];
+    out[i] = c <= ' ' || c == 0x7f ? '_' : (char)c;
+  }
+  out[i] = '\0';
+}
+
+static void node_position(const sylva_node_info *info, double pos[3]) {
+  pos[0] = info->x;
+  pos[1] = info->y;
+  pos[2] = info->z;
+}
+
+/* Computes node i's frame from its parent's (or from scratch for a root). */
+static void node_frame(mesh_writer *mw, size_t i, const sylva_node_info *info) {
+  const mesh_plan *p = mw->p;
+  double *u = mw->frame[i], *t = mw->frame[i] + 3;
+  double pos[3], other[3];
+  sylva_node_info o;
+  node_position(info, pos);
+  if (p->parent[i] < 0) {
+    sylva_world_node_at(mw->w, (size_t)p->first_child[i], &o);
+    node_position(&o, other);
+    for (int a = 0; a < 3; a++) t[a] = other[a] - pos[a];
+    if (!normalize3(t)) {
+      /* no direction to the child: the stem starts upright */
+      t[0] = 0;
+      t[1] = 0;
+      t[2] = 1;
+    }
+    first_perpendicular(t, u);
+    return;
+  }
+  const double *pu = mw->frame[p->parent[i]], *pt = mw->frame[p->parent[i]] + 3;
+  sylva_world_node_at(mw->w, (size_t)p->parent[i], &o);
+  node_position(&o, other);
+  for (int a = 0; a < 3; a++) t[a] = pos[a] - other[a];
+  if (!normalize3(t)) memcpy(t, pt, 3 * sizeof *t); /* a zero-length internode */
+  transport(pu, pt, t, u);
+}
+
+static void write_vertex(mesh_writer *mw, const double v[3]) {
+  fprintf(mw->out, mw->format == SYLVA_MESH_OBJ ? "v %.5f %.5f %.5f\n" : "%.5f %.5f %.5f\n", v[0],
+          v[1], v[2]);
+}
+
+/* Global vertex indices (0-based); stem: the PLY face property. */
+static void write_face(mesh_writer *mw, size_t a, size_t b, size_t c, int stem) {
+  if (mw->format == SYLVA_MESH_OBJ)
+    fprintf(mw->out, "f %zu %zu %zu\n", a + 1, b + 1, c + 1);
+  else
+    fprintf(mw->out, "3 %zu %zu %zu %d\n", a, b, c, stem);
+}
+
+/* The rings of stem s. */
+static bool write_stem_vertices(mesh_writer *mw, int s) {
+  const mesh_plan *p = mw->p;
+  sylva_node_info info;
+  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
+    size_t i = (size_t)p->order[k];
+    if (p->ring[i] < 0) continue;
+    sylva_world_node_at(mw->w, i, &info);
+    node_frame(mw, i, &info);
+    const double *u = mw->frame[i], *t = mw->frame[i] + 3;
+    double v[3], pos[3], r = info.radius;
+    cross3(t, u, v);
+    node_position(&info, pos);
+    for (int j = 0; j < mw->sides; j++) {
+      double q[3];
+      for (int a = 0; a < 3; a++) q[a] = pos[a] + r * (mw->cosk[j] * u[a] + mw->sink[j] * v[a]);
+      write_vertex(mw, q);
+    }
+    if (!stream_ok(mw)) return false;
+  }
+  return true;
+}
+
+/* The faces of stem s: per node, its internode's side, then its cap. */
+static bool write_stem_faces(mesh_writer *mw, int s) {
+  const mesh_plan *p = mw->p;
+  size_t n = (size_t)mw->sides;
+  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
+    size_t i = (size_t)p->order[k];
+    if (p->ring[i] < 0) continue;
+    size_t c = (size_t)p->ring[i] * n;
+    int32_t parent = p->parent[i];
+    if (parent >= 0) {
+      size_t b = (size_t)p->ring[parent] * n;
+      for (size_t j = 0; j < n; j++) {
+        size_t j1 = (j + 1) % n;
+        write_face(mw, b + j, b + j1, c + j1, s);
+        write_face(mw, b + j, c + j1, c + j, s);
+      }
+    }
+    if (parent >= 0 && p->first_child[i] < 0) {
+      for (size_t j = 1; j + 1 < n; j++) write_face(mw, c, c + j, c + j + 1, s);
+    } else if (parent < 0) {
+      for (size_t j = 1; j + 1 < n; j++) write_face(mw, c, c + j + 1, c + j, s);
+    }
+    if (!stream_ok(mw)) return false;
+  }
+  return true;
+}
+
+/* Corner v of a box: bit 0 picks max x, bit 1 max y, bit 2 max z. */
+static void box_corner(const sylva_obstacle_def *o, int v, double q[3]) {
+  for (int a = 0; a < 3; a++) q[a] = (v >> a) & 1 ? o->max[a] : o->min[a];
+}
+
+static void write_box_vertices(mesh_writer *mw, int i) {
+  sylva_obstacle_def o;
+  sylva_world_obstacle_at(mw->w, i, NULL, &o);
+  for (int v = 0; v < 8; v++) {
+    double q[3];
+    box_corner(&o, v, q);
+    write_vertex(mw, q);
+  }
+}
+
+static void write_box_faces(mesh_writer *mw, int i) {
+  /* each side as a quad, counter-clockwise seen from outside: -x +x -y +y -z +z */
+  static const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                  {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  size_t b = mw->box_base + 8 * (size_t)i;
+  for (int f = 0; f < 6; f++) {
+    const int *q = quads[f];
+    write_face(mw, b + (size_t)q[0], b + (size_t)q[1], b + (size_t)q[2], -1 - i);
+    write_face(mw, b + (size_t)q[0], b + (size_t)q[2], b + (size_t)q[3], -1 - i);
+  }
+}
+
+static int stem_plant(const sylva_world *w, int s, int *stem) {
+  int plants = sylva_world_plant_count(w);
+  /* stems are numbered in plant order: the last plant whose first stem is <= s */
+  int lo = 0, hi = plants - 1;
+  while (lo < hi) {
+    int mid = lo + (hi - lo + 1) / 2;
+    if (sylva_world_stem_index(w, mid, 0) <= s) lo = mid;
+    else hi = mid - 1;
+  }
+  *stem = s - sylva_world_stem_index(w, lo, 0);
+  return lo;
+}
+
+static void stem_name(const sylva_world *w, int s, char *buf, size_t size) {
+  int stem, plant = stem_plant(w, s, &stem);
+  char label[SYLVA_LABEL_MAX];
+  name_token(sylva_world_plant_label(w, plant), label);
+  snprintf(buf, size, "%s_%d", label, stem);
+}
+
+static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
+  FILE *out = mw->out;
+  const sylva_world *w = mw->w;
+  int boxes = mw->obstacles ? sylva_world_obstacle_count(w) : 0;
+  char name[SYLVA_LABEL_MAX + 16];
+  if (mw->format == SYLVA_MESH_OBJ) {
+    fprintf(out,
+            "# sylva mesh export: branches as generalized cylinders, one object per stem\n"
+            "# iteration %d, %d stems, %d sides, %d obstacles; metres, z up, triangles\n"
+            "# vertices %zu, faces %zu\n",
+            sylva_world_iteration(w), mw->p->stems, mw->sides, boxes, vertices, faces);
+    return;
+  }
+  fprintf(out,
+          "ply\n"
+          "format ascii 1.0\n"
+          "comment sylva mesh export: branches as generalized cylinders\n"
+          "comment iteration %d, %d stems, %d sides, %d obstacles; metres, z up\n"
+          "comment face property stem: global stem index, or -1 - i for obstacle i\n",
+          sylva_world_iteration(w), mw->p->stems, mw->sides, boxes);
+  for (int s = 0; s < mw->p->stems; s++) {
+    stem_name(w, s, name, sizeof name);
+    fprintf(out, "comment stem %d %s\n", s, name);
+  }
+  for (int i = 0; i < boxes; i++) {
+    sylva_obstacle_def o;
+    sylva_world_obstacle_at(w, i, NULL, &o);
+    name_token(o.label, name);
+    fprintf(out, "comment obstacle %d %s\n", i, name);
+  }
+  fprintf(out,
+          "element vertex %zu\n"
+          "property float x\n"
+          "property float y\n"
+          "property float z\n"
+          "element face %zu\n"
+          "property list uchar int vertex_indices\n"
+          "property int stem\n"
+          "end_header\n",
+          vertices, faces);
+}
+
+static bool write_body(mesh_writer *mw) {
+  const mesh_plan *p = mw->p;
+  int boxes = mw->obstacles ? sylva_world_obstacle_count(mw->w) : 0;
+  char name[SYLVA_LABEL_MAX + 16];
+  if (mw->format == SYLVA_MESH_OBJ) {
+    for (int s = 0; s < p->stems; s++) {
+      if (p->stem_start[s] == p->stem_start[s + 1]) continue;
+      /* a stem of a lone root has no geometry and no object */
+      size_t first = (size_t)p->order[p->stem_start[s]];
+      if (p->ring[first] < 0) continue;
+      stem_name(mw->w, s, name, sizeof name);
+      fprintf(mw->out, "o %s\n", name);
+      if (!write_stem_vertices(mw, s) || !write_stem_faces(mw, s)) return false;
+    }
+    for (int i = 0; i < boxes; i++) {
+      sylva_obstacle_def o;
+      sylva_world_obstacle_at(mw->w, i, NULL, &o);
+      name_token(o.label, name);
+      fprintf(mw->out, "o obstacle_%s\n", name);
+      write_box_vertices(mw, i);
+      write_box_faces(mw, i);
+      if (!stream_ok(mw)) return false;
+    }
+    return true;
+  }
+  for (int s = 0; s < p->stems; s++)
+    if (!write_stem_vertices(mw, s)) return false;
+  for (int i = 0; i < boxes; i++) write_box_vertices(mw, i);
+  for (int s = 0; s < p->stems; s++)
+    if (!write_stem_faces(mw, s)) return false;
+  for (int i = 0; i < boxes; i++) write_box_faces(mw, i);
+  return stream_ok(mw);
+}
+
+int sylva_mesh_write(FILE *out, const sylva_world *w, sylva_mesh_format format,
+                     const sylva_mesh_options *opt) {
+  sylva_mesh_options defaults = sylva_mesh_default_options();
+  if (!opt) opt = &defaults;
+  if (!options_ok(format, opt)) return SYLVA_EINVAL;
+  mesh_plan p;
+  int rc = plan_build(w, &p);
+  if (rc < 0) return rc;
+  size_t vertices, faces;
+  plan_counts(&p, w, opt, &vertices, &faces);
+  if (format == SYLVA_MESH_PLY && vertices > (size_t)INT32_MAX) {
+    plan_free(&p);
+    return SYLVA_ETOOBIG;
+  }
+  mesh_writer mw = {.out = out, .w = w, .p = &p, .format = format, .sides = opt->sides,
+                    .obstacles = opt->obstacles, .box_base = (size_t)opt->sides * p.rings};
+  mw.frame = malloc((p.n ? p.n : 1) * sizeof *mw.frame);
+  if (!mw.frame) {
+    plan_free(&p);
+    return SYLVA_ENOMEM;
+  }
+  for (int j = 0; j < opt->sides; j++) {
+    double a = MESH_TAU * j / opt->sides;
+    mw.cosk[j] = cos(a);
+    mw.sink[j] = sin(a);
+  }
+  write_header(&mw, vertices, faces);
+  bool ok = stream_ok(&mw) && write_body(&mw);
+  ok = fflush(out) == 0 && ok;
+  int saved = errno;
+  free(mw.frame);
+  plan_free(&p);
+  errno = saved;
+  return ok ? 0 : SYLVA_MESH_EWRITE;
+}

@@ -1,0 +1,715 @@
+/* Mesh export (server/mesh.c): a small world with a tree, a two-root shrub and a
+ * wall, grown a few iterations, written as OBJ and PLY with several options. The
+ * files are parsed back and checked against counts derived here from the nodes
+ * (sylva_mesh_count must agree), against each other (same layout), for the same
+ * bytes on a second write, and for geometry: finite vertices, rings of the node's
+ * radius perpendicular to its internode, frames carried by parallel transport,
+ * outward faces. Write errors and bad options are checked too.
+ *
+ * Usage: test_mesh [OUTDIR]. With OUTDIR, the files are also written there with a
+ * manifest expected.tsv for assimp_check.py:
+ *   file <TAB> NAME <TAB> obj|ply <TAB> VERTICES <TAB> FACES
+ *   object <TAB> NAME <TAB> OBJECT <TAB> FACES <TAB> VERTICES   (OBJ, one per object) */
+#include <errno.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "../check.h"
+#include "mesh.h"
+#include "sylva/sylva.h"
+
+/* ---- the world and what the export of it must hold ---- */
+
+static sylva_world *make_world(int iterations) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w;
+  if (sylva_world_create(&wd, &w) < 0) return NULL;
+  sylva_species_def sp = sylva_default_species_def();
+  int species = sylva_world_add_species(w, &sp, "x");
+  double tree[1][3] = {{-2.0, 0.0, 0.0}};
+  double shrub[2][3] = {{2.0, 0.0, 0.0}, {2.4, 0.3, 0.0}};
+  /* a label with a space: the OBJ object name must stay one token */
+  sylva_plant_def p1 = {species, "oak", (const double(*)[3])tree, 1};
+  sylva_plant_def p2 = {species, "hazel bush", (const double(*)[3])shrub, 2};
+  sylva_obstacle_def wall = {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}};
+  if (species < 0 || sylva_world_add_plant(w, &p1, NULL) < 0 ||
+      sylva_world_add_plant(w, &p2, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {
+    sylva_world_destroy(w);
+    return NULL;
+  }
+  const sylva_journal *j;
+  for (int i = 0; i < iterations; i++)
+    if (sylva_world_step(w, &j) < 0) break;
+  return w;
+}
+
+/* The nodes of a world with their topology, and the ring layout of mesh.h. */
+typedef struct model {
+  size_t n;
+  sylva_node_info *node;
+  int32_t *parent;   /* node index or -1 */
+  int32_t *first;    /* first child's node index or -1 */
+  int *children;
+  int *stem;         /* global stem index */
+  int stems;
+  size_t *layout;    /* node indices with a ring, in layout order */
+  size_t rings, internodes, tips, roots;
+  size_t *stem_internodes, *stem_caps, *stem_rings;
+  int boxes;
+} model;
+
+static int32_t index_of(const model *m, size_t count, int32_t id) {
+  size_t lo = 0, hi = count;
+  while (lo < hi) {
+    size_t mid = (lo + hi) / 2;
+    if (m->node[mid].id < id) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < count && m->node[lo].id == id ? (int32_t)lo : -1;
+}
+
+static void model_build(model *m, const sylva_world *w) {
+  memset(m, 0, sizeof *m);
+  m->n = sylva_world_node_count(w);
+  m->stems = sylva_world_stem_count(w);
+  m->boxes = sylva_world_obstacle_count(w);
+  size_t n = m->n + 1, s = (size_t)m->stems + 1;
+  m->node = calloc(n, sizeof *m->node);
+  m->parent = calloc(n, sizeof *m->parent);
+  m->first = calloc(n, sizeof *m->first);
+  m->children = calloc(n, sizeof *m->children);
+  m->stem = calloc(n, sizeof *m->stem);
+  m->layout = calloc(n, sizeof *m->layout);
+  m->stem_internodes = calloc(s, sizeof(size_t));
+  m->stem_caps = calloc(s, sizeof(size_t));
+  m->stem_rings = calloc(s, sizeof(size_t));
+  if (!m->node || !m->parent || !m->first || !m->children || !m->stem || !m->layout ||
+      !m->stem_internodes || !m->stem_caps || !m->stem_rings) {
+    fprintf(stderr, "out of memory\n");
+    exit(1);
+  }
+  for (size_t i = 0; i < m->n; i++) {
+    sylva_world_node_at(w, i, &m->node[i]);
+    m->first[i] = -1;
+    m->parent[i] = m->node[i].parent < 0 ? -1 : index_of(m, i, m->node[i].parent);
+    if (m->node[i].parent >= 0) CHECK(m->parent[i] >= 0);
+    if (m->parent[i] >= 0) {
+      m->children[m->parent[i]]++;
+      if (m->first[m->parent[i]] < 0) m->first[m->parent[i]] = (int32_t)i;
+    }
+    m->stem[i] = sylva_world_stem_index(w, m->node[i].plant, m->node[i].stem);
+  }
+  for (int st = 0; st < m->stems; st++) {
+    for (size_t i = 0; i < m->n; i++) {
+      if (m->stem[i] != st || (m->parent[i] < 0 && m->children[i] == 0)) continue;
+      m->layout[m->rings++] = i;
+      m->stem_rings[st]++;
+      if (m->parent[i] >= 0) m->internodes++, m->stem_internodes[st]++;
+      if (m->parent[i] >= 0 && m->children[i] == 0) m->tips++, m->stem_caps[st]++;
+      if (m->parent[i] < 0) m->roots++, m->stem_caps[st]++;
+    }
+  }
+}
+
+static void model_free(model *m) {
+  free(m->node);
+  free(m->parent);
+  free(m->first);
+  free(m->children);
+  free(m->stem);
+  free(m->layout);
+  free(m->stem_internodes);
+  free(m->stem_caps);
+  free(m->stem_rings);
+}
+
+static void expected_counts(const model *m, int sides, bool boxes, size_t *v, size_t *f) {
+  size_t b = boxes ? (size_t)m->boxes : 0, k = (size_t)sides;
+  *v = k * (m->internodes + m->roots) + 8 * b;
+  *f = 2 * k * m->internodes + (k - 2) * (m->tips + m->roots) + 12 * b;
+}
+
+/* ---- writing into memory ---- */
+
+typedef struct blob {
+  char *data;
+  size_t size;
+  int rc;
+} blob;
+
+static blob write_blob(const sylva_world *w, sylva_mesh_format format,
+                       const sylva_mesh_options *opt) {
+  blob b = {NULL, 0, 0};
+  FILE *f = open_memstream(&b.data, &b.size);
+  if (!f) {
+    fprintf(stderr, "open_memstream failed\n");
+    exit(1);
+  }
+  b.rc = sylva_mesh_write(f, w, format, opt);
+  fclose(f);
+  return b;
+}
+
+/* ---- reading back ---- */
+
+typedef struct parsed {
+  bool ok;                 /* every line as the format says */
+  size_t nv, nf;           /* vertex and face lines */
+  size_t header_v, header_f;
+  double (*v)[3];
+  size_t (*f)[3];          /* 0-based */
+  int *face_tag;           /* PLY: the stem property; OBJ: the object index */
+  size_t nobj;
+  char (*obj_name)[96];
+  size_t *obj_faces;
+} parsed;
+
+static void parsed_free(parsed *p) {
+  free(p->v);
+  free(p->f);
+  free(p->face_tag);
+  free(p->obj_name);
+  free(p->obj_faces);
+}
+
+/* Returns the next line (NUL-terminated in place) or NULL at the end. */
+static char *next_line(char **cursor, char *end) {
+  if (*cursor >= end) return NULL;
+  char *line = *cursor, *nl = memchr(line, '\n', (size_t)(end - line));
+  if (!nl) {
+    *cursor = end;
+    return NULL; /* every line must end with a newline */
+  }
+  *nl = '\0';
+  *cursor = nl + 1;
+  return line;
+}
+
+static bool read_doubles(const char *s, double out[3]) {
+  char *e;
+  for (int a = 0; a < 3; a++) {
+    out[a] = strtod(s, &e);
+    if (e == s) return false;
+    s = e;
+  }
+  return *s == '\0';
+}
+
+static void parsed_alloc(parsed *p, size_t lines) {
+  p->v = calloc(lines + 1, sizeof *p->v);
+  p->f = calloc(lines + 1, sizeof *p->f);
+  p->face_tag = calloc(lines + 1, sizeof *p->face_tag);
+  p->obj_name = calloc(lines + 1, sizeof *p->obj_name);
+  p->obj_faces = calloc(lines + 1, sizeof *p->obj_faces);
+  if (!p->v || !p->f || !p->face_tag || !p->obj_name || !p->obj_faces) {
+    fprintf(stderr, "out of memory\n");
+    exit(1);
+  }
+}
+
+static size_t count_lines(const blob *b) {
+  size_t lines = 0;
+  for (size_t i = 0; i < b->size; i++) lines += b->data[i] == '\n';
+  return lines;
+}
+
+static parsed parse_obj(const blob *b) {
+  parsed p = {.ok = true};
+  parsed_alloc(&p, count_lines(b));
+  char *text = malloc(b->size + 1), *cur = text, *end = text + b->size, *line;
+  if (!text) exit(1);
+  memcpy(text, b->data, b->size);
+  long object = -1;
+  while ((line = next_line(&cur, end))) {
+    if (line[0] == '#') continue;
+    if (strncmp(line, "o ", 2) == 0) {
+      object = (long)p.nobj++;
+      snprintf(p.obj_name[object], sizeof p.obj_name[object], "%s", line + 2);
+      if (strchr(line + 2, ' ') || strchr(line + 2, '\t')) p.ok = false;
+    } else if (strncmp(line, "v ", 2) == 0) {
+      if (!read_doubles(line + 2, p.v[p.nv++])) p.ok = false;
+    } else if (strncmp(line, "f ", 2) == 0) {
+      size_t a, c, d;
+      int used = 0;
+      if (sscanf(line + 2, "%zu %zu %zu%n", &a, &c, &d, &used) != 3 || line[2 + used] != '\0' ||
+          object < 0 || a < 1 || c < 1 || d < 1) {
+        p.ok = false;
+        continue;
+      }
+      p.f[p.nf][0] = a - 1, p.f[p.nf][1] = c - 1, p.f[p.nf][2] = d - 1;
+      p.face_tag[p.nf++] = (int)object;
+      p.obj_faces[object]++;
+    } else {
+      p.ok = false;
+    }
+  }
+  if (cur != end) p.ok = false;
+  for (size_t i = 0; i < p.nf; i++)
+    for (int k = 0; k < 3; k++)
+      if (p.f[i][k] >= p.nv) p.ok = false;
+  free(text);
+  return p;
+}
+
+static parsed parse_ply(const blob *b) {
+  parsed p = {.ok = true};
+  parsed_alloc(&p, count_lines(b));
+  char *text = malloc(b->size + 1), *cur = text, *end = text + b->size, *line;
+  if (!text) exit(1);
+  memcpy(text, b->data, b->size);
+  static const char *const props[] = {
+      "property float x", "property float y", "property float z",
+      "property list uchar int vertex_indices", "property int stem"};
+  size_t prop = 0;
+  bool head = false;
+  line = next_line(&cur, end);
+  if (!line || strcmp(line, "ply") != 0) p.ok = false;
+  line = next_line(&cur, end);
+  if (!line || strcmp(line, "format ascii 1.0") != 0) p.ok = false;
+  while ((line = next_line(&cur, end))) {
+    if (strcmp(line, "end_header") == 0) {
+      head = true;
+      break;
+    }
+    if (strncmp(line, "comment ", 8) == 0) continue;
+    if (sscanf(line, "element vertex %zu", &p.header_v) == 1) continue;
+    if (sscanf(line, "element face %zu", &p.header_f) == 1) continue;
+    if (prop < 5 && strcmp(line, props[prop]) == 0) prop++;
+    else p.ok = false;
+  }
+  if (!head || prop != 5) p.ok = false;
+  for (size_t i = 0; p.ok && i < p.header_v; i++) {
+    line = next_line(&cur, end);
+    if (!line || !read_doubles(line, p.v[p.nv++])) p.ok = false;
+  }
+  for (size_t i = 0; p.ok && i < p.header_f; i++) {
+    line = next_line(&cur, end);
+    size_t a, c, d;
+    int tag, used = 0;
+    if (!line || sscanf(line, "3 %zu %zu %zu %d%n", &a, &c, &d, &tag, &used) != 4 ||
+        line[used] != '\0' || a >= p.header_v || c >= p.header_v || d >= p.header_v) {
+      p.ok = false;
+      break;
+    }
+    p.f[p.nf][0] = a, p.f[p.nf][1] = c, p.f[p.nf][2] = d;
+    p.face_tag[p.nf++] = tag;
+  }
+  if (cur != end) p.ok = false;
+  free(text);
+  return p;
+}
+
+/* ---- geometry ---- */
+
+static void sub3(const double a[3], const double b[3], double out[3]) {
+  for (int k = 0; k < 3; k++) out[k] = a[k] - b[k];
+}
+static double dot3(const double a[3], const double b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static void cross3(const double a[3], const double b[3], double out[3]) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+static double norm3(const double a[3]) { return sqrt(dot3(a, a)); }
+static void unit3(double a[3]) {
+  double l = norm3(a);
+  for (int k = 0; k < 3; k++) a[k] /= l;
+}
+static void pos_of(const sylva_node_info *n, double out[3]) {
+  out[0] = n->x, out[1] = n->y, out[2] = n->z;
+}
+
+/* The direction a node's ring faces: its internode, a root's towards its first child. */
+static void tangent(const model *m, size_t i, double t[3]) {
+  double a[3], b[3];
+  if (m->parent[i] >= 0) {
+    pos_of(&m->node[m->parent[i]], a);
+    pos_of(&m->node[i], b);
+  } else {
+    pos_of(&m->node[i], a);
+    pos_of(&m->node[m->first[i]], b);
+  }
+  sub3(b, a, t);
+  unit3(t);
+}
+
+/* Rodrigues rotation taking unit t0 to unit t1, applied to v. */
+static void rotate(const double t0[3], const double t1[3], const double v[3], double out[3]) {
+  double a[3], axv[3], c = dot3(t0, t1);
+  cross3(t0, t1, a);
+  cross3(a, v, axv);
+  double k = dot3(a, v) / (1 + c);
+  for (int q = 0; q < 3; q++) out[q] = c * v[q] + axv[q] + k * a[q];
+}
+
+static void face_normal(const parsed *p, size_t f, double n[3], double centroid[3]) {
+  const double *a = p->v[p->f[f][0]], *b = p->v[p->f[f][1]], *c = p->v[p->f[f][2]];
+  double e1[3], e2[3];
+  sub3(b, a, e1);
+  sub3(c, a, e2);
+  cross3(e1, e2, n);
+  for (int k = 0; k < 3; k++) centroid[k] = (a[k] + b[k] + c[k]) / 3;
+}
+
+/* Checks the branch geometry of a parsed file against the model. */
+static void check_geometry(const model *m, const parsed *p, int sides, bool boxes,
+                           const sylva_world *w) {
+  size_t bad_finite = 0, bad_radius = 0, bad_plane = 0, bad_frame = 0, bad_side = 0,
+         bad_cap = 0, bad_box = 0, sharp_bends = 0;
+  for (size_t i = 0; i < p->nv; i++)
+    for (int k = 0; k < 3; k++)
+      if (!isfinite(p->v[i][k])) bad_finite++;
+  size_t k = (size_t)sides;
+  double (*u)[3] = calloc(m->n + 1, sizeof *u); /* u per node, from vertex 0 of its ring */
+  size_t *ring_of = calloc(m->n + 1, sizeof *ring_of);
+  if (!u || !ring_of) exit(1);
+  for (size_t r = 0; r < m->rings; r++) {
+    size_t i = m->layout[r];
+    ring_of[i] = r;
+    double c[3], t[3], d[3], rad = m->node[i].radius;
+    pos_of(&m->node[i], c);
+    tangent(m, i, t);
+    for (size_t j = 0; j < k; j++) {
+      sub3(p->v[r * k + j], c, d);
+      /* "%.5f" rounds each coordinate by up to 5e-6 m */
+      if (fabs(norm3(d) - rad) > 1e-5 + 1e-6 * rad) bad_radius++;
+      if (fabs(dot3(d, t)) > 1e-5) bad_plane++;
+    }
+    sub3(p->v[r * k], c, u[i]);
+    unit3(u[i]);
+    if (m->parent[i] >= 0) {
+      double tp[3], expect[3], diff[3];
+      size_t q = (size_t)m->parent[i];
+      tangent(m, q, tp);
+      rotate(tp, t, u[q], expect);
+      sub3(u[i], expect, diff);
+      /* one side of twist at 64 sides is 0.098; rounding of a 3 mm ring about 0.006 */
+      if (norm3(diff) > 0.03) bad_frame++;
+    }
+  }
+  /* faces in layout order: per node its internode's 2 * sides, then its cap */
+  size_t f = 0;
+  for (size_t r = 0; r < m->rings; r++) {
+    size_t i = m->layout[r];
+    double c[3], t[3];
+    pos_of(&m->node[i], c);
+    tangent(m, i, t);
+    if (m->parent[i] >= 0) {
+      double a[3], axis[3];
+      pos_of(&m->node[m->parent[i]], a);
+      sub3(c, a, axis);
+      double len2 = dot3(axis, axis), tp[3];
+      /* at a bend near a right angle the parent's ring, shared with the bent child,
+       * is seen edge-on from the child's internode, and some of its side triangles
+       * face inwards: orientation is checked up to 60 degrees of bend */
+      tangent(m, (size_t)m->parent[i], tp);
+      int sharp = dot3(tp, t) < 0.5;
+      sharp_bends += sharp;
+      for (size_t j = 0; j < 2 * k; j++, f++) {
+        double n[3], g[3], ga[3], out[3];
+        face_normal(p, f, n, g);
+        /* outwards: away from the nearest point of the internode's axis */
+        sub3(g, a, ga);
+        double s = len2 > 0 ? dot3(ga, axis) / len2 : 0;
+        s = s < 0 ? 0 : s > 1 ? 1 : s;
+        for (int q = 0; q < 3; q++) out[q] = g[q] - (a[q] + s * axis[q]);
+        if (!(dot3(n, out) > 0) && sharp == 0) bad_side++;
+        /* each side triangle uses the parent's ring and the node's */
+        size_t pr = ring_of[m->parent[i]];
+        for (int q = 0; q < 3; q++) {
+          size_t ring = p->f[f][q] / k;
+          if (ring != r && ring != pr) bad_side++;
+        }
+      }
+    }
+    bool tip = m->parent[i] >= 0 && m->children[i] == 0, root = m->parent[i] < 0;
+    if (tip || root) {
+      for (size_t j = 0; j + 2 < k; j++, f++) {
+        double n[3], g[3];
+        face_normal(p, f, n, g);
+        if (!(dot3(n, t) * (tip ? 1 : -1) > 0)) bad_cap++;
+        for (int q = 0; q < 3; q++)
+          if (p->f[f][q] / k != r) bad_cap++;
+      }
+    }
+  }
+  CHECK_INT(f + (boxes ? 12 * (size_t)m->boxes : 0), p->nf);
+  if (boxes) {
+    for (int b = 0; b < m->boxes; b++) {
+      sylva_obstacle_def o;
+      sylva_world_obstacle_at(w, b, NULL, &o);
+      double mid[3];
+      for (int q = 0; q < 3; q++) mid[q] = (o.min[q] + o.max[q]) / 2;
+      for (int j = 0; j < 12 && f < p->nf; j++, f++) {
+        double n[3], g[3], out[3];
+        face_normal(p, f, n, g);
+        sub3(g, mid, out);
+        if (!(dot3(n, out) > 0)) bad_box++;
+        for (int q = 0; q < 3; q++) {
+          size_t vi = p->f[f][q];
+          if (vi < m->rings * k + 8 * (size_t)b || vi >= m->rings * k + 8 * (size_t)b + 8)
+            bad_box++;
+          else
+            for (int a = 0; a < 3; a++)
+              if (fabs(p->v[vi][a] - o.max[a]) > 1e-5 && fabs(p->v[vi][a] - o.min[a]) > 1e-5)
+                bad_box++;
+        }
+      }
+    }
+  }
+  /* most internodes bend less than 60 degrees, so the orientation check has teeth */
+  CHECK(sharp_bends * 4 < m->internodes);
+  CHECK_INT(bad_finite, 0);
+  CHECK_INT(bad_radius, 0);
+  CHECK_INT(bad_plane, 0);
+  CHECK_INT(bad_frame, 0);
+  CHECK_INT(bad_side, 0);
+  CHECK_INT(bad_cap, 0);
+  CHECK_INT(bad_box, 0);
+  free(u);
+  free(ring_of);
+}
+
+/* ---- the cases ---- */
+
+static FILE *manifest;
+static const char *outdir;
+
+static void save(const char *name, const blob *b) {
+  if (!outdir) return;
+  char path[4096];
+  snprintf(path, sizeof path, "%s/%s", outdir, name);
+  FILE *f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (!f) return;
+  CHECK_INT(fwrite(b->data, 1, b->size, f), b->size);
+  CHECK_INT(fclose(f), 0);
+}
+
+static void stem_name(const sylva_world *w, int s, char *buf, size_t size) {
+  for (int pl = 0; pl < sylva_world_plant_count(w); pl++)
+    for (int st = 0; st < sylva_world_plant_stem_count(w, pl); st++)
+      if (sylva_world_stem_index(w, pl, st) == s) {
+        char label[SYLVA_LABEL_MAX];
+        snprintf(label, sizeof label, "%s", sylva_world_plant_label(w, pl));
+        for (char *c = label; *c; c++)
+          if (*c == ' ') *c = '_';
+        snprintf(buf, size, "%s_%d", label, st);
+      }
+}
+
+static void check_case(const sylva_world *w, const model *m, int sides, bool boxes) {
+  sylva_mesh_options opt = sylva_mesh_default_options();
+  opt.sides = sides;
+  opt.obstacles = boxes;
+  size_t ev, ef;
+  expected_counts(m, sides, boxes, &ev, &ef);
+  size_t cv = 1, cf = 1;
+  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_OBJ, &opt, &cv, &cf), 0);
+  CHECK_INT(cv, ev);
+  CHECK_INT(cf, ef);
+  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_PLY, &opt, &cv, &cf), 0);
+  CHECK_INT(cv, ev);
+  CHECK_INT(cf, ef);
+
+  blob obj = write_blob(w, SYLVA_MESH_OBJ, &opt), obj2 = write_blob(w, SYLVA_MESH_OBJ, &opt);
+  blob ply = write_blob(w, SYLVA_MESH_PLY, &opt), ply2 = write_blob(w, SYLVA_MESH_PLY, &opt);
+  CHECK_INT(obj.rc, 0);
+  CHECK_INT(ply.rc, 0);
+  /* deterministic: the same world gives the same bytes */
+  CHECK(obj.size == obj2.size && memcmp(obj.data, obj2.data, obj.size) == 0);
+  CHECK(ply.size == ply2.size && memcmp(ply.data, ply2.data, ply.size) == 0);
+
+  parsed po = parse_obj(&obj), pp = parse_ply(&ply);
+  CHECK(po.ok);
+  CHECK(pp.ok);
+  CHECK_INT(po.nv, ev);
+  CHECK_INT(po.nf, ef);
+  CHECK_INT(pp.header_v, ev);
+  CHECK_INT(pp.header_f, ef);
+  CHECK_INT(pp.nv, ev);
+  CHECK_INT(pp.nf, ef);
+
+  /* one layout: the same vertices and faces in both formats */
+  bool same = po.nv == pp.nv && po.nf == pp.nf;
+  for (size_t i = 0; same && i < po.nv; i++)
+    same = memcmp(po.v[i], pp.v[i], sizeof po.v[i]) == 0;
+  for (size_t i = 0; same && i < po.nf; i++)
+    same = memcmp(po.f[i], pp.f[i], sizeof po.f[i]) == 0;
+  CHECK(same);
+
+  /* objects: one per stem with geometry, then one per obstacle; the PLY stem
+   * property names the same stem (or -1 - i for obstacle i) */
+  size_t expect_obj = 0;
+  for (int s = 0; s < m->stems; s++) expect_obj += m->stem_rings[s] > 0;
+  CHECK_INT(po.nobj, expect_obj + (boxes ? (size_t)m->boxes : 0));
+  size_t o = 0;
+  for (int s = 0; s < m->stems && o < po.nobj; s++) {
+    if (!m->stem_rings[s]) continue;
+    char name[96];
+    stem_name(w, s, name, sizeof name);
+    CHECK(strcmp(po.obj_name[o], name) == 0);
+    size_t faces = 2 * (size_t)sides * m->stem_internodes[s] + (size_t)(sides - 2) * m->stem_caps[s];
+    CHECK_INT(po.obj_faces[o], faces);
+    size_t mismatched = 0;
+    for (size_t f = 0; f < po.nf && f < pp.nf; f++)
+      if ((size_t)po.face_tag[f] == o && pp.face_tag[f] != s) mismatched++;
+    CHECK_INT(mismatched, 0);
+    o++;
+  }
+  for (int b = 0; boxes && b < m->boxes && o < po.nobj; b++, o++) {
+    sylva_obstacle_def od;
+    sylva_world_obstacle_at(w, b, NULL, &od);
+    char name[96];
+    snprintf(name, sizeof name, "obstacle_%s", od.label);
+    CHECK(strcmp(po.obj_name[o], name) == 0);
+    CHECK_INT(po.obj_faces[o], 12);
+    size_t mismatched = 0;
+    for (size_t f = 0; f < po.nf && f < pp.nf; f++)
+      if ((size_t)po.face_tag[f] == o && pp.face_tag[f] != -1 - b) mismatched++;
+    CHECK_INT(mismatched, 0);
+  }
+
+  if (po.ok && po.nv == ev && po.nf == ef) check_geometry(m, &po, sides, boxes, w);
+
+  char name[64];
+  snprintf(name, sizeof name, "mesh_s%d%s.obj", sides, boxes ? "_obstacles" : "");
+  save(name, &obj);
+  if (manifest) {
+    fprintf(manifest, "file\t%s\tobj\t%zu\t%zu\n", name, ev, ef);
+    /* objects as expected (checked above): stems with geometry, then obstacles */
+    size_t i = 0;
+    for (int st = 0; st < m->stems && i < po.nobj; st++) {
+      if (!m->stem_rings[st]) continue;
+      fprintf(manifest, "object\t%s\t%s\t%zu\t%zu\n", name, po.obj_name[i], po.obj_faces[i],
+              (size_t)sides * m->stem_rings[st]);
+      i++;
+    }
+    for (; i < po.nobj; i++)
+      fprintf(manifest, "object\t%s\t%s\t%zu\t8\n", name, po.obj_name[i], po.obj_faces[i]);
+  }
+  snprintf(name, sizeof name, "mesh_s%d%s.ply", sides, boxes ? "_obstacles" : "");
+  save(name, &ply);
+  if (manifest) fprintf(manifest, "file\t%s\tply\t%zu\t%zu\n", name, ev, ef);
+
+  parsed_free(&po);
+  parsed_free(&pp);
+  free(obj.data);
+  free(obj2.data);
+  free(ply.data);
+  free(ply2.data);
+}
+
+static void test_options(const sylva_world *w) {
+  sylva_mesh_options d = sylva_mesh_default_options();
+  CHECK_INT(d.sides, 8);
+  CHECK(!d.obstacles);
+  size_t v = 1, f = 1;
+  static const int sides[] = {-1, 0, 2, 3, 64, 65};
+  for (size_t i = 0; i < sizeof sides / sizeof *sides; i++) {
+    sylva_mesh_options o = d;
+    o.sides = sides[i];
+    int want = sides[i] >= 3 && sides[i] <= 64 ? 0 : SYLVA_EINVAL;
+    CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_PLY, &o, &v, &f), want);
+    if (want) CHECK(v == 0 && f == 0);
+    blob b = write_blob(w, SYLVA_MESH_OBJ, &o);
+    CHECK_INT(b.rc, want);
+    if (want) CHECK_INT(b.size, 0); /* nothing written */
+    free(b.data);
+  }
+  blob bad = write_blob(w, (sylva_mesh_format)7, &d);
+  CHECK_INT(bad.rc, SYLVA_EINVAL);
+  CHECK_INT(bad.size, 0);
+  free(bad.data);
+  CHECK_INT(sylva_mesh_count(w, (sylva_mesh_format)7, &d, &v, &f), SYLVA_EINVAL);
+  /* NULL options are the defaults */
+  blob a = write_blob(w, SYLVA_MESH_PLY, NULL), b = write_blob(w, SYLVA_MESH_PLY, &d);
+  CHECK(a.rc == 0 && b.rc == 0 && a.size == b.size && memcmp(a.data, b.data, a.size) == 0);
+  free(a.data);
+  free(b.data);
+}
+
+static void test_write_error(const sylva_world *w) {
+  /* /dev/full fails every write with ENOSPC once the stream's buffer is flushed */
+  FILE *f = fopen("/dev/full", "w");
+  CHECK(f != NULL);
+  if (!f) return;
+  errno = 0;
+  CHECK_INT(sylva_mesh_write(f, w, SYLVA_MESH_OBJ, NULL), SYLVA_MESH_EWRITE);
+  CHECK_INT(errno, ENOSPC);
+  fclose(f);
+}
+
+static void test_empty(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  sylva_mesh_options opt = sylva_mesh_default_options();
+  size_t v = 1, f = 1;
+  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_OBJ, &opt, &v, &f), 0);
+  CHECK(v == 0 && f == 0);
+  blob ply = write_blob(w, SYLVA_MESH_PLY, &opt);
+  CHECK_INT(ply.rc, 0);
+  parsed p = parse_ply(&ply);
+  CHECK(p.ok && p.header_v == 0 && p.header_f == 0);
+  parsed_free(&p);
+  free(ply.data);
+  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}};
+  CHECK(sylva_world_add_obstacle(w, &box) >= 0);
+  opt.obstacles = true;
+  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_OBJ, &opt, &v, &f), 0);
+  CHECK(v == 8 && f == 12);
+  blob obj = write_blob(w, SYLVA_MESH_OBJ, &opt);
+  CHECK_INT(obj.rc, 0);
+  p = parse_obj(&obj);
+  CHECK(p.ok && p.nv == 8 && p.nf == 12 && p.nobj == 1);
+  if (p.nobj == 1) CHECK(strcmp(p.obj_name[0], "obstacle_a_box") == 0);
+  parsed_free(&p);
+  free(obj.data);
+  sylva_world_destroy(w);
+}
+
+int main(int argc, char **argv) {
+  if (argc > 2) {
+    fprintf(stderr, "usage: %s [OUTDIR]\n", argv[0]);
+    return 2;
+  }
+  if (argc == 2) {
+    outdir = argv[1];
+    char path[4096];
+    snprintf(path, sizeof path, "%s/expected.tsv", outdir);
+    manifest = fopen(path, "w");
+    if (!manifest) {
+      fprintf(stderr, "%s: %s\n", path, strerror(errno));
+      return 1;
+    }
+  }
+  sylva_world *w = make_world(6);
+  CHECK(w != NULL);
+  if (!w) return check_summary("export-mesh");
+  model m;
+  model_build(&m, w);
+  /* the world has what the export must handle: three stems, branching, tips */
+  CHECK_INT(m.stems, 3);
+  CHECK_INT(m.roots, 3);
+  size_t branching = 0;
+  for (size_t i = 0; i < m.n; i++) branching += m.children[i] > 1;
+  CHECK(branching > 0);
+  CHECK(m.tips > 3);
+  printf("world: %zu nodes, %zu internodes, %zu tips, %zu branching nodes\n", m.n, m.internodes,
+         m.tips, branching);
+
+  int sides[] = {3, 8, 64};
+  for (int s = 0; s < 3; s++)
+    for (int b = 0; b < 2; b++) check_case(w, &m, sides[s], b);
+  test_options(w);
+  test_write_error(w);
+  test_empty();
+
+  if (manifest) CHECK_INT(fclose(manifest), 0);
+  model_free(&m);
+  sylva_world_destroy(w);
+  return check_summary("export-mesh");
+}
