@@ -9,16 +9,26 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "grow.h"
 #include "input.h"
 #include "options.h"
+#include "store.h"
+#include "stored.h"
 #include "sylva/encode.h"
 #include "sylva/status.h"
 
-enum { OPT_SEED, OPT_ITERATIONS, OPT_EXPORT, OPT_QUIET, OPT_HELP, OPT_COUNT };
+enum {
+  OPT_SEED, OPT_ITERATIONS, OPT_DB, OPT_NAME, OPT_SNAPSHOT_EVERY, OPT_EXPORT, OPT_QUIET,
+  OPT_HELP, OPT_COUNT
+};
 
 static const cli_option run_options[OPT_COUNT] = {
     [OPT_SEED] = {"seed", 0, "N", "override the scenario's seed (0 to 2^53)"},
     [OPT_ITERATIONS] = {"iterations", 0, "N", "override the iteration limit (1 to 100000)"},
+    [OPT_DB] = {"db", 0, "FILE", "store the run (snapshots and stats) in this SQLite file"},
+    [OPT_NAME] = {"name", 0, "NAME", "name of the stored run (default: the scenario's name)"},
+    [OPT_SNAPSHOT_EVERY] = {"snapshot-every", 0, "N",
+                            "a full snapshot every N stored iterations (default 5)"},
     [OPT_EXPORT] = {"export", 0, "FILE", "write the final skeleton (sylva.skeleton/1) to FILE"},
     [OPT_QUIET] = {"quiet-progress", 0, NULL, "no progress bar on stderr"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
@@ -35,42 +45,13 @@ static void run_usage(FILE *f) {
         "   \"nodes\": 183, \"shed\": 0, \"light\": 402.1, \"cap\": 5, \"finished\": false}]}\n"
         "and a last line {\"done\": true, \"iterations\": N, \"reason\": \"finished\"|\"limit\"}.\n"
         "When stderr is a terminal, a progress bar is shown there.\n"
+        "With --db, every iteration is stored in one transaction (its stats, and a full\n"
+        "snapshot every --snapshot-every iterations and at the end); 'sylva resume'\n"
+        "continues a stored run after a crash or a stop.\n"
         "\n"
         "Options:\n",
         f);
   cli_print_options(f, run_options, OPT_COUNT);
-}
-
-static double now_ms(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
-
-/* Progress on stderr when it is a terminal; `width` remembers what to clear. */
-typedef struct progress {
-  bool enabled;
-  int width;
-} progress;
-
-static void progress_show(progress *pr, int iteration, int limit, size_t nodes) {
-  if (!pr->enabled) return;
-  int n = fprintf(stderr, "\r iteration %d/%d  nodes %zu", iteration, limit, nodes);
-  if (n > 0 && n - 1 < pr->width) fprintf(stderr, "%*s", pr->width - (n - 1), "");
-  if (n > 0 && n - 1 > pr->width) pr->width = n - 1;
-  fflush(stderr);
-}
-
-static void progress_clear(progress *pr) {
-  if (!pr->enabled || pr->width == 0) return;
-  fprintf(stderr, "\r%*s\r", pr->width + 1, "");
-  fflush(stderr);
-  pr->width = 0;
-}
-
-static bool put_line(const char *line) {
-  if (fputs(line, stdout) == EOF || fputc('\n', stdout) == EOF) return false;
-  return fflush(stdout) == 0;
 }
 
 /* Writes data to the already opened tmp file, then renames it over path. */
@@ -98,8 +79,8 @@ static int finish_export(FILE *f, const char *tmp, const char *path, const char 
 int cmd_run(int argc, char **argv) {
   cli_parser p;
   cli_parser_init(&p, "run", run_options, OPT_COUNT, argc, argv);
-  const char *seed_text = NULL, *export_path = NULL, *arg;
-  uint64_t seed = 0, iterations = 0;
+  const char *seed_text = NULL, *export_path = NULL, *db_path = NULL, *name = NULL, *arg;
+  uint64_t seed = 0, iterations = 0, snapshot_every = STORE_SNAPSHOT_EVERY;
   bool quiet = false;
   int first = argc, opt;
   while ((opt = cli_next(&p, &arg, &first)) >= 0) {
@@ -117,6 +98,19 @@ int cmd_run(int argc, char **argv) {
       if (arg[0] == '\0') return cli_usage_error("run", "--export: empty file name");
       export_path = arg;
       break;
+    case OPT_DB:
+      if (arg[0] == '\0') return cli_usage_error("run", "--db: empty file name");
+      db_path = arg;
+      break;
+    case OPT_NAME:
+      if (arg[0] == '\0') return cli_usage_error("run", "--name: empty name");
+      name = arg;
+      break;
+    case OPT_SNAPSHOT_EVERY:
+      if (cli_parse_u64("run", "snapshot-every", arg, 1, SYLVA_SCENARIO_MAX_ITERATIONS,
+                        &snapshot_every))
+        return CLI_EXIT_USAGE;
+      break;
     case OPT_QUIET: quiet = true; break;
     default:
       run_usage(stdout);
@@ -127,6 +121,8 @@ int cmd_run(int argc, char **argv) {
   if (argc - first != 1)
     return cli_usage_error("run", argc - first == 0 ? "missing SCENARIO.json"
                                                     : "expected one SCENARIO.json");
+  if ((name || snapshot_every != STORE_SNAPSHOT_EVERY) && !db_path)
+    return cli_usage_error("run", "--name and --snapshot-every need --db");
   const char *path = argv[first];
 
   sylva_scenario *s;
@@ -156,53 +152,14 @@ int cmd_run(int argc, char **argv) {
 
   sylva_world *w = NULL;
   rc = cli_build_world(path, s, &w);
-  progress pr = {.enabled = !quiet && isatty(STDERR_FILENO), .width = 0};
-  const char *reason = NULL;
-  while (rc == CLI_EXIT_OK) {
-    if (sylva_world_finished(w)) {
-      reason = "finished";
-      break;
-    }
-    if (sylva_world_iteration(w) >= limit) {
-      reason = "limit";
-      break;
-    }
-    const sylva_journal *j;
-    double t0 = now_ms();
-    int status = sylva_world_step(w, &j);
-    double elapsed = now_ms() - t0;
-    if (status == SYLVA_EFINISHED) {
-      reason = "finished";
-      break;
-    }
-    if (status < 0) {
-      progress_clear(&pr);
-      fprintf(stderr, "sylva: %s: iteration %d: %s\n", path, sylva_world_iteration(w) + 1,
-              sylva_strerror(status));
-      rc = CLI_EXIT_FAILURE;
-      break;
-    }
-    char *line = sylva_encode_stats_line(w, j, elapsed);
-    bool nomem = !line, ok = line && put_line(line);
-    free(line);
-    if (!ok) {
-      progress_clear(&pr);
-      fprintf(stderr, "sylva: %s\n", nomem ? "out of memory" : "cannot write to stdout");
-      rc = CLI_EXIT_FAILURE;
-      break;
-    }
-    progress_show(&pr, sylva_world_iteration(w), limit, sylva_world_node_count(w));
-  }
-  progress_clear(&pr);
+  grow_job job = {.label = path, .w = w, .limit = limit,
+                  .progress = !quiet && isatty(STDERR_FILENO),
+                  .snapshot_every = (int)snapshot_every};
+  if (rc == CLI_EXIT_OK && db_path) rc = cli_store_new_run(db_path, name ? name : s->name, s,
+                                                            limit, &job);
+  if (rc == CLI_EXIT_OK) rc = grow_run(&job);
+  store_close(job.st);
 
-  if (rc == CLI_EXIT_OK) {
-    char *done = sylva_encode_done_line(sylva_world_iteration(w), reason);
-    if (!done || !put_line(done)) {
-      fprintf(stderr, "sylva: %s\n", done ? "cannot write to stdout" : "out of memory");
-      rc = CLI_EXIT_FAILURE;
-    }
-    free(done);
-  }
   if (export_file) {
     if (rc == CLI_EXIT_OK) {
       char *skeleton = sylva_encode_skeleton(w);

@@ -9,4 +9,13 @@ int cmd_run(int argc, char **argv);
 /** `sylva validate SCENARIO.json`: check a scenario without running it. */
 int cmd_validate(int argc, char **argv);
 
+/** `sylva resume --db FILE --name NAME`: continue a stored run. */
+int cmd_resume(int argc, char **argv);
+
+/** `sylva runs --db FILE`: list the stored runs. */
+int cmd_runs(int argc, char **argv);
+
+/** `sylva export --db FILE --name NAME --format F -o OUT`: export a stored iteration. */
+int cmd_export(int argc, char **argv);
+
 #endif

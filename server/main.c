@@ -18,6 +18,11 @@ static void usage(FILE *f) {
         "Commands:\n"
         "  run SCENARIO.json       grow a scenario headless; one JSON line per iteration\n"
         "  validate SCENARIO.json  check a scenario without running it\n"
+        "  resume --db FILE --name NAME\n"
+        "                          continue a stored run\n"
+        "  runs --db FILE          list the stored runs\n"
+        "  export --db FILE --name NAME --format F -o OUT\n"
+        "                          a stored iteration as skeleton, obj, ply or csv\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -44,6 +49,9 @@ int main(int argc, char **argv) {
   }
   if (strcmp(cmd, "run") == 0) return cmd_run(argc - 1, argv + 1);
   if (strcmp(cmd, "validate") == 0) return cmd_validate(argc - 1, argv + 1);
+  if (strcmp(cmd, "resume") == 0) return cmd_resume(argc - 1, argv + 1);
+  if (strcmp(cmd, "runs") == 0) return cmd_runs(argc - 1, argv + 1);
+  if (strcmp(cmd, "export") == 0) return cmd_export(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else

@@ -3,16 +3,23 @@
  * the live and new internodes, the time of each phase and the memory, then a
  * summary; and measures the cost of shading one internode at several heights.
  *
- *   bench [all|fig17b|stand5|stand100|shade] [--scenarios DIR] */
+ * With "store5" / "store100" the stands are grown while every iteration is stored
+ * in an SQLite store (a temporary file) with the default snapshot interval, and
+ * the time spent storing is compared with the time spent growing.
+ *
+ *   bench [all|fig17b|stand5|stand100|shade|store5|store100] [--scenarios DIR] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <time.h>
 
 #include "../scenario_file.h"
 #include "grid.h"
+#include "store.h"
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
@@ -183,6 +190,55 @@ static void shade_by_height(void) {
   sylva__grid_free(&g);
 }
 
+/* Grows w, storing every iteration; reports store time against grow time. */
+static void grow_stored(const char *name, sylva_world *w, int limit, size_t target) {
+  char path[] = "/tmp/sylva-bench-XXXXXX";
+  int fd = mkstemp(path);
+  if (fd < 0) exit(1);
+  close(fd);
+  remove(path);
+  store *st;
+  int64_t run;
+  if (store_open(path, true, &st) ||
+      store_create_run(st, "bench", "{}", 1, limit, STORE_SNAPSHOT_EVERY, w, &run)) {
+    fprintf(stderr, "bench: %s\n", st ? store_error(st) : store_open_error());
+    exit(1);
+  }
+  printf("\n== %s, stored (a full snapshot every %d iterations)\n%4s %9s %10s %10s %7s\n", name,
+         STORE_SNAPSHOT_EVERY, "T", "live", "grow ms", "store ms", "store%");
+  double grow_s = 0, store_s = 0;
+  const sylva_journal *j;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < limit) {
+    double t0 = now(NULL);
+    if (sylva_world_step(w, &j)) break;
+    double t1 = now(NULL);
+    bool last = sylva_world_finished(w) || j->iteration >= limit ||
+                (target && sylva_world_node_count(w) >= target);
+    if (store_save_iteration(st, run, w, j, last || j->iteration % STORE_SNAPSHOT_EVERY == 0)) {
+      fprintf(stderr, "bench: %s\n", store_error(st));
+      exit(1);
+    }
+    double t2 = now(NULL);
+    grow_s += t1 - t0;
+    store_s += t2 - t1;
+    printf("%4d %9zu %10.1f %10.1f %6.1f%%\n", j->iteration, sylva_world_node_count(w),
+           (t1 - t0) * 1e3, (t2 - t1) * 1e3, 100.0 * (t2 - t1) / (t1 - t0));
+    if (last) break;
+  }
+  store_close(st);
+  struct stat sb;
+  long long bytes = stat(path, &sb) == 0 ? (long long)sb.st_size : -1;
+  char wal[64];
+  snprintf(wal, sizeof wal, "%s-wal", path);
+  if (stat(wal, &sb) == 0) bytes += (long long)sb.st_size;
+  printf("-- %s: growing %.2f s, storing %.2f s = %.1f%% of growing; store file %.1f MB\n", name,
+         grow_s, store_s, 100.0 * store_s / grow_s, (double)bytes / 1048576.0);
+  remove(path);
+  remove(wal);
+  snprintf(wal, sizeof wal, "%s-shm", path);
+  remove(wal);
+}
+
 int main(int argc, char **argv) {
   const char *what = "all", *dir = SOURCE_ROOT "/scenarios";
   for (int i = 1; i < argc; i++) {
@@ -205,6 +261,17 @@ int main(int argc, char **argv) {
     sylva_world_set_clock(w, now, NULL);
     summary s = grow("five-tree stand (scenarios/stand.json)", w, limit, 0);
     report(&s);
+    sylva_world_destroy(w);
+  }
+  if (all || strcmp(what, "store5") == 0) {
+    int limit;
+    sylva_world *w = from_file(dir, "stand.json", &limit);
+    grow_stored("five-tree stand", w, limit, 0);
+    sylva_world_destroy(w);
+  }
+  if (all || strcmp(what, "store100") == 0) {
+    sylva_world *w = generated_stand(10, 2.0);
+    grow_stored("100-tree stand", w, 60, 1000000);
     sylva_world_destroy(w);
   }
   if (all || strcmp(what, "stand100") == 0) {

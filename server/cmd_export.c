@@ -1,0 +1,213 @@
+/* `sylva export`: a stored iteration as a skeleton (JSON), a mesh (OBJ, PLY), or the
+ * stats of every iteration (CSV). */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "mesh.h"
+#include "options.h"
+#include "stored.h"
+#include "sylva/encode.h"
+#include "sylva/scenario.h"
+#include "sylva/status.h"
+
+enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_FORMAT, OPT_OUT, OPT_SIDES, OPT_OBSTACLES, OPT_HELP,
+       OPT_COUNT };
+
+static const cli_option export_options[OPT_COUNT] = {
+    [OPT_DB] = {"db", 0, "FILE", "the store (required)"},
+    [OPT_NAME] = {"name", 0, "NAME", "the run (required)"},
+    [OPT_ITERATION] = {"iteration", 0, "T", "the stored iteration (default: the last)"},
+    [OPT_FORMAT] = {"format", 0, "F", "skeleton, obj, ply or csv (required)"},
+    [OPT_OUT] = {"output", 'o', "OUT", "the file to write, '-' for stdout (required)"},
+    [OPT_SIDES] = {"sides", 0, "N", "obj, ply: sides of each branch cylinder (3 to 64, default 8)"},
+    [OPT_OBSTACLES] = {"obstacles", 0, NULL, "obj, ply: include the obstacles as boxes"},
+    [OPT_HELP] = {"help", 'h', NULL, "show this help"},
+};
+
+static void export_usage(FILE *f) {
+  fputs("Usage: sylva export --db FILE --name NAME [--iteration T] --format F -o OUT\n"
+        "\n"
+        "Writes a stored iteration of a run:\n"
+        "  skeleton  sylva.skeleton/1 JSON: every node [id, parent, x, y, z, radius, birth]\n"
+        "  obj, ply  a mesh of the branches: tapered generalized cylinders with radii\n"
+        "            from the model, one object per stem (OBJ), obstacles on request\n"
+        "  csv       the stats of every stored iteration up to T, one row per stem:\n"
+        "            iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,\n"
+        "            light,cap,finished (empty where a measure is null)\n"
+        "An iteration between two snapshots is regrown from the earlier one.\n"
+        "\n"
+        "Options:\n",
+        f);
+  cli_print_options(f, export_options, OPT_COUNT);
+}
+
+enum { FMT_SKELETON, FMT_OBJ, FMT_PLY, FMT_CSV };
+
+/* RFC 4180: quote a field that holds a comma, a quote or a line break. */
+static void csv_text(FILE *f, const char *s) {
+  if (!strpbrk(s, ",\"\r\n")) {
+    fputs(s, f);
+    return;
+  }
+  fputc('"', f);
+  for (; *s; s++) {
+    if (*s == '"') fputc('"', f);
+    fputc(*s, f);
+  }
+  fputc('"', f);
+}
+
+static void csv_number(FILE *f, double v, int decimals) {
+  if (isnan(v)) return; /* null: an empty field */
+  char buf[64];
+  sylva_fmt_fixed(buf, sizeof buf, v, decimals);
+  fputs(buf, f);
+}
+
+static int csv_row(const store_stats_row *r, void *ctx) {
+  FILE *f = ctx;
+  fprintf(f, "%d,", r->iteration);
+  csv_text(f, r->plant);
+  fprintf(f, ",%d,", r->plant_stem);
+  csv_number(f, r->height, 4);
+  fputc(',', f);
+  csv_number(f, r->dbh, 4);
+  fputc(',', f);
+  csv_number(f, r->crown_width, 4);
+  fputc(',', f);
+  csv_number(f, r->crown_base, 4);
+  fprintf(f, ",%lld,%lld,", (long long)r->nodes, (long long)r->shed);
+  csv_number(f, r->light, 3);
+  fprintf(f, ",%d,%s\n", r->cap, r->finished ? "true" : "false");
+  return ferror(f) ? -1 : 0;
+}
+
+int cmd_export(int argc, char **argv) {
+  cli_parser p;
+  cli_parser_init(&p, "export", export_options, OPT_COUNT, argc, argv);
+  const char *db = NULL, *name = NULL, *out = NULL, *arg;
+  uint64_t iteration = 0, sides = 8;
+  bool has_iteration = false, obstacles = false;
+  int format = -1, first = argc, opt;
+  while ((opt = cli_next(&p, &arg, &first)) >= 0) {
+    switch (opt) {
+    case OPT_DB: db = arg; break;
+    case OPT_NAME: name = arg; break;
+    case OPT_ITERATION:
+      if (cli_parse_u64("export", "iteration", arg, 0, SYLVA_SCENARIO_MAX_ITERATIONS, &iteration))
+        return CLI_EXIT_USAGE;
+      has_iteration = true;
+      break;
+    case OPT_FORMAT:
+      if (strcmp(arg, "skeleton") == 0) format = FMT_SKELETON;
+      else if (strcmp(arg, "obj") == 0) format = FMT_OBJ;
+      else if (strcmp(arg, "ply") == 0) format = FMT_PLY;
+      else if (strcmp(arg, "csv") == 0) format = FMT_CSV;
+      else return cli_usage_error("export", "--format: '%s' is not skeleton, obj, ply or csv", arg);
+      break;
+    case OPT_OUT: out = arg; break;
+    case OPT_SIDES:
+      if (cli_parse_u64("export", "sides", arg, 3, 64, &sides)) return CLI_EXIT_USAGE;
+      break;
+    case OPT_OBSTACLES: obstacles = true; break;
+    default:
+      export_usage(stdout);
+      return CLI_EXIT_OK;
+    }
+  }
+  if (opt == -2) return CLI_EXIT_USAGE;
+  if (first != argc) return cli_usage_error("export", "unexpected argument '%s'", argv[first]);
+  if (!db || !db[0]) return cli_usage_error("export", "--db FILE is required");
+  if (!name || !name[0]) return cli_usage_error("export", "--name NAME is required");
+  if (format < 0) return cli_usage_error("export", "--format is required");
+  if (!out || !out[0]) return cli_usage_error("export", "-o OUT is required");
+
+  store *st;
+  int rc = cli_store_open(db, false, &st);
+  if (rc) return rc;
+  store_run r;
+  rc = cli_store_find(st, db, name, &r);
+  if (rc) {
+    store_close(st);
+    return rc;
+  }
+  int at = has_iteration ? (int)iteration : r.last_iteration;
+  if (at > r.last_iteration) {
+    fprintf(stderr, "sylva: %s: run \"%s\" has no iteration %d (it has 0 to %d)\n", db, name, at,
+            r.last_iteration);
+    store_run_free(&r);
+    store_close(st);
+    return CLI_EXIT_USAGE;
+  }
+
+  /* write to OUT.tmp and rename, so that OUT is never half written */
+  bool to_stdout = strcmp(out, "-") == 0;
+  char *tmp = NULL;
+  FILE *f = stdout;
+  if (!to_stdout) {
+    size_t n = strlen(out) + 5;
+    tmp = malloc(n);
+    if (tmp) snprintf(tmp, n, "%s.tmp", out);
+    if (!tmp || !(f = fopen(tmp, "wb"))) {
+      fprintf(stderr, "sylva: -o: cannot create %s: %s\n", tmp ? tmp : out,
+              tmp ? strerror(errno) : "out of memory");
+      free(tmp);
+      store_run_free(&r);
+      store_close(st);
+      return CLI_EXIT_USAGE;
+    }
+  }
+  if (format == FMT_CSV) {
+    fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished\n",
+          f);
+    if (store_each_stats(st, r.id, at, csv_row, f)) {
+      fprintf(stderr, "sylva: %s\n", ferror(f) ? strerror(errno) : store_error(st));
+      rc = CLI_EXIT_FAILURE;
+    }
+  } else {
+    sylva_world *w = NULL;
+    rc = cli_store_world_at(st, &r, at, &w);
+    if (rc == CLI_EXIT_OK && format == FMT_SKELETON) {
+      char *text = sylva_encode_skeleton(w);
+      if (!text || fputs(text, f) == EOF) {
+        fprintf(stderr, "sylva: %s\n", text ? strerror(errno) : "out of memory");
+        rc = CLI_EXIT_FAILURE;
+      }
+      free(text);
+    } else if (rc == CLI_EXIT_OK) {
+      sylva_mesh_options mo = sylva_mesh_default_options();
+      mo.sides = (int)sides;
+      mo.obstacles = obstacles;
+      int m = sylva_mesh_write(f, w, format == FMT_OBJ ? SYLVA_MESH_OBJ : SYLVA_MESH_PLY, &mo);
+      if (m) {
+        fprintf(stderr, "sylva: %s: %s\n", out,
+                m == SYLVA_MESH_EWRITE ? strerror(errno) : sylva_strerror(m));
+        rc = CLI_EXIT_FAILURE;
+      }
+    }
+    sylva_world_destroy(w);
+  }
+  if (fflush(f) != 0 && rc == CLI_EXIT_OK) {
+    fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
+    rc = CLI_EXIT_FAILURE;
+  }
+  if (!to_stdout) {
+    if (fclose(f) != 0 && rc == CLI_EXIT_OK) {
+      fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
+      rc = CLI_EXIT_FAILURE;
+    }
+    if (rc == CLI_EXIT_OK && rename(tmp, out) != 0) {
+      fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
+      rc = CLI_EXIT_FAILURE;
+    }
+    if (rc != CLI_EXIT_OK) remove(tmp);
+    free(tmp);
+  }
+  store_run_free(&r);
+  store_close(st);
+  return rc;
+}

@@ -1,0 +1,33 @@
+/* sylva server: the headless growing loop shared by `run` and `resume`: step,
+ * print the stats line, store the iteration, show progress, and end with the
+ * done line. */
+#ifndef SYLVA_SERVER_GROW_H
+#define SYLVA_SERVER_GROW_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "store.h"
+#include "sylva/world.h"
+
+/** One headless run. */
+typedef struct grow_job {
+  const char *label;  /**< names the run in messages (a path or a run name) */
+  sylva_world *w;
+  int limit;          /**< the iteration limit */
+  bool progress;      /**< show a progress bar on stderr */
+  store *st;          /**< NULL: not stored */
+  int64_t run;        /**< the stored run */
+  int snapshot_every; /**< iterations between full snapshots when stored */
+  const char *reason; /**< out: "finished" or "limit" when it ended well */
+} grow_job;
+
+/** Grows until every stem finished or the limit, printing one line per iteration
+ *  and the done line; stores every iteration when job->st is set (a full snapshot
+ *  every snapshot_every iterations and at the end). Returns the exit status. */
+int grow_run(grow_job *job);
+
+/** Prints a line and a newline to stdout and flushes; false on a write error. */
+bool grow_put_line(const char *line);
+
+#endif

@@ -1,0 +1,624 @@
+/* The SQLite store: schema, migrations, runs, iterations, stats, commands. */
+#include "store.h"
+
+#include <math.h>
+#include <sqlite3.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "sylva/snapshot.h"
+
+struct store {
+  sqlite3 *db;
+  char *path;
+  char error[512];
+};
+
+static char open_error[512];
+
+const char *store_error(const store *st) { return st->error; }
+const char *store_open_error(void) { return open_error; }
+
+/* Records "PATH: what: SQLite's reason" and returns -1. */
+static int fail(store *st, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+static int fail(store *st, const char *fmt, ...) {
+  char what[384];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(what, sizeof what, fmt, ap);
+  va_end(ap);
+  int code = sqlite3_errcode(st->db);
+  if (code != SQLITE_OK && code != SQLITE_ROW && code != SQLITE_DONE)
+    snprintf(st->error, sizeof st->error, "%s: %s: %s", st->path, what, sqlite3_errmsg(st->db));
+  else
+    snprintf(st->error, sizeof st->error, "%s: %s", st->path, what);
+  return -1;
+}
+
+static int exec(store *st, const char *sql) {
+  char *msg = NULL;
+  if (sqlite3_exec(st->db, sql, NULL, NULL, &msg) != SQLITE_OK) {
+    snprintf(st->error, sizeof st->error, "%s: %s", st->path, msg ? msg : "SQLite error");
+    sqlite3_free(msg);
+    return -1;
+  }
+  return 0;
+}
+
+static void rollback(store *st) { sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL); }
+
+static void utc_now(char out[32]) {
+  time_t t = time(NULL);
+  struct tm tm;
+  gmtime_r(&t, &tm);
+  strftime(out, 32, "%Y-%m-%dT%H:%M:%SZ", &tm);
+}
+
+static int64_t pragma_int(store *st, const char *sql, bool *ok) {
+  sqlite3_stmt *q;
+  *ok = false;
+  if (sqlite3_prepare_v2(st->db, sql, -1, &q, NULL) != SQLITE_OK) return 0;
+  int64_t v = 0;
+  if (sqlite3_step(q) == SQLITE_ROW) {
+    v = sqlite3_column_int64(q, 0);
+    *ok = true;
+  }
+  sqlite3_finalize(q);
+  return v;
+}
+
+/* ---- schema ------------------------------------------------------------------- */
+
+/* Migration i brings a store from user_version i to i + 1. */
+static const char *const migrations[STORE_SCHEMA_VERSION] = {
+    "CREATE TABLE runs ("
+    "  id INTEGER PRIMARY KEY,"
+    "  name TEXT NOT NULL UNIQUE,"
+    "  scenario TEXT NOT NULL,"
+    "  seed INTEGER NOT NULL,"
+    "  iterations INTEGER NOT NULL CHECK (iterations > 0),"
+    "  snapshot_every INTEGER NOT NULL CHECK (snapshot_every > 0),"
+    "  status TEXT NOT NULL CHECK (status IN ('running', 'paused', 'finished', 'failed')),"
+    "  reason TEXT,"
+    "  created TEXT NOT NULL,"
+    "  updated TEXT NOT NULL);"
+    "CREATE TABLE iterations ("
+    "  run INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,"
+    "  iteration INTEGER NOT NULL CHECK (iteration >= 0),"
+    "  hash INTEGER NOT NULL,"
+    "  nodes INTEGER NOT NULL,"
+    "  snapshot BLOB,"
+    "  PRIMARY KEY (run, iteration));"
+    "CREATE TABLE stats ("
+    "  run INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,"
+    "  iteration INTEGER NOT NULL,"
+    "  stem INTEGER NOT NULL,"
+    "  plant TEXT NOT NULL,"
+    "  plant_stem INTEGER NOT NULL,"
+    "  height REAL, dbh REAL, crown_width REAL, crown_base REAL,"
+    "  nodes INTEGER NOT NULL, shed INTEGER NOT NULL, light REAL,"
+    "  cap INTEGER NOT NULL, finished INTEGER NOT NULL,"
+    "  PRIMARY KEY (run, iteration, stem));"
+    "CREATE TABLE commands ("
+    "  run INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,"
+    "  seq INTEGER NOT NULL,"
+    "  iteration INTEGER NOT NULL,"
+    "  command TEXT NOT NULL,"
+    "  created TEXT NOT NULL,"
+    "  PRIMARY KEY (run, seq));",
+};
+
+static int migrate(store *st) {
+  if (sqlite3_exec(st->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
+    if ((sqlite3_errcode(st->db) & 0xff) == SQLITE_NOTADB)
+      return fail(st, "not a sylva store (not an SQLite database)");
+    return fail(st, "cannot open the store");
+  }
+  bool ok1, ok2, ok3;
+  int64_t app = pragma_int(st, "PRAGMA application_id", &ok1);
+  int64_t version = pragma_int(st, "PRAGMA user_version", &ok2);
+  int64_t objects = pragma_int(st, "SELECT count(*) FROM sqlite_schema", &ok3);
+  if (!ok1 || !ok2 || !ok3) {
+    rollback(st);
+    return fail(st, "not a sylva store (cannot read it as an SQLite database)");
+  }
+  if (app != STORE_APPLICATION_ID && (app != 0 || objects > 0)) {
+    rollback(st);
+    return fail(st, "not a sylva store (an SQLite file of another program, application_id "
+                    "0x%llx)", (unsigned long long)app);
+  }
+  if (version > STORE_SCHEMA_VERSION) {
+    rollback(st);
+    return fail(st, "written by a newer sylva (schema %lld; this build knows up to %d)",
+                (long long)version, STORE_SCHEMA_VERSION);
+  }
+  for (int64_t v = version; v < STORE_SCHEMA_VERSION; v++) {
+    if (exec(st, migrations[v])) {
+      rollback(st);
+      return -1;
+    }
+  }
+  char sql[96];
+  snprintf(sql, sizeof sql, "PRAGMA application_id = %d; PRAGMA user_version = %d",
+           STORE_APPLICATION_ID, STORE_SCHEMA_VERSION);
+  if (exec(st, sql) || exec(st, "COMMIT")) {
+    rollback(st);
+    return -1;
+  }
+  return 0;
+}
+
+int store_open(const char *path, bool create, store **out) {
+  *out = NULL;
+  store *st = calloc(1, sizeof *st);
+  if (!st || !(st->path = strdup(path))) {
+    free(st);
+    snprintf(open_error, sizeof open_error, "%s: out of memory", path);
+    return -1;
+  }
+  int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0);
+  if (sqlite3_open_v2(path, &st->db, flags, NULL) != SQLITE_OK) {
+    snprintf(open_error, sizeof open_error, "%s: %s", path,
+             st->db ? sqlite3_errmsg(st->db) : "cannot open");
+    if (!create && st->db && sqlite3_errcode(st->db) == SQLITE_CANTOPEN)
+      snprintf(open_error, sizeof open_error, "%s: no such store (or it cannot be opened)", path);
+    store_close(st);
+    return -1;
+  }
+  sqlite3_busy_timeout(st->db, 5000);
+  sqlite3_extended_result_codes(st->db, 1);
+  /* WAL with full syncs: a commit that returned survives a crash of the program
+   * and of the machine; foreign keys keep runs and their rows together. */
+  if (migrate(st) || exec(st, "PRAGMA journal_mode = WAL") ||
+      exec(st, "PRAGMA synchronous = FULL") || exec(st, "PRAGMA foreign_keys = ON")) {
+    snprintf(open_error, sizeof open_error, "%s", st->error);
+    store_close(st);
+    return -1;
+  }
+  *out = st;
+  return 0;
+}
+
+void store_close(store *st) {
+  if (!st) return;
+  sqlite3_close_v2(st->db);
+  free(st->path);
+  free(st);
+}
+
+/* ---- runs ---------------------------------------------------------------------- */
+
+/* Inserts an iteration record (and its snapshot) inside the caller's transaction. */
+static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool snapshot) {
+  uint8_t *img = NULL;
+  size_t size = 0;
+  int it = sylva_world_iteration(w);
+  if (snapshot) {
+    int rc = sylva_snapshot_save(w, &img, &size);
+    if (rc) return fail(st, "snapshot of iteration %d: %s", it, sylva_strerror(rc));
+  }
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "INSERT INTO iterations (run, iteration, hash, nodes, snapshot)"
+                         " VALUES (?, ?, ?, ?, ?)",
+                         -1, &q, NULL) != SQLITE_OK) {
+    free(img);
+    return fail(st, "storing iteration %d", it);
+  }
+  sqlite3_bind_int64(q, 1, run);
+  sqlite3_bind_int(q, 2, it);
+  sqlite3_bind_int64(q, 3, (int64_t)sylva_world_hash(w));
+  sqlite3_bind_int64(q, 4, (int64_t)sylva_world_node_count(w));
+  /* the image carries its own checksum (sylva_snapshot_load verifies it) */
+  if (img)
+    sqlite3_bind_blob64(q, 5, img, size, SQLITE_STATIC);
+  else
+    sqlite3_bind_null(q, 5);
+  int rc = sqlite3_step(q);
+  sqlite3_finalize(q);
+  free(img);
+  if (rc != SQLITE_DONE) return fail(st, "storing iteration %d", it);
+  return 0;
+}
+
+int store_create_run(store *st, const char *name, const char *scenario_json, uint64_t seed,
+                     int iterations, int snapshot_every, const sylva_world *w, int64_t *run) {
+  char now[32];
+  utc_now(now);
+  if (exec(st, "BEGIN IMMEDIATE")) return -1;
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "INSERT INTO runs (name, scenario, seed, iterations, snapshot_every,"
+                         " status, reason, created, updated)"
+                         " VALUES (?, ?, ?, ?, ?, 'running', NULL, ?, ?)",
+                         -1, &q, NULL) != SQLITE_OK) {
+    rollback(st);
+    return fail(st, "creating run \"%s\"", name);
+  }
+  sqlite3_bind_text(q, 1, name, -1, SQLITE_STATIC);
+  sqlite3_bind_text(q, 2, scenario_json, -1, SQLITE_STATIC);
+  sqlite3_bind_int64(q, 3, (int64_t)seed);
+  sqlite3_bind_int(q, 4, iterations);
+  sqlite3_bind_int(q, 5, snapshot_every);
+  sqlite3_bind_text(q, 6, now, -1, SQLITE_STATIC);
+  sqlite3_bind_text(q, 7, now, -1, SQLITE_STATIC);
+  int rc = sqlite3_step(q);
+  sqlite3_finalize(q);
+  if (rc == SQLITE_CONSTRAINT_UNIQUE) {
+    rollback(st);
+    snprintf(st->error, sizeof st->error,
+             "%s: a run named \"%s\" exists already (continue it with 'sylva resume', or "
+             "choose another --name)", st->path, name);
+    return -1;
+  }
+  if (rc != SQLITE_DONE) {
+    fail(st, "creating run \"%s\"", name);
+    rollback(st);
+    return -1;
+  }
+  *run = sqlite3_last_insert_rowid(st->db);
+  if (insert_iteration(st, *run, w, true)) {
+    rollback(st);
+    return -1;
+  }
+  if (exec(st, "COMMIT")) {
+    rollback(st);
+    return -1;
+  }
+  return 0;
+}
+
+static char *dup_column(sqlite3_stmt *q, int col) {
+  const unsigned char *t = sqlite3_column_text(q, col);
+  return strdup(t ? (const char *)t : "");
+}
+
+static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
+  const unsigned char *t = sqlite3_column_text(q, col);
+  snprintf(out, n, "%s", t ? (const char *)t : "");
+}
+
+#define RUN_COLUMNS                                                                         \
+  "SELECT r.id, r.name, r.scenario, r.seed, r.iterations, r.snapshot_every, r.status,"      \
+  " r.reason, r.created, r.updated,"                                                        \
+  " (SELECT max(iteration) FROM iterations i WHERE i.run = r.id),"                          \
+  " (SELECT nodes FROM iterations i WHERE i.run = r.id ORDER BY iteration DESC LIMIT 1)"    \
+  " FROM runs r"
+
+static int read_run(sqlite3_stmt *q, store_run *r) {
+  memset(r, 0, sizeof *r);
+  r->id = sqlite3_column_int64(q, 0);
+  r->name = dup_column(q, 1);
+  r->scenario = dup_column(q, 2);
+  r->seed = (uint64_t)sqlite3_column_int64(q, 3);
+  r->iterations = sqlite3_column_int(q, 4);
+  r->snapshot_every = sqlite3_column_int(q, 5);
+  copy_column(q, 6, r->status, sizeof r->status);
+  copy_column(q, 7, r->reason, sizeof r->reason);
+  copy_column(q, 8, r->created, sizeof r->created);
+  copy_column(q, 9, r->updated, sizeof r->updated);
+  r->last_iteration = sqlite3_column_int(q, 10);
+  r->nodes = sqlite3_column_int64(q, 11);
+  return r->name && r->scenario ? 0 : -1;
+}
+
+void store_run_free(store_run *r) {
+  if (!r) return;
+  free(r->name);
+  free(r->scenario);
+  r->name = r->scenario = NULL;
+}
+
+void store_runs_free(store_run *runs, size_t count) {
+  for (size_t i = 0; i < count; i++) store_run_free(&runs[i]);
+  free(runs);
+}
+
+int store_find_run(store *st, const char *name, store_run *out, bool *found) {
+  *found = false;
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, RUN_COLUMNS " WHERE r.name = ?", -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "looking up run \"%s\"", name);
+  sqlite3_bind_text(q, 1, name, -1, SQLITE_STATIC);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW) {
+    if (read_run(q, out)) {
+      store_run_free(out);
+      sqlite3_finalize(q);
+      snprintf(st->error, sizeof st->error, "%s: out of memory", st->path);
+      return -1;
+    }
+    *found = true;
+  }
+  sqlite3_finalize(q);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) return fail(st, "looking up run \"%s\"", name);
+  return 0;
+}
+
+int store_list_runs(store *st, store_run **out, size_t *count) {
+  *out = NULL;
+  *count = 0;
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, RUN_COLUMNS " ORDER BY r.id", -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "listing runs");
+  size_t n = 0, cap = 0;
+  store_run *runs = NULL;
+  int rc;
+  while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
+    if (n == cap) {
+      cap = cap ? 2 * cap : 8;
+      store_run *p = realloc(runs, cap * sizeof *p);
+      if (!p) break;
+      runs = p;
+    }
+    if (read_run(q, &runs[n])) {
+      store_run_free(&runs[n]);
+      break;
+    }
+    n++;
+  }
+  sqlite3_finalize(q);
+  if (rc != SQLITE_DONE) {
+    store_runs_free(runs, n);
+    if (rc == SQLITE_ROW) {
+      snprintf(st->error, sizeof st->error, "%s: out of memory", st->path);
+      return -1;
+    }
+    return fail(st, "listing runs");
+  }
+  *out = runs;
+  *count = n;
+  return 0;
+}
+
+/* ---- iterations ---------------------------------------------------------------- */
+
+static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
+  if (isnan(v))
+    sqlite3_bind_null(q, col);
+  else
+    sqlite3_bind_double(q, col, v);
+}
+
+int store_save_iteration(store *st, int64_t run, const sylva_world *w,
+                         const sylva_journal *j, bool snapshot) {
+  int it = j->iteration;
+  char now[32];
+  utc_now(now);
+  if (exec(st, "BEGIN IMMEDIATE")) return -1;
+  if (insert_iteration(st, run, w, snapshot)) {
+    rollback(st);
+    return -1;
+  }
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "INSERT INTO stats (run, iteration, stem, plant, plant_stem, height, dbh,"
+                         " crown_width, crown_base, nodes, shed, light, cap, finished)"
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                         -1, &q, NULL) != SQLITE_OK) {
+    fail(st, "storing iteration %d", it);
+    rollback(st);
+    return -1;
+  }
+  for (size_t k = 0; k < j->stem_count; k++) {
+    const sylva_stem_stats *s = &j->stats[k];
+    sqlite3_reset(q);
+    sqlite3_bind_int64(q, 1, run);
+    sqlite3_bind_int(q, 2, it);
+    sqlite3_bind_int(q, 3, (int)k);
+    sqlite3_bind_text(q, 4, sylva_world_plant_label(w, s->plant), -1, SQLITE_STATIC);
+    sqlite3_bind_int(q, 5, s->stem);
+    bind_real_or_null(q, 6, s->height);
+    bind_real_or_null(q, 7, s->dbh);
+    bind_real_or_null(q, 8, s->crown_width);
+    bind_real_or_null(q, 9, s->crown_base);
+    sqlite3_bind_int64(q, 10, s->nodes);
+    sqlite3_bind_int64(q, 11, s->shed);
+    bind_real_or_null(q, 12, s->light);
+    sqlite3_bind_int(q, 13, s->cap);
+    sqlite3_bind_int(q, 14, s->finished);
+    if (sqlite3_step(q) != SQLITE_DONE) {
+      fail(st, "storing iteration %d", it);
+      sqlite3_finalize(q);
+      rollback(st);
+      return -1;
+    }
+  }
+  sqlite3_finalize(q);
+  if (sqlite3_prepare_v2(st->db, "UPDATE runs SET updated = ? WHERE id = ?", -1, &q, NULL) !=
+      SQLITE_OK) {
+    fail(st, "storing iteration %d", it);
+    rollback(st);
+    return -1;
+  }
+  sqlite3_bind_text(q, 1, now, -1, SQLITE_STATIC);
+  sqlite3_bind_int64(q, 2, run);
+  int rc = sqlite3_step(q);
+  sqlite3_finalize(q);
+  if (rc != SQLITE_DONE || exec(st, "COMMIT")) {
+    if (rc != SQLITE_DONE) fail(st, "storing iteration %d", it);
+    rollback(st);
+    return -1;
+  }
+  return 0;
+}
+
+int store_set_status(store *st, int64_t run, const char *status, const char *reason,
+                     int iterations) {
+  char now[32];
+  utc_now(now);
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "UPDATE runs SET status = ?, reason = ?, updated = ?,"
+                         " iterations = CASE WHEN ? > 0 THEN ? ELSE iterations END WHERE id = ?",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "setting the status of a run");
+  sqlite3_bind_text(q, 1, status, -1, SQLITE_STATIC);
+  if (reason)
+    sqlite3_bind_text(q, 2, reason, -1, SQLITE_STATIC);
+  else
+    sqlite3_bind_null(q, 2);
+  sqlite3_bind_text(q, 3, now, -1, SQLITE_STATIC);
+  sqlite3_bind_int(q, 4, iterations);
+  sqlite3_bind_int(q, 5, iterations);
+  sqlite3_bind_int64(q, 6, run);
+  int rc = sqlite3_step(q);
+  sqlite3_finalize(q);
+  return rc == SQLITE_DONE ? 0 : fail(st, "setting the status of a run");
+}
+
+int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, bool *found) {
+  *found = false;
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, "SELECT hash FROM iterations WHERE run = ? AND iteration = ?",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "reading iteration %d", iteration);
+  sqlite3_bind_int64(q, 1, run);
+  sqlite3_bind_int(q, 2, iteration);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW) {
+    *hash = (uint64_t)sqlite3_column_int64(q, 0);
+    *found = true;
+  }
+  sqlite3_finalize(q);
+  return rc == SQLITE_ROW || rc == SQLITE_DONE ? 0 : fail(st, "reading iteration %d", iteration);
+}
+
+int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
+                     sylva_world **world_out, int *from) {
+  *world_out = NULL;
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "SELECT iteration, snapshot FROM iterations"
+                         " WHERE run = ? AND iteration <= ? AND snapshot IS NOT NULL"
+                         " ORDER BY iteration DESC",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "reading snapshots");
+  sqlite3_bind_int64(q, 1, run);
+  sqlite3_bind_int(q, 2, at);
+  int rc;
+  while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
+    int it = sqlite3_column_int(q, 0);
+    const uint8_t *img = sqlite3_column_blob(q, 1);
+    size_t size = (size_t)sqlite3_column_bytes(q, 1);
+    const char *problem = NULL;
+    int load = 0;
+    if (!img)
+      problem = "empty";
+    else if ((load = sylva_snapshot_load(img, size, world_out)) != 0)
+      problem = sylva_strerror(load);
+    else if (sylva_world_iteration(*world_out) != it) {
+      problem = "it holds another iteration";
+      sylva_world_destroy(*world_out);
+      *world_out = NULL;
+    }
+    if (!problem) {
+      *from = it;
+      sqlite3_finalize(q);
+      return 0;
+    }
+    if (load == SYLVA_ENOMEM) {
+      sqlite3_finalize(q);
+      snprintf(st->error, sizeof st->error, "%s: out of memory restoring iteration %d", st->path,
+               it);
+      return -1;
+    }
+    if (warn) {
+      char msg[512];
+      snprintf(msg, sizeof msg, "%s: the snapshot of iteration %d is corrupt (%s); using an "
+               "earlier one", st->path, it, problem);
+      warn(msg);
+    }
+  }
+  sqlite3_finalize(q);
+  if (rc != SQLITE_DONE) return fail(st, "reading snapshots");
+  snprintf(st->error, sizeof st->error, "%s: no good snapshot at or before iteration %d",
+           st->path, at);
+  return -1;
+}
+
+static double column_real(sqlite3_stmt *q, int col) {
+  return sqlite3_column_type(q, col) == SQLITE_NULL ? NAN : sqlite3_column_double(q, col);
+}
+
+int store_each_stats(store *st, int64_t run, int to,
+                     int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
+                         " crown_base, nodes, shed, light, cap, finished FROM stats"
+                         " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "reading stats");
+  sqlite3_bind_int64(q, 1, run);
+  sqlite3_bind_int(q, 2, to);
+  int rc;
+  while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
+    store_stats_row r = {
+        .iteration = sqlite3_column_int(q, 0),
+        .stem = sqlite3_column_int(q, 1),
+        .plant = (const char *)sqlite3_column_text(q, 2),
+        .plant_stem = sqlite3_column_int(q, 3),
+        .height = column_real(q, 4),
+        .dbh = column_real(q, 5),
+        .crown_width = column_real(q, 6),
+        .crown_base = column_real(q, 7),
+        .nodes = sqlite3_column_int64(q, 8),
+        .shed = sqlite3_column_int64(q, 9),
+        .light = column_real(q, 10),
+        .cap = sqlite3_column_int(q, 11),
+        .finished = sqlite3_column_int(q, 12) != 0,
+    };
+    if (!r.plant) r.plant = "";
+    if (fn(&r, ctx)) {
+      sqlite3_finalize(q);
+      snprintf(st->error, sizeof st->error, "%s: reading stats: stopped", st->path);
+      return -1;
+    }
+  }
+  sqlite3_finalize(q);
+  return rc == SQLITE_DONE ? 0 : fail(st, "reading stats");
+}
+
+/* ---- commands ------------------------------------------------------------------ */
+
+int store_log_command(store *st, int64_t run, int iteration, const char *command_json,
+                      int64_t *seq) {
+  char now[32];
+  utc_now(now);
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "INSERT INTO commands (run, seq, iteration, command, created)"
+                         " VALUES (?1, (SELECT coalesce(max(seq), 0) + 1 FROM commands"
+                         " WHERE run = ?1), ?2, ?3, ?4) RETURNING seq",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "logging a command");
+  sqlite3_bind_int64(q, 1, run);
+  sqlite3_bind_int(q, 2, iteration);
+  sqlite3_bind_text(q, 3, command_json, -1, SQLITE_STATIC);
+  sqlite3_bind_text(q, 4, now, -1, SQLITE_STATIC);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW && seq) *seq = sqlite3_column_int64(q, 0);
+  if (rc == SQLITE_ROW) rc = sqlite3_step(q);
+  sqlite3_finalize(q);
+  return rc == SQLITE_DONE ? 0 : fail(st, "logging a command");
+}
+
+int store_command_count(store *st, int64_t run, int64_t *count) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, "SELECT count(*) FROM commands WHERE run = ?", -1, &q, NULL) !=
+      SQLITE_OK)
+    return fail(st, "counting commands");
+  sqlite3_bind_int64(q, 1, run);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW) *count = sqlite3_column_int64(q, 0);
+  sqlite3_finalize(q);
+  return rc == SQLITE_ROW ? 0 : fail(st, "counting commands");
+}

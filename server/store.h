@@ -1,0 +1,103 @@
+/* sylva server: the store. Runs, their iterations (world snapshots with checksums,
+ * lighter records in between), per-stem stats of every iteration and the log of
+ * commands applied to a run, in one SQLite file (WAL; one transaction per stored
+ * iteration, so after a crash the file holds a consistent prefix of every run).
+ *
+ * Snapshots are core images (sylva/snapshot.h), which carry their own checksum.
+ * Every function returns 0 or -1; after -1, store_error() says what failed, with
+ * the file's name and SQLite's reason, e.g.
+ *   "runs.db: storing iteration 12 of run \"oak\": disk I/O error". */
+#ifndef SYLVA_SERVER_STORE_H
+#define SYLVA_SERVER_STORE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sylva/world.h"
+
+/** PRAGMA application_id of a sylva store ("SYLV"). */
+#define STORE_APPLICATION_ID 0x53594c56
+/** Schema version this build writes (PRAGMA user_version). */
+#define STORE_SCHEMA_VERSION 1
+/** Default number of iterations between two full snapshots. */
+#define STORE_SNAPSHOT_EVERY 5
+
+typedef struct store store;
+
+/** A run as stored. Strings are owned by the record (store_run_free). */
+typedef struct store_run {
+  int64_t id;
+  char *name;
+  char *scenario;     /**< the scenario, canonical JSON */
+  uint64_t seed;
+  int iterations;     /**< the iteration limit */
+  int snapshot_every; /**< iterations between full snapshots */
+  char status[16];    /**< running, paused, finished, failed */
+  char reason[16];    /**< finished or limit once it ended, else empty */
+  char created[32], updated[32]; /**< UTC, ISO 8601 */
+  int last_iteration; /**< the last stored iteration (0: only the planted world) */
+  int64_t nodes;      /**< live nodes after it */
+} store_run;
+
+/** Opens (create: also creates) a store file and brings its schema up to date
+ *  inside one transaction. Refuses a file that is not SQLite, belongs to another
+ *  program, or was written by a newer sylva. */
+int store_open(const char *path, bool create, store **out);
+/** Closes the store; NULL is fine. */
+void store_close(store *st);
+/** What the last failing call of this store said. */
+const char *store_error(const store *st);
+/** The message of a failed store_open (which has no store to ask). */
+const char *store_open_error(void);
+
+/** Creates a run with its planted world as iteration 0 (a full snapshot).
+ *  Fails (store_error names it) when the name is taken. */
+int store_create_run(store *st, const char *name, const char *scenario_json, uint64_t seed,
+                     int iterations, int snapshot_every, const sylva_world *w, int64_t *run);
+/** Finds a run by name; *found false when there is none. */
+int store_find_run(store *st, const char *name, store_run *out, bool *found);
+/** All runs, oldest first; *out is a malloc'd array of *count records. */
+int store_list_runs(store *st, store_run **out, size_t *count);
+/** Frees the strings of a record (and not the record). */
+void store_run_free(store_run *r);
+/** Frees an array from store_list_runs. */
+void store_runs_free(store_run *runs, size_t count);
+
+/** Stores one iteration in one transaction: its stats rows, its world hash and,
+ *  when snapshot is true, the full world image. */
+int store_save_iteration(store *st, int64_t run, const sylva_world *w,
+                         const sylva_journal *j, bool snapshot);
+/** Sets a run's status (and reason, may be NULL) and iteration limit (> 0 to change). */
+int store_set_status(store *st, int64_t run, const char *status, const char *reason,
+                     int iterations);
+/** The world hash stored for an iteration; *found false when there is no record. */
+int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, bool *found);
+
+/** Restores the newest good snapshot at or before iteration `at`. A snapshot whose
+ *  checksum or content is bad is reported through warn (if given) and the previous
+ *  one is used. *world_out gets the world, which is at iteration *from. */
+int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
+                     sylva_world **world_out, int *from);
+
+/** One stored stats row. */
+typedef struct store_stats_row {
+  int iteration, stem, plant_stem, cap;
+  const char *plant;
+  double height, dbh, crown_width, crown_base, light; /**< NaN where null */
+  int64_t nodes, shed;
+  bool finished;
+} store_stats_row;
+
+/** Calls fn for every stats row of a run up to iteration `to`, in iteration then
+ *  stem order; fn returns 0 to go on, non-zero to stop (returned as -1). */
+int store_each_stats(store *st, int64_t run, int to,
+                     int (*fn)(const store_stats_row *row, void *ctx), void *ctx);
+
+/** Appends a command (JSON) applied to a run after iteration `iteration`. */
+int store_log_command(store *st, int64_t run, int iteration, const char *command_json,
+                      int64_t *seq);
+/** Number of logged commands of a run. */
+int store_command_count(store *st, int64_t run, int64_t *count);
+
+#endif

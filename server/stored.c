@@ -1,0 +1,81 @@
+#include "stored.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "options.h"
+#include "sylva/status.h"
+
+static void warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
+
+int cli_store_open(const char *path, bool create, store **out) {
+  if (store_open(path, create, out)) {
+    fprintf(stderr, "sylva: %s\n", store_open_error());
+    return CLI_EXIT_USAGE;
+  }
+  return CLI_EXIT_OK;
+}
+
+int cli_store_new_run(const char *db, const char *name, const sylva_scenario *s, int limit,
+                      grow_job *job) {
+  int rc = cli_store_open(db, true, &job->st);
+  if (rc) return rc;
+  char *json = sylva_scenario_json(s);
+  if (!json) {
+    fprintf(stderr, "sylva: out of memory\n");
+    return CLI_EXIT_FAILURE;
+  }
+  int failed = store_create_run(job->st, name, json, s->seed, limit, job->snapshot_every, job->w,
+                                &job->run);
+  free(json);
+  if (failed) {
+    fprintf(stderr, "sylva: %s\n", store_error(job->st));
+    return CLI_EXIT_USAGE;
+  }
+  return CLI_EXIT_OK;
+}
+
+int cli_store_find(store *st, const char *db, const char *name, store_run *out) {
+  bool found;
+  if (store_find_run(st, name, out, &found)) {
+    fprintf(stderr, "sylva: %s\n", store_error(st));
+    return CLI_EXIT_FAILURE;
+  }
+  if (!found) {
+    fprintf(stderr, "sylva: %s: no run named \"%s\" ('sylva runs --db %s' lists them)\n", db,
+            name, db);
+    return CLI_EXIT_USAGE;
+  }
+  return CLI_EXIT_OK;
+}
+
+int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
+  *out = NULL;
+  sylva_world *w;
+  int from;
+  if (store_load_world(st, r->id, at, warn, &w, &from)) {
+    fprintf(stderr, "sylva: %s\n", store_error(st));
+    return CLI_EXIT_FAILURE;
+  }
+  while (sylva_world_iteration(w) < at) {
+    int status = sylva_world_step(w, NULL);
+    int it = sylva_world_iteration(w);
+    uint64_t hash;
+    bool found = false;
+    if (status == SYLVA_OK && store_iteration_hash(st, r->id, it, &hash, &found)) {
+      fprintf(stderr, "sylva: %s\n", store_error(st));
+      sylva_world_destroy(w);
+      return CLI_EXIT_FAILURE;
+    }
+    if (status != SYLVA_OK || (found && hash != sylva_world_hash(w))) {
+      fprintf(stderr, "sylva: run \"%s\": regrowing iteration %d from the snapshot of %d %s\n",
+              r->name, it, from,
+              status != SYLVA_OK ? sylva_strerror(status)
+                                 : "gives another world than the one stored");
+      sylva_world_destroy(w);
+      return CLI_EXIT_FAILURE;
+    }
+  }
+  *out = w;
+  return CLI_EXIT_OK;
+}

@@ -1,0 +1,29 @@
+/* sylva server: stored runs for the command line: opening a store, creating a
+ * run, and restoring a run's world at any stored iteration. Each prints its own
+ * error ("sylva: ...") and returns an exit status (options.h). */
+#ifndef SYLVA_SERVER_STORED_H
+#define SYLVA_SERVER_STORED_H
+
+#include <stdbool.h>
+
+#include "grow.h"
+#include "store.h"
+#include "sylva/scenario.h"
+
+/** Opens a store (create: a new file may be made). */
+int cli_store_open(const char *path, bool create, store **out);
+
+/** Opens (creating) the store at db, creates run `name` for scenario s with the
+ *  job's planted world as iteration 0, and points job->st and job->run at it. */
+int cli_store_new_run(const char *db, const char *name, const sylva_scenario *s, int limit,
+                      grow_job *job);
+
+/** Finds run `name`; exit status 2 with a message when there is none. */
+int cli_store_find(store *st, const char *db, const char *name, store_run *out);
+
+/** The world of a stored run at iteration `at`: the newest good snapshot at or
+ *  before it, regrown to `at`, each regrown iteration checked against the stored
+ *  world hash. */
+int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out);
+
+#endif
