@@ -1,0 +1,304 @@
+#!/usr/bin/env python3
+"""Round trip through the store, with the real binary.
+
+- `sylva run --db --export`: the stdout lines equal those of a run without a
+  store (elapsed_ms aside); `sylva export` of the last iteration equals the
+  --export file byte for byte (to a file and to stdout);
+- `sylva export --iteration T` of stored iterations (snapshot ones and ones
+  regrown from an earlier snapshot) equals `sylva run --iterations T --export`;
+- `sylva runs` lists the run: finished, limit, 10/10;
+- CSV: one header line, one row per stem and iteration 1..last, every value as
+  on the stats lines of `sylva run`; --iteration T cuts it at T;
+- resume after a clean stop (--iterations 5, then resume --iterations 10):
+  exactly the uninterrupted lines 6..10 and the done line, the same final
+  skeleton and the same CSV; resume of a run at its limit prints only the
+  done line;
+- bad cases: a taken run name, an unknown run, a missing file, a file that is
+  not SQLite, an SQLite file of another program, a store of a newer schema:
+  exit 2, a message naming the file and the problem, and the file (and its
+  directory) left exactly as it was.
+"""
+import csv
+import io
+import json
+import os
+import sqlite3
+import sys
+import time
+
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from store_common import (Checks, Env, crash_text, query, read_bytes,  # noqa: E402
+                          strip_elapsed)
+
+ITERATIONS = 10
+SNAPSHOT_EVERY = 3
+HEADER = "iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished"
+
+
+def main():
+    env = Env(sys.argv)
+    c = Checks()
+    t0 = time.monotonic()
+    try:
+        scenario = env.scenario("stand.json")
+        with open(scenario) as f:
+            stems = sum(len(p["roots"]) for p in json.load(f)["plants"])
+        db = env.path("a.db")
+        final = env.path("final.json")
+
+        # ---- run with a store ---------------------------------------------------
+        rc, out, err = env.sylva("run", scenario, "--db", db, "--name", "rt",
+                                 "--snapshot-every", SNAPSHOT_EVERY, "--iterations", ITERATIONS,
+                                 "--export", final, "--quiet-progress")
+        if not c.check(rc == 0, "run --db exits 0", "exit %s: %s" % (rc, err)):
+            c.finish()
+        lines = out.splitlines()
+        c.check(len(lines) == ITERATIONS + 1, "run prints %d lines" % (ITERATIONS + 1), len(lines))
+        c.check(lines[-1] == '{"done": true, "iterations": %d, "reason": "limit"}' % ITERATIONS,
+                "done line", lines[-1])
+        plain = env.clean_lines(scenario, ITERATIONS)
+        c.check([strip_elapsed(x) for x in lines] == [strip_elapsed(x) for x in plain],
+                "the stats lines with a store equal those without")
+        c.check(read_bytes(final) == env.clean_export(scenario, ITERATIONS),
+                "--export with a store equals --export without")
+
+        rc, data, err = env.export(db, "rt")
+        c.check(rc == 0 and data == read_bytes(final),
+                "export of the last iteration equals the --export file byte for byte",
+                "exit %s: %s" % (rc, err))
+        rc, out2, err = env.sylva("export", "--db", db, "--name", "rt", "--format", "skeleton",
+                                  "-o", "-")
+        c.check(rc == 0 and out2.encode() == read_bytes(final), "export -o - (stdout) too",
+                "exit %s: %s" % (rc, err))
+        rc, data, err = env.export(db, "rt", iteration=ITERATIONS)
+        c.check(rc == 0 and data == read_bytes(final), "export --iteration %d too" % ITERATIONS,
+                "exit %s: %s" % (rc, err))
+
+        # snapshots at 0, 3, 6, 9, 10: 4, 5, 8 are regrown, 3 and 6 are restored
+        for t in (1, 3, 4, 5, 6, 8):
+            rc, data, err = env.export(db, "rt", iteration=t)
+            c.check(rc == 0 and data == env.clean_export(scenario, t),
+                    "export --iteration %d equals run --iterations %d --export" % (t, t),
+                    "exit %s: %s" % (rc, err))
+        rc, data, err = env.export(db, "rt", iteration=0)
+        c.check(rc == 0 and data is not None and json.loads(data)["iteration"] == 0,
+                "export --iteration 0 (the planted world)", "exit %s: %s" % (rc, err))
+        rc, data, err = env.export(db, "rt", iteration=ITERATIONS + 1)
+        c.check(rc == 2 and "no iteration %d" % (ITERATIONS + 1) in err and data is None,
+                "export of an iteration not stored: exit 2", "exit %s: %s" % (rc, err))
+
+        # ---- runs ---------------------------------------------------------------
+        rc, out, err = env.sylva("runs", "--db", db)
+        rows = [x.split() for x in out.splitlines()]
+        c.check(rc == 0 and len(rows) == 2 and rows[0][:2] == ["NAME", "STATUS"],
+                "runs: a header and one run", out + err)
+        last_nodes = sum(s["nodes"] for s in json.loads(lines[-2])["stems"])
+        c.check(len(rows) == 2 and rows[1][:5] == ["rt", "finished", "limit", "10/10",
+                                                     str(last_nodes)],
+                "runs: rt finished, limit, 10/10, its live nodes", out)
+
+        # ---- CSV ----------------------------------------------------------------
+        check_csv(env, c, db, "rt", lines, stems)
+
+        # ---- resume after a clean stop -----------------------------------------
+        db_b = env.path("b.db")
+        rc, out, err = env.sylva("run", scenario, "--db", db_b, "--name", "rs",
+                                 "--snapshot-every", SNAPSHOT_EVERY, "--iterations", 5,
+                                 "--quiet-progress")
+        first = out.splitlines()
+        c.check(rc == 0 and [strip_elapsed(x) for x in first[:-1]] ==
+                [strip_elapsed(x) for x in lines[:5]] and
+                first[-1] == '{"done": true, "iterations": 5, "reason": "limit"}',
+                "run --iterations 5: lines 1..5 and a done line", "exit %s: %s" % (rc, err))
+        rc, out, err = env.sylva("runs", "--db", db_b)
+        c.check(rc == 0 and out.splitlines()[1].split()[:4] == ["rs", "finished", "limit", "5/5"],
+                "runs: rs finished at 5/5", out + err)
+        rc, out, err = env.sylva("resume", "--db", db_b, "--name", "rs", "--iterations",
+                                 ITERATIONS, "--quiet-progress")
+        c.check(rc == 0, "resume --iterations 10 exits 0", "exit %s: %s" % (rc, err))
+        c.check(err == "", "resume after a clean stop is silent on stderr", err)
+        got = [strip_elapsed(x) for x in out.splitlines()]
+        want = [strip_elapsed(x) for x in lines[5:]]
+        c.check(got == want, "resume prints exactly the lines 6..10 and the done line",
+                "got:\n%s\nwant:\n%s" % ("\n".join(x[:120] for x in got),
+                                          "\n".join(x[:120] for x in want)))
+        rc, data, err = env.export(db_b, "rs")
+        c.check(rc == 0 and data == read_bytes(final),
+                "the resumed run's final export equals the uninterrupted one",
+                "exit %s: %s" % (rc, err))
+        rc_a, csv_a, _ = env.export(db, "rt", fmt="csv")
+        rc_b, csv_b, _ = env.export(db_b, "rs", fmt="csv")
+        c.check(rc_a == 0 and rc_b == 0 and csv_a == csv_b,
+                "the resumed run's CSV equals the uninterrupted one")
+        c.check(query(db, "SELECT iteration, hash, nodes FROM iterations ORDER BY iteration") ==
+                query(db_b, "SELECT iteration, hash, nodes FROM iterations ORDER BY iteration"),
+                "the same world hashes and node counts are stored")
+        rc, out, err = env.sylva("runs", "--db", db_b)
+        c.check(rc == 0 and out.splitlines()[1].split()[:4] ==
+                ["rs", "finished", "limit", "10/10"], "runs: rs finished at 10/10", out + err)
+        rc, out, err = env.sylva("resume", "--db", db_b, "--name", "rs", "--quiet-progress")
+        c.check(rc == 0 and out == '{"done": true, "iterations": 10, "reason": "limit"}\n',
+                "resume of a run at its limit prints only the done line",
+                "exit %s: %r %s" % (rc, out, err))
+
+        # ---- bad cases ------------------------------------------------------------
+        bad_cases(env, c, scenario, db)
+    finally:
+        env.cleanup()
+    print("time %.1f s" % (time.monotonic() - t0))
+    c.finish()
+
+
+def check_csv(env, c, db, name, lines, stems):
+    rc, data, err = env.export(db, name, fmt="csv")
+    if not c.check(rc == 0 and data is not None, "export --format csv exits 0",
+                   "exit %s: %s" % (rc, err)):
+        return
+    text = data.decode()
+    c.check(text.endswith("\n") and "\r" not in text, "CSV lines end with \\n")
+    rows = text.splitlines()
+    c.check(rows[0] == HEADER, "CSV header", rows[0])
+    c.check(sum(1 for r in rows if r.startswith("iteration,")) == 1, "exactly one header line")
+    records = list(csv.reader(io.StringIO("\n".join(rows[1:]))))
+    c.check(len(records) == stems * ITERATIONS,
+            "one CSV row per stem (%d) and iteration (1..%d)" % (stems, ITERATIONS), len(records))
+    expected = []
+    for line in lines[:-1]:
+        obj = json.loads(line)
+        for s in obj["stems"]:
+            expected.append((obj["iteration"], s))
+    mismatches = []
+    for i, ((it, s), rec) in enumerate(zip(expected, records)):
+        if len(rec) != 12:
+            mismatches.append("row %d: %d fields" % (i + 1, len(rec)))
+            continue
+        num = lambda v: None if v == "" else float(v)  # noqa: E731
+        got = (int(rec[0]), rec[1], int(rec[2]), num(rec[3]), num(rec[4]), num(rec[5]),
+               num(rec[6]), int(rec[7]), int(rec[8]), num(rec[9]), int(rec[10]), rec[11])
+        want = (it, s["plant"], s["stem"], s["height"], s["dbh"], s["crown_width"],
+                s["crown_base"], s["nodes"], s["shed"], s["light"], s["cap"],
+                "true" if s["finished"] else "false")
+        if got != want:
+            mismatches.append("row %d: %r != %r" % (i + 1, got, want))
+    c.check(len(expected) == len(records) and not mismatches,
+            "every CSV row equals the stats line of its iteration and stem "
+            "(height, dbh, crown, nodes, shed, light, cap, finished)",
+            "\n".join(mismatches[:10]))
+    rc, data, err = env.export(db, name, fmt="csv", iteration=4)
+    c.check(rc == 0 and data is not None and
+            data.decode().splitlines() == rows[:1 + 4 * stems],
+            "CSV --iteration 4: the header and the rows of iterations 1..4",
+            "exit %s: %s" % (rc, err))
+
+
+def snapshot_dir(d):
+    """Name, size, mtime and bytes of every file in a directory."""
+    out = {}
+    for n in sorted(os.listdir(d)):
+        p = os.path.join(d, n)
+        st = os.stat(p)
+        out[n] = (st.st_size, st.st_mtime_ns, read_bytes(p))
+    return out
+
+
+def bad_cases(env, c, scenario, good_db):
+    # a taken name: exit 2, nothing stored
+    before = (query(good_db, "SELECT count(*) FROM iterations"),
+              query(good_db, "SELECT * FROM stats"))
+    runs_before = query(good_db, "SELECT * FROM runs")
+    rc, out, err = env.sylva("run", scenario, "--db", good_db, "--name", "rt", "--iterations", 3,
+                             "--quiet-progress")
+    c.check(rc == 2 and "exists already" in err and '"rt"' in err and good_db in err and out == "",
+            "run with a taken name: exit 2, says so", "exit %s: %s" % (rc, err))
+    c.check((query(good_db, "SELECT count(*) FROM iterations"),
+             query(good_db, "SELECT * FROM stats")) == before and
+            query(good_db, "SELECT * FROM runs") == runs_before,
+            "run with a taken name changes nothing")
+
+    # an unknown run
+    for args in (["resume", "--db", good_db, "--name", "nosuch"],
+                 ["export", "--db", good_db, "--name", "nosuch", "--format", "skeleton", "-o",
+                  env.path("x.json")],
+                 ["export", "--db", good_db, "--name", "nosuch", "--format", "csv", "-o",
+                  env.path("x.csv")]):
+        rc, out, err = env.sylva(*args)
+        c.check(rc == 2 and 'no run named "nosuch"' in err and good_db in err,
+                "%s of an unknown run: exit 2, says so" % args[0], "exit %s: %s" % (rc, err))
+    c.check(not os.path.exists(env.path("x.json")) and not os.path.exists(env.path("x.csv")) and
+            not os.path.exists(env.path("x.json.tmp")) and
+            not os.path.exists(env.path("x.csv.tmp")),
+            "a failed export leaves no output file")
+
+    # a missing file is not created by the commands that only read
+    missing = env.path("missing.db")
+    for args in (["resume", "--db", missing, "--name", "rt"],
+                 ["export", "--db", missing, "--name", "rt", "--format", "csv", "-o",
+                  env.path("x.csv")],
+                 ["runs", "--db", missing]):
+        rc, out, err = env.sylva(*args)
+        c.check(rc == 2 and missing in err and not os.path.exists(missing),
+                "%s of a missing store: exit 2, names it, creates nothing" % args[0],
+                "exit %s: %s" % (rc, err))
+
+    # files that are no sylva store (of this version)
+    bad_dir = env.path("bad")
+    os.mkdir(bad_dir)
+    text = os.path.join(bad_dir, "text.db")
+    with open(text, "w") as f:
+        f.write("this is not a database\n" * 200)
+    binary = os.path.join(bad_dir, "random.db")
+    with open(binary, "wb") as f:
+        f.write(bytes((i * 7919 + 13) % 251 for i in range(16384)))
+    other = os.path.join(bad_dir, "other.db")
+    con = sqlite3.connect(other)
+    con.execute("CREATE TABLE notes (id INTEGER PRIMARY KEY, text TEXT)")
+    con.execute("INSERT INTO notes (text) VALUES ('hello')")
+    con.commit()
+    con.close()
+    other_app = os.path.join(bad_dir, "other-app.db")
+    con = sqlite3.connect(other_app)
+    con.execute("PRAGMA application_id = 1234")
+    con.execute("CREATE TABLE t (x)")
+    con.commit()
+    con.close()
+    newer = os.path.join(bad_dir, "newer.db")
+    with open(newer, "wb") as f:
+        f.write(read_bytes(good_db))
+    con = sqlite3.connect(newer)
+    con.execute("PRAGMA user_version = 99")
+    con.commit()
+    con.close()
+    c.check(query(newer, "PRAGMA user_version") == [(99,)] and
+            query(newer, "PRAGMA journal_mode") == [("wal",)],
+            "the newer-schema store is a WAL sylva store with user_version 99")
+    cases = [(text, "not a sylva store"), (binary, "not a sylva store"),
+             (other, "not a sylva store"), (other_app, "not a sylva store"),
+             (newer, "newer sylva")]
+    # older timestamps, so that a rewrite within the same clock tick would show
+    for path, _ in cases:
+        os.utime(path, ns=(1_000_000_000_000_000_000, 1_000_000_000_000_000_000))
+    before = snapshot_dir(bad_dir)
+    for path, reason in cases:
+        for args in (["run", scenario, "--db", path, "--name", "x", "--iterations", 2,
+                      "--quiet-progress"],
+                     ["resume", "--db", path, "--name", "rt"],
+                     ["export", "--db", path, "--name", "rt", "--format", "skeleton", "-o",
+                      env.path("x.json")],
+                     ["runs", "--db", path]):
+            rc, out, err = env.sylva(*args)
+            crash = crash_text(rc, err)
+            label = "%s on %s" % (args[0], os.path.basename(path))
+            c.check(not crash and rc == 2 and out == "" and err.startswith("sylva: ") and
+                    path in err and reason in err,
+                    "%s: exit 2, names the file and says '%s'" % (label, reason),
+                    "exit %s: %s" % (rc, err))
+            after = snapshot_dir(bad_dir)
+            changed = [n for n in set(before) | set(after) if before.get(n) != after.get(n)]
+            c.check(not changed, "%s: the file and its directory are unchanged" % label,
+                    "changed: %s" % changed)
+            before = after
+
+
+if __name__ == "__main__":
+    main()
