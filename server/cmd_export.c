@@ -1,12 +1,12 @@
 /* `sylva export`: a stored iteration as a skeleton (JSON), a mesh (OBJ, PLY), or the
  * stats of every iteration (CSV). */
 #include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "commands.h"
+#include "csv.h"
 #include "mesh.h"
 #include "options.h"
 #include "stored.h"
@@ -46,45 +46,6 @@ static void export_usage(FILE *f) {
 }
 
 enum { FMT_SKELETON, FMT_OBJ, FMT_PLY, FMT_CSV };
-
-/* RFC 4180: quote a field that holds a comma, a quote or a line break. */
-static void csv_text(FILE *f, const char *s) {
-  if (!strpbrk(s, ",\"\r\n")) {
-    fputs(s, f);
-    return;
-  }
-  fputc('"', f);
-  for (; *s; s++) {
-    if (*s == '"') fputc('"', f);
-    fputc(*s, f);
-  }
-  fputc('"', f);
-}
-
-static void csv_number(FILE *f, double v, int decimals) {
-  if (isnan(v)) return; /* null: an empty field */
-  char buf[64];
-  sylva_fmt_fixed(buf, sizeof buf, v, decimals);
-  fputs(buf, f);
-}
-
-static int csv_row(const store_stats_row *r, void *ctx) {
-  FILE *f = ctx;
-  fprintf(f, "%d,", r->iteration);
-  csv_text(f, r->plant);
-  fprintf(f, ",%d,", r->plant_stem);
-  csv_number(f, r->height, 4);
-  fputc(',', f);
-  csv_number(f, r->dbh, 4);
-  fputc(',', f);
-  csv_number(f, r->crown_width, 4);
-  fputc(',', f);
-  csv_number(f, r->crown_base, 4);
-  fprintf(f, ",%lld,%lld,", (long long)r->nodes, (long long)r->shed);
-  csv_number(f, r->light, 3);
-  fprintf(f, ",%d,%s\n", r->cap, r->finished ? "true" : "false");
-  return ferror(f) ? -1 : 0;
-}
 
 int cmd_export(int argc, char **argv) {
   cli_parser p;
@@ -162,9 +123,7 @@ int cmd_export(int argc, char **argv) {
     }
   }
   if (format == FMT_CSV) {
-    fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished\n",
-          f);
-    if (store_each_stats(st, r.id, at, csv_row, f)) {
+    if (csv_write_stats(f, st, r.id, at)) {
       fprintf(stderr, "sylva: %s\n", ferror(f) ? strerror(errno) : store_error(st));
       rc = CLI_EXIT_FAILURE;
     }

@@ -42,10 +42,12 @@ static int fail(store *st, const char *fmt, ...) {
   return -1;
 }
 
-static int exec(store *st, const char *sql) {
+/* Runs SQL; on failure records "PATH: what: reason". */
+static int exec(store *st, const char *sql, const char *what) {
   char *msg = NULL;
   if (sqlite3_exec(st->db, sql, NULL, NULL, &msg) != SQLITE_OK) {
-    snprintf(st->error, sizeof st->error, "%s: %s", st->path, msg ? msg : "SQLite error");
+    snprintf(st->error, sizeof st->error, "%s: %s: %s", st->path, what,
+             msg ? msg : "SQLite error");
     sqlite3_free(msg);
     return -1;
   }
@@ -117,8 +119,10 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
 
 static int migrate(store *st) {
   if (sqlite3_exec(st->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
-    if ((sqlite3_errcode(st->db) & 0xff) == SQLITE_NOTADB)
-      return fail(st, "not a sylva store (not an SQLite database)");
+    if ((sqlite3_errcode(st->db) & 0xff) == SQLITE_NOTADB) {
+      fail(st, "not a sylva store (not an SQLite database)");
+      return STORE_EINPUT;
+    }
     return fail(st, "cannot open the store");
   }
   bool ok1, ok2, ok3;
@@ -127,20 +131,23 @@ static int migrate(store *st) {
   int64_t objects = pragma_int(st, "SELECT count(*) FROM sqlite_schema", &ok3);
   if (!ok1 || !ok2 || !ok3) {
     rollback(st);
-    return fail(st, "not a sylva store (cannot read it as an SQLite database)");
+    fail(st, "not a sylva store (cannot read it as an SQLite database)");
+    return STORE_EINPUT;
   }
   if (app != STORE_APPLICATION_ID && (app != 0 || objects > 0)) {
     rollback(st);
-    return fail(st, "not a sylva store (an SQLite file of another program, application_id "
-                    "0x%llx)", (unsigned long long)app);
+    fail(st, "not a sylva store (an SQLite file of another program, application_id 0x%llx)",
+         (unsigned long long)app);
+    return STORE_EINPUT;
   }
   if (version > STORE_SCHEMA_VERSION) {
     rollback(st);
-    return fail(st, "written by a newer sylva (schema %lld; this build knows up to %d)",
-                (long long)version, STORE_SCHEMA_VERSION);
+    fail(st, "written by a newer sylva (schema %lld; this build knows up to %d)",
+         (long long)version, STORE_SCHEMA_VERSION);
+    return STORE_EINPUT;
   }
   for (int64_t v = version; v < STORE_SCHEMA_VERSION; v++) {
-    if (exec(st, migrations[v])) {
+    if (exec(st, migrations[v], "migrating the schema")) {
       rollback(st);
       return -1;
     }
@@ -148,7 +155,7 @@ static int migrate(store *st) {
   char sql[96];
   snprintf(sql, sizeof sql, "PRAGMA application_id = %d; PRAGMA user_version = %d",
            STORE_APPLICATION_ID, STORE_SCHEMA_VERSION);
-  if (exec(st, sql) || exec(st, "COMMIT")) {
+  if (exec(st, sql, "migrating the schema") || exec(st, "COMMIT", "migrating the schema")) {
     rollback(st);
     return -1;
   }
@@ -165,22 +172,27 @@ int store_open(const char *path, bool create, store **out) {
   }
   int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0);
   if (sqlite3_open_v2(path, &st->db, flags, NULL) != SQLITE_OK) {
+    int rc = -1;
     snprintf(open_error, sizeof open_error, "%s: %s", path,
              st->db ? sqlite3_errmsg(st->db) : "cannot open");
-    if (!create && st->db && sqlite3_errcode(st->db) == SQLITE_CANTOPEN)
+    if (!create && st->db && sqlite3_errcode(st->db) == SQLITE_CANTOPEN) {
       snprintf(open_error, sizeof open_error, "%s: no such store (or it cannot be opened)", path);
+      rc = STORE_EINPUT;
+    }
     store_close(st);
-    return -1;
+    return rc;
   }
   sqlite3_busy_timeout(st->db, 5000);
   sqlite3_extended_result_codes(st->db, 1);
   /* WAL with full syncs: a commit that returned survives a crash of the program
    * and of the machine; foreign keys keep runs and their rows together. */
-  if (migrate(st) || exec(st, "PRAGMA journal_mode = WAL") ||
-      exec(st, "PRAGMA synchronous = FULL") || exec(st, "PRAGMA foreign_keys = ON")) {
+  int rc = migrate(st);
+  if (rc || exec(st, "PRAGMA journal_mode = WAL", "opening the store") ||
+      exec(st, "PRAGMA synchronous = FULL", "opening the store") ||
+      exec(st, "PRAGMA foreign_keys = ON", "opening the store")) {
     snprintf(open_error, sizeof open_error, "%s", st->error);
     store_close(st);
-    return -1;
+    return rc == STORE_EINPUT ? STORE_EINPUT : -1;
   }
   *out = st;
   return 0;
@@ -232,7 +244,9 @@ int store_create_run(store *st, const char *name, const char *scenario_json, uin
                      int iterations, int snapshot_every, const sylva_world *w, int64_t *run) {
   char now[32];
   utc_now(now);
-  if (exec(st, "BEGIN IMMEDIATE")) return -1;
+  char what[320];
+  snprintf(what, sizeof what, "creating run \"%s\"", name);
+  if (exec(st, "BEGIN IMMEDIATE", what)) return -1;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO runs (name, scenario, seed, iterations, snapshot_every,"
@@ -256,7 +270,7 @@ int store_create_run(store *st, const char *name, const char *scenario_json, uin
     snprintf(st->error, sizeof st->error,
              "%s: a run named \"%s\" exists already (continue it with 'sylva resume', or "
              "choose another --name)", st->path, name);
-    return -1;
+    return STORE_EINPUT;
   }
   if (rc != SQLITE_DONE) {
     fail(st, "creating run \"%s\"", name);
@@ -268,7 +282,7 @@ int store_create_run(store *st, const char *name, const char *scenario_json, uin
     rollback(st);
     return -1;
   }
-  if (exec(st, "COMMIT")) {
+  if (exec(st, "COMMIT", what)) {
     rollback(st);
     return -1;
   }
@@ -390,9 +404,10 @@ static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
 int store_save_iteration(store *st, int64_t run, const sylva_world *w,
                          const sylva_journal *j, bool snapshot) {
   int it = j->iteration;
-  char now[32];
+  char now[32], what[64];
   utc_now(now);
-  if (exec(st, "BEGIN IMMEDIATE")) return -1;
+  snprintf(what, sizeof what, "storing iteration %d", it);
+  if (exec(st, "BEGIN IMMEDIATE", what)) return -1;
   if (insert_iteration(st, run, w, snapshot)) {
     rollback(st);
     return -1;
@@ -442,7 +457,7 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
   sqlite3_bind_int64(q, 2, run);
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
-  if (rc != SQLITE_DONE || exec(st, "COMMIT")) {
+  if (rc != SQLITE_DONE || exec(st, "COMMIT", what)) {
     if (rc != SQLITE_DONE) fail(st, "storing iteration %d", it);
     rollback(st);
     return -1;
@@ -496,7 +511,7 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
   *world_out = NULL;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
-                         "SELECT iteration, snapshot FROM iterations"
+                         "SELECT iteration, snapshot, hash FROM iterations"
                          " WHERE run = ? AND iteration <= ? AND snapshot IS NOT NULL"
                          " ORDER BY iteration DESC",
                          -1, &q, NULL) != SQLITE_OK)
@@ -516,6 +531,11 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
       problem = sylva_strerror(load);
     else if (sylva_world_iteration(*world_out) != it) {
       problem = "it holds another iteration";
+      sylva_world_destroy(*world_out);
+      *world_out = NULL;
+    } else if (sylva_world_hash(*world_out) != (uint64_t)sqlite3_column_int64(q, 2)) {
+      /* a valid image, but not of the world stored for this iteration */
+      problem = "it holds another world than the one stored";
       sylva_world_destroy(*world_out);
       *world_out = NULL;
     }

@@ -4,8 +4,10 @@
  * iteration, so after a crash the file holds a consistent prefix of every run).
  *
  * Snapshots are core images (sylva/snapshot.h), which carry their own checksum.
- * Every function returns 0 or -1; after -1, store_error() says what failed, with
- * the file's name and SQLite's reason, e.g.
+ * Every function returns 0 or -1 (STORE_EINPUT where the caller's input is at
+ * fault: not a sylva store, a newer schema, a missing file, a taken name); after
+ * a failure store_error() says what failed, with the file's name and SQLite's
+ * reason, e.g.
  *   "runs.db: storing iteration 12 of run \"oak\": disk I/O error". */
 #ifndef SYLVA_SERVER_STORE_H
 #define SYLVA_SERVER_STORE_H
@@ -22,6 +24,9 @@
 #define STORE_SCHEMA_VERSION 1
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
+
+/** A failure caused by the input (exit status 2), not by the machine (1). */
+#define STORE_EINPUT (-2)
 
 typedef struct store store;
 

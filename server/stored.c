@@ -9,9 +9,10 @@
 static void warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
 
 int cli_store_open(const char *path, bool create, store **out) {
-  if (store_open(path, create, out)) {
+  int rc = store_open(path, create, out);
+  if (rc) {
     fprintf(stderr, "sylva: %s\n", store_open_error());
-    return CLI_EXIT_USAGE;
+    return rc == STORE_EINPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
   }
   return CLI_EXIT_OK;
 }
@@ -30,7 +31,7 @@ int cli_store_new_run(const char *db, const char *name, const sylva_scenario *s,
   free(json);
   if (failed) {
     fprintf(stderr, "sylva: %s\n", store_error(job->st));
-    return CLI_EXIT_USAGE;
+    return failed == STORE_EINPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
   }
   return CLI_EXIT_OK;
 }

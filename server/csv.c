@@ -1,0 +1,52 @@
+#include "csv.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "sylva/encode.h"
+
+/* RFC 4180: quote a field that holds a comma, a quote or a line break. */
+static void csv_text(FILE *f, const char *s) {
+  if (!strpbrk(s, ",\"\r\n")) {
+    fputs(s, f);
+    return;
+  }
+  fputc('"', f);
+  for (; *s; s++) {
+    if (*s == '"') fputc('"', f);
+    fputc(*s, f);
+  }
+  fputc('"', f);
+}
+
+static void csv_number(FILE *f, double v, int decimals) {
+  if (isnan(v)) return; /* null: an empty field */
+  char buf[64];
+  sylva_fmt_fixed(buf, sizeof buf, v, decimals);
+  fputs(buf, f);
+}
+
+static int csv_row(const store_stats_row *r, void *ctx) {
+  FILE *f = ctx;
+  fprintf(f, "%d,", r->iteration);
+  csv_text(f, r->plant);
+  fprintf(f, ",%d,", r->plant_stem);
+  csv_number(f, r->height, 4);
+  fputc(',', f);
+  csv_number(f, r->dbh, 4);
+  fputc(',', f);
+  csv_number(f, r->crown_width, 4);
+  fputc(',', f);
+  csv_number(f, r->crown_base, 4);
+  fprintf(f, ",%lld,%lld,", (long long)r->nodes, (long long)r->shed);
+  csv_number(f, r->light, 3);
+  fprintf(f, ",%d,%s\n", r->cap, r->finished ? "true" : "false");
+  return ferror(f) ? -1 : 0;
+}
+
+int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
+  fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished\n",
+        f);
+  if (ferror(f)) return -1;
+  return store_each_stats(st, run, to, csv_row, f);
+}
