@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "encode_parts.h"
 #include "strbuf.h"
 
 int sylva_fmt_fixed(char *buf, size_t n, double v, int decimals) {
@@ -54,29 +55,50 @@ int sylva_fmt_shortest(char *buf, size_t n, double v) {
   return snprintf(buf, n, "%s", tmp);
 }
 
+/* `"key": ` after a separator (none before the first key). */
+static void put_key(sylva__strbuf *b, bool first, const char *key, bool compact) {
+  if (!first) sylva__strbuf_puts(b, compact ? "," : ", ");
+  sylva__strbuf_putc(b, '"');
+  sylva__strbuf_puts(b, key);
+  sylva__strbuf_puts(b, compact ? "\":" : "\": ");
+}
+
+void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_stem_stats *s,
+                           bool compact) {
+  const char *label = sylva_world_plant_label(w, s->plant);
+  sylva__strbuf_putc(b, '{');
+  put_key(b, true, "plant", compact);
+  sylva__strbuf_json_string(b, label ? label : "");
+  put_key(b, false, "stem", compact);
+  sylva__strbuf_printf(b, "%" PRId32, s->stem);
+  put_key(b, false, "height", compact);
+  sylva__strbuf_fixed(b, s->height, 4);
+  put_key(b, false, "dbh", compact);
+  sylva__strbuf_fixed(b, s->dbh, 4);
+  put_key(b, false, "crown_width", compact);
+  sylva__strbuf_fixed(b, s->crown_width, 4);
+  put_key(b, false, "crown_base", compact);
+  sylva__strbuf_fixed(b, s->crown_base, 4);
+  put_key(b, false, "nodes", compact);
+  sylva__strbuf_printf(b, "%" PRId64, s->nodes);
+  put_key(b, false, "shed", compact);
+  sylva__strbuf_printf(b, "%" PRId64, s->shed);
+  put_key(b, false, "light", compact);
+  sylva__strbuf_fixed(b, s->light, 3);
+  put_key(b, false, "cap", compact);
+  sylva__strbuf_printf(b, "%d", s->cap);
+  put_key(b, false, "finished", compact);
+  sylva__strbuf_puts(b, s->finished ? "true}" : "false}");
+}
+
 char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms) {
   sylva__strbuf b = {0};
   sylva__strbuf_printf(&b, "{\"iteration\": %d, \"elapsed_ms\": ", j->iteration);
   sylva__strbuf_fixed(&b, elapsed_ms, 1);
   sylva__strbuf_puts(&b, ", \"stems\": [");
   for (size_t i = 0; i < j->stem_count; i++) {
-    const sylva_stem_stats *s = &j->stats[i];
-    const char *label = sylva_world_plant_label(w, s->plant);
-    sylva__strbuf_puts(&b, i ? ", {\"plant\": " : "{\"plant\": ");
-    sylva__strbuf_json_string(&b, label ? label : "");
-    sylva__strbuf_printf(&b, ", \"stem\": %" PRId32 ", \"height\": ", s->stem);
-    sylva__strbuf_fixed(&b, s->height, 4);
-    sylva__strbuf_puts(&b, ", \"dbh\": ");
-    sylva__strbuf_fixed(&b, s->dbh, 4);
-    sylva__strbuf_puts(&b, ", \"crown_width\": ");
-    sylva__strbuf_fixed(&b, s->crown_width, 4);
-    sylva__strbuf_puts(&b, ", \"crown_base\": ");
-    sylva__strbuf_fixed(&b, s->crown_base, 4);
-    sylva__strbuf_printf(&b, ", \"nodes\": %" PRId64 ", \"shed\": %" PRId64 ", \"light\": ",
-                         s->nodes, s->shed);
-    sylva__strbuf_fixed(&b, s->light, 3);
-    sylva__strbuf_printf(&b, ", \"cap\": %d, \"finished\": %s}", s->cap,
-                         s->finished ? "true" : "false");
+    if (i) sylva__strbuf_puts(&b, ", ");
+    sylva__put_stem_stats(&b, w, &j->stats[i], false);
   }
   sylva__strbuf_puts(&b, "]}");
   return sylva__strbuf_finish(&b);
@@ -90,7 +112,7 @@ char *sylva_encode_done_line(int iterations, const char *reason) {
   return sylva__strbuf_finish(&b);
 }
 
-static void put_vec(sylva__strbuf *b, const double v[3]) {
+void sylva__put_vec3(sylva__strbuf *b, const double v[3]) {
   for (int i = 0; i < 3; i++) {
     sylva__strbuf_putc(b, i ? ',' : '[');
     sylva__strbuf_shortest(b, v[i]);
@@ -98,19 +120,27 @@ static void put_vec(sylva__strbuf *b, const double v[3]) {
   sylva__strbuf_putc(b, ']');
 }
 
+void sylva__put_radius(sylva__strbuf *b, float radius) {
+  sylva__strbuf_fixed(b, radius, SYLVA__RADIUS_DECIMALS);
+}
+
+void sylva__put_node_geometry(sylva__strbuf *b, const sylva_node_info *n) {
+  sylva__strbuf_fixed(b, n->x, SYLVA__POSITION_DECIMALS);
+  sylva__strbuf_putc(b, ',');
+  sylva__strbuf_fixed(b, n->y, SYLVA__POSITION_DECIMALS);
+  sylva__strbuf_putc(b, ',');
+  sylva__strbuf_fixed(b, n->z, SYLVA__POSITION_DECIMALS);
+  sylva__strbuf_putc(b, ',');
+  sylva__put_radius(b, n->radius);
+}
+
 static void put_node(sylva__strbuf *b, const sylva_node_info *n) {
   sylva__strbuf_printf(b, "[%" PRId32 ",%" PRId32 ",", n->id, n->parent);
-  sylva__strbuf_fixed(b, n->x, 4);
-  sylva__strbuf_putc(b, ',');
-  sylva__strbuf_fixed(b, n->y, 4);
-  sylva__strbuf_putc(b, ',');
-  sylva__strbuf_fixed(b, n->z, 4);
-  sylva__strbuf_putc(b, ',');
-  sylva__strbuf_fixed(b, n->radius, 5);
+  sylva__put_node_geometry(b, n);
   sylva__strbuf_printf(b, ",%" PRId32 "]", n->birth);
 }
 
-char *sylva_encode_skeleton(const sylva_world *w) {
+void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w) {
   const sylva_world_def *def = sylva_world_get_def(w);
   size_t node_count = sylva_world_node_count(w);
   int stem_count = sylva_world_stem_count(w);
@@ -119,8 +149,8 @@ char *sylva_encode_skeleton(const sylva_world *w) {
   sylva_node_info *nodes = malloc((node_count ? node_count : 1) * sizeof *nodes);
   size_t *order = malloc((node_count ? node_count : 1) * sizeof *order);
   size_t *start = calloc((size_t)stem_count + 1, sizeof *start);
-  sylva__strbuf b = {0};
-  if (!nodes || !order || !start) goto fail;
+  size_t *next = malloc(((size_t)stem_count + 1) * sizeof *next);
+  if (!nodes || !order || !start || !next) goto fail;
   for (size_t i = 0; i < node_count; i++) {
     sylva_world_node_at(w, i, &nodes[i]);
     int s = sylva_world_stem_index(w, nodes[i].plant, nodes[i].stem);
@@ -128,70 +158,75 @@ char *sylva_encode_skeleton(const sylva_world *w) {
     start[s + 1]++;
   }
   for (int s = 0; s < stem_count; s++) start[s + 1] += start[s];
-  {
-    size_t *next = malloc(((size_t)stem_count + 1) * sizeof *next);
-    if (!next) goto fail;
-    memcpy(next, start, ((size_t)stem_count + 1) * sizeof *next);
-    for (size_t i = 0; i < node_count; i++)
-      order[next[sylva_world_stem_index(w, nodes[i].plant, nodes[i].stem)]++] = i;
-    free(next);
-  }
+  memcpy(next, start, ((size_t)stem_count + 1) * sizeof *next);
+  for (size_t i = 0; i < node_count; i++)
+    order[next[sylva_world_stem_index(w, nodes[i].plant, nodes[i].stem)]++] = i;
 
-  if (!sylva__strbuf_reserve(&b, node_count * 48 + 256)) goto fail;
-  sylva__strbuf_printf(&b, "{\"format\":\"sylva.skeleton/1\",\"iteration\":%d,\"voxel\":",
-                       sylva_world_iteration(w));
-  sylva__strbuf_shortest(&b, def->voxel);
-  sylva__strbuf_puts(&b, ",\"world\":{\"min\":");
-  put_vec(&b, def->min);
-  sylva__strbuf_puts(&b, ",\"max\":");
-  put_vec(&b, def->max);
-  sylva__strbuf_puts(&b, "},\"obstacles\":[");
+  if (!sylva__strbuf_reserve(b, node_count * 48 + 256)) goto fail;
+  sylva__strbuf_puts(b, "\"voxel\":");
+  sylva__strbuf_shortest(b, def->voxel);
+  sylva__strbuf_puts(b, ",\"world\":{\"min\":");
+  sylva__put_vec3(b, def->min);
+  sylva__strbuf_puts(b, ",\"max\":");
+  sylva__put_vec3(b, def->max);
+  sylva__strbuf_puts(b, "},\"obstacles\":[");
   int obstacles = sylva_world_obstacle_count(w);
   for (int i = 0; i < obstacles; i++) {
     int id;
     sylva_obstacle_def o;
     sylva_world_obstacle_at(w, i, &id, &o);
-    sylva__strbuf_puts(&b, i ? ",{\"id\":" : "{\"id\":");
-    sylva__strbuf_json_string(&b, o.label ? o.label : "");
-    sylva__strbuf_puts(&b, ",\"kind\":\"box\",\"min\":");
-    put_vec(&b, o.min);
-    sylva__strbuf_puts(&b, ",\"max\":");
-    put_vec(&b, o.max);
-    sylva__strbuf_putc(&b, '}');
+    sylva__strbuf_puts(b, i ? ",{\"id\":" : "{\"id\":");
+    sylva__strbuf_json_string(b, o.label ? o.label : "");
+    sylva__strbuf_puts(b, ",\"kind\":\"box\",\"min\":");
+    sylva__put_vec3(b, o.min);
+    sylva__strbuf_puts(b, ",\"max\":");
+    sylva__put_vec3(b, o.max);
+    sylva__strbuf_putc(b, '}');
   }
-  sylva__strbuf_puts(&b, "],\"plants\":[");
+  sylva__strbuf_puts(b, "],\"plants\":[");
   int plants = sylva_world_plant_count(w);
   for (int p = 0; p < plants; p++) {
     const char *label = sylva_world_plant_label(w, p);
-    sylva__strbuf_puts(&b, p ? ",{\"id\":" : "{\"id\":");
-    sylva__strbuf_json_string(&b, label ? label : "");
-    sylva__strbuf_puts(&b, ",\"stems\":[");
+    sylva__strbuf_puts(b, p ? ",{\"id\":" : "{\"id\":");
+    sylva__strbuf_json_string(b, label ? label : "");
+    sylva__strbuf_puts(b, ",\"stems\":[");
     int stems = sylva_world_plant_stem_count(w, p);
     for (int k = 0; k < stems; k++) {
       int s = sylva_world_stem_index(w, p, k);
       double root[3];
       sylva_world_stem_root(w, s, root);
-      sylva__strbuf_puts(&b, k ? ",{\"root\":" : "{\"root\":");
-      put_vec(&b, root);
-      sylva__strbuf_puts(&b, ",\"nodes\":[");
+      sylva__strbuf_puts(b, k ? ",{\"root\":" : "{\"root\":");
+      sylva__put_vec3(b, root);
+      sylva__strbuf_puts(b, ",\"nodes\":[");
       for (size_t i = start[s]; i < start[s + 1]; i++) {
-        if (i > start[s]) sylva__strbuf_putc(&b, ',');
-        put_node(&b, &nodes[order[i]]);
+        if (i > start[s]) sylva__strbuf_putc(b, ',');
+        put_node(b, &nodes[order[i]]);
       }
-      sylva__strbuf_puts(&b, "]}");
+      sylva__strbuf_puts(b, "]}");
     }
-    sylva__strbuf_puts(&b, "]}");
+    sylva__strbuf_puts(b, "]}");
   }
-  sylva__strbuf_puts(&b, "]}\n");
+  sylva__strbuf_putc(b, ']');
   free(nodes);
   free(order);
   free(start);
-  return sylva__strbuf_finish(&b);
+  free(next);
+  return;
 
 fail:
+  /* Out of memory, or a node of an unknown stem: either way no skeleton. */
+  b->failed = true;
   free(nodes);
   free(order);
   free(start);
-  sylva__strbuf_free(&b);
-  return NULL;
+  free(next);
+}
+
+char *sylva_encode_skeleton(const sylva_world *w) {
+  sylva__strbuf b = {0};
+  sylva__strbuf_printf(&b, "{\"format\":\"sylva.skeleton/1\",\"iteration\":%d,",
+                       sylva_world_iteration(w));
+  sylva__put_world_body(&b, w);
+  sylva__strbuf_puts(&b, "}\n");
+  return sylva__strbuf_finish(&b);
 }

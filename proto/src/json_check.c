@@ -100,6 +100,9 @@ static int check_number(checker *c) {
       return fail_at(c, c->pos, "digit expected in the exponent");
     while (c->pos < c->len && is_digit(c->s[c->pos])) c->pos++;
   }
+  if ((c->flags & SYLVA_JSON_CJSON_NUMBERS) && c->pos - start > SYLVA_JSON_CJSON_NUMBER_MAX)
+    return fail_at(c, start, "number of %zu characters; at most %d are supported", c->pos - start,
+                   SYLVA_JSON_CJSON_NUMBER_MAX);
   return 0;
 }
 

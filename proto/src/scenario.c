@@ -13,25 +13,20 @@
 #include "sylva/encode.h"
 #include "sylva/json_check.h"
 #include "sylva/status.h"
+#include "scenario_parts.h"
 #include "strbuf.h"
 
 /* ---- error reporting with a JSON pointer (RFC 6901) ---- */
 
-typedef struct parser {
-  char ptr[1024]; /* pointer of the value being checked; "" is the root */
-  size_t plen;
-  char *err;
-  size_t errlen;
-} parser;
-
 /* Appends one reference token; the pointer is truncated (never overflows) if a key
  * is absurdly long. Control bytes show as '?' so that messages stay printable. */
-static size_t ptr_push(parser *p, const char *token) {
+size_t sylva__ptr_push(sylva__parser *p, const char *token) {
   size_t old = p->plen;
   char *out = p->ptr;
   size_t n = p->plen, cap = sizeof p->ptr - 1;
   if (n < cap) out[n++] = '/';
-  for (const unsigned char *s = (const unsigned char *)token; *s && n < cap; s++) {
+  const unsigned char *s = (const unsigned char *)token;
+  for (; *s && n < cap; s++) {
     if (*s == '~' || *s == '/') {
       if (n + 2 > cap) break;
       out[n++] = '~';
@@ -40,38 +35,36 @@ static size_t ptr_push(parser *p, const char *token) {
       out[n++] = *s < 0x20 ? '?' : (char)*s;
     }
   }
+  /* A cut inside a UTF-8 sequence drops its first bytes too: messages stay valid UTF-8. */
+  if ((*s & 0xC0) == 0x80) {
+    while (n > old + 1 && ((unsigned char)out[n - 1] & 0xC0) == 0x80) n--;
+    if (n > old + 1 && ((unsigned char)out[n - 1] & 0xC0) == 0xC0) n--;
+  }
   out[n] = '\0';
   p->plen = n;
   return old;
 }
 
-static size_t ptr_push_index(parser *p, size_t i) {
+size_t sylva__ptr_push_index(sylva__parser *p, size_t i) {
   char token[32];
   snprintf(token, sizeof token, "%zu", i);
-  return ptr_push(p, token);
+  return sylva__ptr_push(p, token);
 }
 
-static void ptr_pop(parser *p, size_t old) {
+void sylva__ptr_pop(sylva__parser *p, size_t old) {
   p->plen = old;
   p->ptr[old] = '\0';
 }
 
 /* Writes "<pointer>: <message>" and returns status. */
-static int vfail(parser *p, int status, const char *fmt, va_list ap) {
+static int vfail(sylva__parser *p, int status, const char *fmt, va_list ap) {
   if (!p->err || p->errlen == 0) return status;
   int n = snprintf(p->err, p->errlen, "%s: ", p->plen ? p->ptr : "(root)");
   if (n >= 0 && (size_t)n < p->errlen) vsnprintf(p->err + n, p->errlen - (size_t)n, fmt, ap);
   return status;
 }
 
-#if defined(__GNUC__)
-#define PRINTF_LIKE(f, a) __attribute__((format(printf, f, a)))
-#else
-#define PRINTF_LIKE(f, a)
-#endif
-
-static int fail(parser *p, const char *fmt, ...) PRINTF_LIKE(2, 3);
-static int fail(parser *p, const char *fmt, ...) {
+int sylva__fail(sylva__parser *p, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   int rc = vfail(p, SYLVA_EINVAL, fmt, ap);
@@ -80,24 +73,23 @@ static int fail(parser *p, const char *fmt, ...) {
 }
 
 /* Fails at the member `key` of the current value (present or not). */
-static int fail_at_key(parser *p, const char *key, const char *fmt, ...) PRINTF_LIKE(3, 4);
-static int fail_at_key(parser *p, const char *key, const char *fmt, ...) {
-  size_t old = ptr_push(p, key);
+int sylva__fail_at_key(sylva__parser *p, const char *key, const char *fmt, ...) {
+  size_t old = sylva__ptr_push(p, key);
   va_list ap;
   va_start(ap, fmt);
   int rc = vfail(p, SYLVA_EINVAL, fmt, ap);
   va_end(ap);
-  ptr_pop(p, old);
+  sylva__ptr_pop(p, old);
   return rc;
 }
 
-static int fail_nomem(parser *p) {
+int sylva__fail_nomem(sylva__parser *p) {
   if (p->err && p->errlen) snprintf(p->err, p->errlen, "out of memory");
   return SYLVA_ENOMEM;
 }
 
 /* A user string for a message: quoted, at most about 60 bytes, control bytes as '?'. */
-static const char *quote(char buf[80], const char *s) {
+const char *sylva__quote(char buf[80], const char *s) {
   size_t n = 0;
   buf[n++] = '"';
   for (const unsigned char *c = (const unsigned char *)s; *c; c++) {
@@ -116,7 +108,7 @@ static const char *quote(char buf[80], const char *s) {
   return buf;
 }
 
-static const char *type_name(const cJSON *item) {
+const char *sylva__type_name(const cJSON *item) {
   if (cJSON_IsObject(item)) return "an object";
   if (cJSON_IsArray(item)) return "an array";
   if (cJSON_IsString(item)) return "a string";
@@ -127,7 +119,7 @@ static const char *type_name(const cJSON *item) {
 }
 
 /* Shortest exact text of a number, for messages. */
-static const char *num(char buf[SYLVA_FMT_BUFSIZE], double v) {
+const char *sylva__num(char buf[SYLVA_FMT_BUFSIZE], double v) {
   sylva_fmt_shortest(buf, SYLVA_FMT_BUFSIZE, v);
   return buf;
 }
@@ -155,7 +147,7 @@ static size_t edit_distance(const char *a, const char *b) {
 }
 
 /* Every member of obj must be one of known[] and appear once. */
-static int check_keys(parser *p, const cJSON *obj, const char *const *known, size_t count) {
+int sylva__check_keys(sylva__parser *p, const cJSON *obj, const char *const *known, size_t count) {
   for (const cJSON *it = obj->child; it; it = it->next) {
     size_t k = 0;
     while (k < count && strcmp(it->string, known[k]) != 0) k++;
@@ -166,43 +158,48 @@ static int check_keys(parser *p, const cJSON *obj, const char *const *known, siz
         if (d < best_d) best_d = d, best = i;
       }
       if (best_d <= 2 && best_d < strlen(known[best]))
-        return fail_at_key(p, it->string, "unknown key (did you mean \"%s\"?)", known[best]);
-      return fail_at_key(p, it->string, "unknown key");
+        return sylva__fail_at_key(p, it->string, "unknown key (did you mean \"%s\"?)", known[best]);
+      return sylva__fail_at_key(p, it->string, "unknown key");
     }
     for (const cJSON *prev = obj->child; prev != it; prev = prev->next)
       if (strcmp(prev->string, it->string) == 0)
-        return fail_at_key(p, it->string, "duplicate key");
+        return sylva__fail_at_key(p, it->string, "duplicate key");
   }
   return 0;
 }
 
 /* ---- typed values (the pointer names the value) ---- */
 
-static int want_object(parser *p, const cJSON *item) {
-  return cJSON_IsObject(item) ? 0 : fail(p, "expected an object, got %s", type_name(item));
+int sylva__want_object(sylva__parser *p, const cJSON *item) {
+  return cJSON_IsObject(item)
+             ? 0
+             : sylva__fail(p, "expected an object, got %s", sylva__type_name(item));
 }
 
-static int want_number(parser *p, const cJSON *item, double *out) {
-  if (!cJSON_IsNumber(item)) return fail(p, "expected a number, got %s", type_name(item));
-  if (!isfinite(item->valuedouble)) return fail(p, "number out of range (not a finite double)");
+int sylva__want_number(sylva__parser *p, const cJSON *item, double *out) {
+  if (!cJSON_IsNumber(item))
+    return sylva__fail(p, "expected a number, got %s", sylva__type_name(item));
+  if (!isfinite(item->valuedouble))
+    return sylva__fail(p, "number out of range (not a finite double)");
   *out = item->valuedouble;
   return 0;
 }
 
-static int want_string(parser *p, const cJSON *item, const char **out) {
-  if (!cJSON_IsString(item)) return fail(p, "expected a string, got %s", type_name(item));
+int sylva__want_string(sylva__parser *p, const cJSON *item, const char **out) {
+  if (!cJSON_IsString(item))
+    return sylva__fail(p, "expected a string, got %s", sylva__type_name(item));
   *out = item->valuestring;
   return 0;
 }
 
 /* A label: 1 to SYLVA_LABEL_MAX - 1 bytes. */
-static int want_label(parser *p, const cJSON *item, char out[SYLVA_LABEL_MAX]) {
+int sylva__want_label(sylva__parser *p, const cJSON *item, char out[SYLVA_LABEL_MAX]) {
   const char *s = "";
-  int rc = want_string(p, item, &s);
+  int rc = sylva__want_string(p, item, &s);
   if (rc) return rc;
   size_t n = strlen(s);
   if (n == 0 || n >= SYLVA_LABEL_MAX)
-    return fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_LABEL_MAX - 1, n);
+    return sylva__fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_LABEL_MAX - 1, n);
   memcpy(out, s, n + 1);
   return 0;
 }
@@ -219,31 +216,33 @@ static bool in_range(double v, range r) {
   return true;
 }
 
-static int range_fail(parser *p, double v, range r) {
+static int range_fail(sylva__parser *p, double v, range r) {
   char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE], c[SYLVA_FMT_BUFSIZE];
   if (isinf(r.hi))
-    return fail(p, "must be %s %s, got %s", r.lo_open ? ">" : ">=", num(a, r.lo), num(c, v));
+    return sylva__fail(p, "must be %s %s, got %s", r.lo_open ? ">" : ">=", sylva__num(a, r.lo),
+                       sylva__num(c, v));
   if (isinf(r.lo))
-    return fail(p, "must be %s %s, got %s", r.hi_open ? "<" : "<=", num(b, r.hi), num(c, v));
-  return fail(p, "must be in %c%s, %s%c, got %s", r.lo_open ? '(' : '[', num(a, r.lo),
-              num(b, r.hi), r.hi_open ? ')' : ']', num(c, v));
+    return sylva__fail(p, "must be %s %s, got %s", r.hi_open ? "<" : "<=", sylva__num(b, r.hi),
+                       sylva__num(c, v));
+  return sylva__fail(p, "must be in %c%s, %s%c, got %s", r.lo_open ? '(' : '[', sylva__num(a, r.lo),
+                     sylva__num(b, r.hi), r.hi_open ? ')' : ']', sylva__num(c, v));
 }
 
-static int want_real(parser *p, const cJSON *item, range r, double *out) {
+static int want_real(sylva__parser *p, const cJSON *item, range r, double *out) {
   double v = 0;
-  int rc = want_number(p, item, &v);
+  int rc = sylva__want_number(p, item, &v);
   if (rc) return rc;
   if (!in_range(v, r)) return range_fail(p, v, r);
   *out = v;
   return 0;
 }
 
-static int want_integer(parser *p, const cJSON *item, double lo, double hi, double *out) {
+int sylva__want_integer(sylva__parser *p, const cJSON *item, double lo, double hi, double *out) {
   double v = 0;
   char a[SYLVA_FMT_BUFSIZE];
-  int rc = want_number(p, item, &v);
+  int rc = sylva__want_number(p, item, &v);
   if (rc) return rc;
-  if (v != floor(v)) return fail(p, "must be an integer, got %s", num(a, v));
+  if (v != floor(v)) return sylva__fail(p, "must be an integer, got %s", sylva__num(a, v));
   range r = {lo, hi, false, false};
   if (!in_range(v, r)) return range_fail(p, v, r);
   *out = v;
@@ -251,13 +250,14 @@ static int want_integer(parser *p, const cJSON *item, double lo, double hi, doub
 }
 
 /* [x, y, z] of finite numbers. */
-static int want_vec3(parser *p, const cJSON *item, double out[3]) {
-  if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3) return fail(p, "expected [x, y, z]");
+int sylva__want_vec3(sylva__parser *p, const cJSON *item, double out[3]) {
+  if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
+    return sylva__fail(p, "expected [x, y, z]");
   int i = 0;
   for (const cJSON *e = item->child; e; e = e->next, i++) {
-    size_t old = ptr_push_index(p, (size_t)i);
-    int rc = want_number(p, e, &out[i]);
-    ptr_pop(p, old);
+    size_t old = sylva__ptr_push_index(p, (size_t)i);
+    int rc = sylva__want_number(p, e, &out[i]);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
   return 0;
@@ -325,16 +325,16 @@ static const char *const species_keys[] = {
     "r_s",    "r_tip", "pipe_exponent", "markers", "initial_nodes",
 };
 
-static int set_fields(parser *p, const cJSON *obj, const species_field *fields, size_t count,
+static int set_fields(sylva__parser *p, const cJSON *obj, const species_field *fields, size_t count,
                       sylva_species_def *def) {
   for (size_t i = 0; i < count; i++) {
     const cJSON *item = member(obj, fields[i].key);
     if (!item) continue;
-    size_t old = ptr_push(p, fields[i].key);
+    size_t old = sylva__ptr_push(p, fields[i].key);
     double v = 0;
-    int rc = fields[i].integer ? want_integer(p, item, fields[i].r.lo, fields[i].r.hi, &v)
+    int rc = fields[i].integer ? sylva__want_integer(p, item, fields[i].r.lo, fields[i].r.hi, &v)
                                : want_real(p, item, fields[i].r, &v);
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
     char *at = (char *)def + fields[i].offset;
     if (fields[i].integer) {
@@ -365,27 +365,27 @@ static const char *equation_param_list(sylva_equation_kind kind) {
 
 /* "growth": the equation may be left out to override parameters of the base
  * (preset or default) equation; a different equation needs all its parameters. */
-static int parse_growth(parser *p, const cJSON *obj, sylva_equation *eq) {
-  int rc = want_object(p, obj);
+static int parse_growth(sylva__parser *p, const cJSON *obj, sylva_equation *eq) {
+  int rc = sylva__want_object(p, obj);
   if (rc) return rc;
   static const char *const keys[] = {"equation", "X0",     "Xm",     "r", "beta1", "beta2",
                                      "omega1",   "omega2", "omega3", "A", "B",     "C"};
-  if ((rc = check_keys(p, obj, keys, sizeof keys / sizeof keys[0]))) return rc;
+  if ((rc = sylva__check_keys(p, obj, keys, sizeof keys / sizeof keys[0]))) return rc;
   sylva_equation_kind kind = eq->kind;
   const cJSON *name = member(obj, "equation");
   if (name) {
-    size_t old = ptr_push(p, "equation");
+    size_t old = sylva__ptr_push(p, "equation");
     const char *s = "";
-    rc = want_string(p, name, &s);
+    rc = sylva__want_string(p, name, &s);
     int k = 0;
     while (!rc && k < SYLVA_EQ_COUNT && strcmp(s, sylva_equation_name((sylva_equation_kind)k)) != 0)
       k++;
     if (!rc && k == SYLVA_EQ_COUNT) {
       char q[80];
-      rc = fail(p, "unknown equation %s (known: logistic, bertalanffy, weibull, gompertz)",
-                quote(q, s));
+      rc = sylva__fail(p, "unknown equation %s (known: logistic, bertalanffy, weibull, gompertz)",
+                       sylva__quote(q, s));
     }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
     kind = (sylva_equation_kind)k;
   }
@@ -396,118 +396,123 @@ static int parse_growth(parser *p, const cJSON *obj, sylva_equation *eq) {
     for (int i = 0; i < 3; i++)
       if (names[i] && strcmp(names[i], it->string) == 0) ours = true;
     if (!ours)
-      return fail_at_key(p, it->string, "not a parameter of the %s equation (%s)",
-                         sylva_equation_name(kind), equation_param_list(kind));
+      return sylva__fail_at_key(p, it->string, "not a parameter of the %s equation (%s)",
+                                sylva_equation_name(kind), equation_param_list(kind));
   }
   sylva_equation out = {kind, {0, 0, 0}};
   for (int i = 0; i < 3 && names[i]; i++) {
     const cJSON *item = member(obj, names[i]);
     if (!item) {
       if (kind != eq->kind)
-        return fail_at_key(p, names[i], "required by the %s equation", sylva_equation_name(kind));
+        return sylva__fail_at_key(p, names[i], "required by the %s equation",
+                                  sylva_equation_name(kind));
       out.p[i] = eq->p[i];
       continue;
     }
-    size_t old = ptr_push(p, names[i]);
+    size_t old = sylva__ptr_push(p, names[i]);
     rc = want_real(p, item, R_POSITIVE, &out.p[i]);
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
   char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
   if (kind == SYLVA_EQ_LOGISTIC && !(out.p[0] < out.p[1])) {
     if (member(obj, "X0"))
-      return fail_at_key(p, "X0", "must be < Xm (%s), got %s", num(a, out.p[1]), num(b, out.p[0]));
-    return fail_at_key(p, "Xm", "must be > X0 (%s), got %s", num(a, out.p[0]), num(b, out.p[1]));
+      return sylva__fail_at_key(p, "X0", "must be < Xm (%s), got %s", sylva__num(a, out.p[1]),
+                                sylva__num(b, out.p[0]));
+    return sylva__fail_at_key(p, "Xm", "must be > X0 (%s), got %s", sylva__num(a, out.p[0]),
+                              sylva__num(b, out.p[1]));
   }
   if (sylva_equation_limit(&out) > 1e6)
-    return fail(p, "the limit of the equation is %s internodes; at most 1e6 are allowed",
-                num(a, sylva_equation_limit(&out)));
+    return sylva__fail(p, "the limit of the equation is %s internodes; at most 1e6 are allowed",
+                       sylva__num(a, sylva_equation_limit(&out)));
   *eq = out;
   return 0;
 }
 
-static int parse_markers(parser *p, const cJSON *obj, sylva_species_def *def) {
+static int parse_markers(sylva__parser *p, const cJSON *obj, sylva_species_def *def) {
   static const char *const keys[] = {"m0", "m_min", "cone_angle", "cone_radius"};
-  int rc = want_object(p, obj);
-  if (!rc) rc = check_keys(p, obj, keys, 4);
+  int rc = sylva__want_object(p, obj);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 4);
   if (!rc) rc = set_fields(p, obj, marker_fields, sizeof marker_fields / sizeof marker_fields[0], def);
   if (rc) return rc;
   if (def->m_min > def->m0) {
     if (member(obj, "m_min"))
-      return fail_at_key(p, "m_min", "must be <= m0 (%d), got %d", def->m0, def->m_min);
-    return fail_at_key(p, "m0", "must be >= m_min (%d), got %d", def->m_min, def->m0);
+      return sylva__fail_at_key(p, "m_min", "must be <= m0 (%d), got %d", def->m0, def->m_min);
+    return sylva__fail_at_key(p, "m0", "must be >= m_min (%d), got %d", def->m_min, def->m0);
   }
   return 0;
 }
 
-static int parse_species(parser *p, const cJSON *obj, sylva_species_def *out) {
-  int rc = want_object(p, obj);
-  if (!rc) rc = check_keys(p, obj, species_keys, sizeof species_keys / sizeof species_keys[0]);
+static int parse_species(sylva__parser *p, const cJSON *obj, sylva_species_def *out) {
+  int rc = sylva__want_object(p, obj);
+  if (!rc)
+    rc = sylva__check_keys(p, obj, species_keys, sizeof species_keys / sizeof species_keys[0]);
   if (rc) return rc;
   sylva_species_def def = sylva_default_species_def();
   const cJSON *item = member(obj, "preset");
   if (item) {
-    size_t old = ptr_push(p, "preset");
+    size_t old = sylva__ptr_push(p, "preset");
     const char *name = "";
-    rc = want_string(p, item, &name);
+    rc = sylva__want_string(p, item, &name);
     if (!rc && sylva_preset_find(name, &def) != 0) {
       char list[1024] = "", q[80];
       size_t n = 0;
       for (int i = 0; i < sylva_preset_count() && n < sizeof list; i++)
         n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", sylva_preset_name(i));
-      rc = fail(p, "unknown preset %s (known: %s)", quote(q, name), list);
+      rc = sylva__fail(p, "unknown preset %s (known: %s)", sylva__quote(q, name), list);
     }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
   rc = set_fields(p, obj, species_fields, sizeof species_fields / sizeof species_fields[0], &def);
   if (rc) return rc;
   if ((item = member(obj, "growth"))) {
-    size_t old = ptr_push(p, "growth");
+    size_t old = sylva__ptr_push(p, "growth");
     rc = parse_growth(p, item, &def.growth);
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
   if ((item = member(obj, "allocation"))) {
-    size_t old = ptr_push(p, "allocation");
+    size_t old = sylva__ptr_push(p, "allocation");
     const char *s = "";
-    rc = want_string(p, item, &s);
+    rc = sylva__want_string(p, item, &s);
     if (!rc) {
       char q[80];
       if (strcmp(s, "lgtm") == 0) def.allocation = SYLVA_ALLOC_LGTM;
       else if (strcmp(s, "none") == 0) def.allocation = SYLVA_ALLOC_NONE;
-      else rc = fail(p, "must be \"lgtm\" or \"none\", got %s", quote(q, s));
+      else
+        rc = sylva__fail(p, "must be \"lgtm\" or \"none\", got %s", sylva__quote(q, s));
     }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
   if ((item = member(obj, "tropism"))) {
-    size_t old = ptr_push(p, "tropism");
+    size_t old = sylva__ptr_push(p, "tropism");
     double v[3] = {0, 0, 0};
-    rc = want_vec3(p, item, v);
+    rc = sylva__want_vec3(p, item, v);
     for (int i = 0; !rc && i < 3; i++)
       if (fabs(v[i]) > 1000) {
-        size_t o2 = ptr_push_index(p, (size_t)i);
+        size_t o2 = sylva__ptr_push_index(p, (size_t)i);
         rc = range_fail(p, v[i], (range){-1000, 1000, false, false});
-        ptr_pop(p, o2);
+        sylva__ptr_pop(p, o2);
       }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
     memcpy(def.tropism, v, sizeof v);
   }
   if ((item = member(obj, "markers"))) {
-    size_t old = ptr_push(p, "markers");
+    size_t old = sylva__ptr_push(p, "markers");
     rc = parse_markers(p, item, &def);
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
   if (!(def.b_max >= def.b_min)) {
     char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
     if (member(obj, "b_max"))
-      return fail_at_key(p, "b_max", "must be >= b_min (%s), got %s", num(a, def.b_min),
-                         num(b, def.b_max));
-    return fail_at_key(p, "b_min", "must be <= b_max (%s), got %s", num(a, def.b_max),
-                       num(b, def.b_min));
+      return sylva__fail_at_key(p, "b_max", "must be >= b_min (%s), got %s",
+                                sylva__num(a, def.b_min), sylva__num(b, def.b_max));
+    return sylva__fail_at_key(p, "b_min", "must be <= b_max (%s), got %s", sylva__num(a, def.b_max),
+                              sylva__num(b, def.b_min));
   }
   /* The initial trunk follows the final growth equation unless given. */
   if (!member(obj, "initial_nodes")) {
@@ -520,27 +525,23 @@ static int parse_species(parser *p, const cJSON *obj, sylva_species_def *out) {
   }
   const char *field = NULL;
   if (sylva_species_check(&def, &field) != 0)
-    return fail_at_key(p, field ? field : "?", "value out of range");
+    return sylva__fail_at_key(p, field ? field : "?", "value out of range");
   *out = def;
   return 0;
 }
 
 /* ---- the scenario ---- */
 
-typedef struct id_ref {
-  const char *id;
-  int index;
-} id_ref;
 
 static int cmp_id_ref(const void *a, const void *b) {
-  const id_ref *x = a, *y = b;
+  const sylva__id_ref *x = a, *y = b;
   int c = strcmp(x->id, y->id);
   return c ? c : (x->index > y->index) - (x->index < y->index);
 }
 
 /* Finds the first repeated id: *first and *second are the indices of its first
  * occurrence and of the earliest repetition; false if every id is unique. */
-static bool find_duplicate(id_ref *refs, int count, int *first, int *second) {
+bool sylva__find_duplicate(sylva__id_ref *refs, int count, int *first, int *second) {
   qsort(refs, (size_t)count, sizeof *refs, cmp_id_ref);
   bool found = false;
   for (int i = 1; i < count; i++) {
@@ -557,95 +558,107 @@ static bool find_duplicate(id_ref *refs, int count, int *first, int *second) {
 }
 
 static int cmp_id_ref_name(const void *key, const void *elem) {
-  return strcmp((const char *)key, ((const id_ref *)elem)->id);
+  return strcmp((const char *)key, ((const sylva__id_ref *)elem)->id);
 }
 
 /* by_name: the species sorted by name, for lookups in O(log n). */
-static int parse_plant(parser *p, const cJSON *obj, sylva_scenario *s, const id_ref *by_name,
-                       sylva_scenario_plant *pl) {
+int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *by_name,
+                       int species_count, int *stem_count, sylva_scenario_plant *pl,
+                       const char **species_name) {
   static const char *const keys[] = {"id", "species", "roots"};
-  int rc = want_object(p, obj);
-  if (!rc) rc = check_keys(p, obj, keys, 3);
+  int rc = sylva__want_object(p, obj);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 3);
   if (rc) return rc;
   for (int i = 0; i < 3; i++)
-    if (!member(obj, keys[i])) return fail_at_key(p, keys[i], "required");
-  size_t old = ptr_push(p, "id");
-  rc = want_label(p, member(obj, "id"), pl->id);
-  ptr_pop(p, old);
+    if (!member(obj, keys[i])) return sylva__fail_at_key(p, keys[i], "required");
+  size_t old = sylva__ptr_push(p, "id");
+  rc = sylva__want_label(p, member(obj, "id"), pl->id);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
 
-  old = ptr_push(p, "species");
+  old = sylva__ptr_push(p, "species");
   const char *name = "";
-  rc = want_string(p, member(obj, "species"), &name);
-  if (!rc) {
-    const id_ref *found = s->species_count ? bsearch(name, by_name, (size_t)s->species_count,
-                                                     sizeof *by_name, cmp_id_ref_name)
-                                           : NULL;
-    pl->species = found ? found->index : -1;
-    if (!found) {
+  rc = sylva__want_string(p, member(obj, "species"), &name);
+  pl->species = -1;
+  if (!rc && !by_name) {
+    size_t n = strlen(name);
+    if (n == 0 || n >= SYLVA_LABEL_MAX)
+      rc = sylva__fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_LABEL_MAX - 1, n);
+    else if (species_name)
+      *species_name = name;
+  } else if (!rc) {
+    const sylva__id_ref *found = species_count ? bsearch(name, by_name, (size_t)species_count,
+                                                         sizeof *by_name, cmp_id_ref_name)
+                                               : NULL;
+    if (found) {
+      pl->species = found->index;
+    } else {
       char q[80];
-      rc = fail(p, "unknown species %s (not a key of /species)", quote(q, name));
+      rc = sylva__fail(p, "unknown species %s (not a key of %.*s/species)", sylva__quote(q, name),
+                       (int)p->base, p->ptr);
     }
   }
-  ptr_pop(p, old);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
 
-  old = ptr_push(p, "roots");
+  old = sylva__ptr_push(p, "roots");
   const cJSON *roots = member(obj, "roots");
   int count = cJSON_IsArray(roots) ? cJSON_GetArraySize(roots) : 0;
-  if (!cJSON_IsArray(roots)) rc = fail(p, "expected an array of [x, y, z], got %s", type_name(roots));
-  else if (count == 0) rc = fail(p, "must hold at least one root");
+  if (!cJSON_IsArray(roots))
+    rc = sylva__fail(p, "expected an array of [x, y, z], got %s", sylva__type_name(roots));
+  else if (count == 0)
+    rc = sylva__fail(p, "must hold at least one root");
   else if (count > SYLVA_SCENARIO_MAX_ROOTS)
-    rc = fail(p, "%d roots; a plant may have at most %d", count, SYLVA_SCENARIO_MAX_ROOTS);
-  else if (s->stem_count > SYLVA_MAX_STEMS - count)
-    rc = fail(p, "too many stems: a world holds at most %d", SYLVA_MAX_STEMS);
-  if (!rc && !(pl->roots = malloc((size_t)count * sizeof *pl->roots))) rc = fail_nomem(p);
+    rc = sylva__fail(p, "%d roots; a plant may have at most %d", count, SYLVA_SCENARIO_MAX_ROOTS);
+  else if (*stem_count > SYLVA_MAX_STEMS - count)
+    rc = sylva__fail(p, "too many stems: a world holds at most %d", SYLVA_MAX_STEMS);
+  if (!rc && !(pl->roots = malloc((size_t)count * sizeof *pl->roots))) rc = sylva__fail_nomem(p);
   int i = 0;
   for (const cJSON *r = rc ? NULL : roots->child; r && !rc; r = r->next, i++) {
-    size_t o2 = ptr_push_index(p, (size_t)i);
-    rc = want_vec3(p, r, pl->roots[i]);
-    ptr_pop(p, o2);
+    size_t o2 = sylva__ptr_push_index(p, (size_t)i);
+    rc = sylva__want_vec3(p, r, pl->roots[i]);
+    sylva__ptr_pop(p, o2);
   }
-  ptr_pop(p, old);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
   pl->root_count = count;
-  s->stem_count += count;
+  *stem_count += count;
   return 0;
 }
 
-static int parse_obstacle(parser *p, const cJSON *obj, sylva_scenario_obstacle *o) {
+int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obstacle *o) {
   static const char *const keys[] = {"id", "kind", "min", "max"};
-  int rc = want_object(p, obj);
-  if (!rc) rc = check_keys(p, obj, keys, 4);
+  int rc = sylva__want_object(p, obj);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 4);
   if (rc) return rc;
   for (int i = 0; i < 4; i++)
-    if (!member(obj, keys[i])) return fail_at_key(p, keys[i], "required");
-  size_t old = ptr_push(p, "id");
-  rc = want_label(p, member(obj, "id"), o->id);
-  ptr_pop(p, old);
+    if (!member(obj, keys[i])) return sylva__fail_at_key(p, keys[i], "required");
+  size_t old = sylva__ptr_push(p, "id");
+  rc = sylva__want_label(p, member(obj, "id"), o->id);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
-  old = ptr_push(p, "kind");
+  old = sylva__ptr_push(p, "kind");
   const char *kind = "";
-  rc = want_string(p, member(obj, "kind"), &kind);
+  rc = sylva__want_string(p, member(obj, "kind"), &kind);
   if (!rc && strcmp(kind, "box") != 0) {
     char q[80];
-    rc = fail(p, "unknown obstacle kind %s (known: box)", quote(q, kind));
+    rc = sylva__fail(p, "unknown obstacle kind %s (known: box)", sylva__quote(q, kind));
   }
-  ptr_pop(p, old);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
-  old = ptr_push(p, "min");
-  rc = want_vec3(p, member(obj, "min"), o->min);
-  ptr_pop(p, old);
+  old = sylva__ptr_push(p, "min");
+  rc = sylva__want_vec3(p, member(obj, "min"), o->min);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
-  old = ptr_push(p, "max");
-  rc = want_vec3(p, member(obj, "max"), o->max);
+  old = sylva__ptr_push(p, "max");
+  rc = sylva__want_vec3(p, member(obj, "max"), o->max);
   for (int i = 0; !rc && i < 3; i++)
     if (!(o->max[i] > o->min[i])) {
       char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
-      rc = fail(p, "must be greater than min on every axis (%c: %s <= %s)", "xyz"[i],
-                num(a, o->max[i]), num(b, o->min[i]));
+      rc = sylva__fail(p, "must be greater than min on every axis (%c: %s <= %s)", "xyz"[i],
+                       sylva__num(a, o->max[i]), sylva__num(b, o->min[i]));
     }
-  ptr_pop(p, old);
+  sylva__ptr_pop(p, old);
   return rc;
 }
 
@@ -666,8 +679,8 @@ static const char *sci(char buf[48], double v) {
   return buf;
 }
 
-static int fail_status(parser *p, int status, const char *fmt, ...) PRINTF_LIKE(3, 4);
-static int fail_status(parser *p, int status, const char *fmt, ...) {
+static int fail_status(sylva__parser *p, int status, const char *fmt, ...) SYLVA__PRINTF_LIKE(3, 4);
+static int fail_status(sylva__parser *p, int status, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   int rc = vfail(p, status, fmt, ap);
@@ -685,14 +698,14 @@ static sylva_world_def world_def_of(const sylva_scenario *s, double voxel) {
 }
 
 /* Refuses a world whose voxels would not fit and names a voxel edge that would. */
-static int check_world_size(parser *p, const sylva_scenario *s) {
+static int check_world_size(sylva__parser *p, const sylva_scenario *s) {
   sylva_world_def def = world_def_of(s, s->voxel);
   int rc = sylva_world_def_check(&def);
   if (rc == 0) return 0;
-  size_t old = ptr_push(p, "world");
+  size_t old = sylva__ptr_push(p, "world");
   if (rc != SYLVA_ETOOBIG) {
     rc = fail_status(p, rc, "%s", sylva_strerror(rc));
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     return rc;
   }
   double count = 1, volume = 1;
@@ -713,9 +726,10 @@ static int check_world_size(parser *p, const sylva_scenario *s) {
     steps += 1;
   }
   char a[48], b[48], v[SYLVA_FMT_BUFSIZE], e[SYLVA_FMT_BUFSIZE];
-  rc = fail_status(p, SYLVA_ETOOBIG, "%s voxels at voxel %s m exceed the limit of %s; use \"voxel\" >= %s",
-                   sci(a, count), num(v, s->voxel), sci(b, SYLVA_MAX_VOXELS), num(e, def.voxel));
-  ptr_pop(p, old);
+  rc = fail_status(
+      p, SYLVA_ETOOBIG, "%s voxels at voxel %s m exceed the limit of %s; use \"voxel\" >= %s",
+      sci(a, count), sylva__num(v, s->voxel), sci(b, SYLVA_MAX_VOXELS), sylva__num(e, def.voxel));
+  sylva__ptr_pop(p, old);
   return rc;
 }
 
@@ -734,183 +748,198 @@ void sylva_scenario_free(sylva_scenario *s) { scenario_free_parts(s); }
 static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
                                        "world",   "species", "plants",   "obstacles"};
 
-static int parse_top(parser *p, const cJSON *root, sylva_scenario *s) {
-  int rc = want_object(p, root);
+static int parse_top(sylva__parser *p, const cJSON *root, sylva_scenario *s) {
+  int rc = sylva__want_object(p, root);
   if (rc) return rc;
   const cJSON *item = member(root, "format");
   char q[80];
-  if (!item) return fail_at_key(p, "format", "required: \"%s\" (is this a scenario file?)", SYLVA_SCENARIO_FORMAT);
+  if (!item)
+    return sylva__fail_at_key(p, "format", "required: \"%s\" (is this a scenario file?)",
+                              SYLVA_SCENARIO_FORMAT);
   if (!cJSON_IsString(item) || strcmp(item->valuestring, SYLVA_SCENARIO_FORMAT) != 0) {
     if (cJSON_IsString(item))
-      return fail_at_key(p, "format", "expected \"%s\", got %s", SYLVA_SCENARIO_FORMAT,
-                         quote(q, item->valuestring));
-    return fail_at_key(p, "format", "expected \"%s\", got %s", SYLVA_SCENARIO_FORMAT, type_name(item));
+      return sylva__fail_at_key(p, "format", "expected \"%s\", got %s", SYLVA_SCENARIO_FORMAT,
+                                sylva__quote(q, item->valuestring));
+    return sylva__fail_at_key(p, "format", "expected \"%s\", got %s", SYLVA_SCENARIO_FORMAT,
+                              sylva__type_name(item));
   }
-  if ((rc = check_keys(p, root, top_keys, sizeof top_keys / sizeof top_keys[0]))) return rc;
+  if ((rc = sylva__check_keys(p, root, top_keys, sizeof top_keys / sizeof top_keys[0]))) return rc;
 
   const char *name = "untitled";
   size_t old;
   if ((item = member(root, "name"))) {
-    old = ptr_push(p, "name");
-    rc = want_string(p, item, &name);
+    old = sylva__ptr_push(p, "name");
+    rc = sylva__want_string(p, item, &name);
     if (!rc && (name[0] == '\0' || strlen(name) > SYLVA_SCENARIO_NAME_MAX))
-      rc = fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_SCENARIO_NAME_MAX, strlen(name));
-    ptr_pop(p, old);
+      rc = sylva__fail(p, "must be 1 to %d bytes long, got %zu", SYLVA_SCENARIO_NAME_MAX,
+                       strlen(name));
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
-  if (!(s->name = strdup(name))) return fail_nomem(p);
+  if (!(s->name = strdup(name))) return sylva__fail_nomem(p);
 
   double v = 0;
   s->seed = 1;
   if ((item = member(root, "seed"))) {
-    old = ptr_push(p, "seed");
-    rc = want_integer(p, item, 0, SYLVA_SCENARIO_SEED_MAX, &v);
-    ptr_pop(p, old);
+    old = sylva__ptr_push(p, "seed");
+    rc = sylva__want_integer(p, item, 0, SYLVA_SCENARIO_SEED_MAX, &v);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
     s->seed = (uint64_t)v;
   }
   s->iterations = 40;
   if ((item = member(root, "iterations"))) {
-    old = ptr_push(p, "iterations");
-    rc = want_integer(p, item, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &v);
-    ptr_pop(p, old);
+    old = sylva__ptr_push(p, "iterations");
+    rc = sylva__want_integer(p, item, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &v);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
     s->iterations = (int)v;
   }
 
   /* species, before the plants that name them */
   if ((item = member(root, "species"))) {
-    old = ptr_push(p, "species");
-    rc = want_object(p, item);
+    old = sylva__ptr_push(p, "species");
+    rc = sylva__want_object(p, item);
     int count = rc ? 0 : cJSON_GetArraySize(item);
     if (!rc && count > SYLVA_SCENARIO_MAX_SPECIES)
-      rc = fail(p, "%d species; at most %d are allowed", count, SYLVA_SCENARIO_MAX_SPECIES);
+      rc = sylva__fail(p, "%d species; at most %d are allowed", count, SYLVA_SCENARIO_MAX_SPECIES);
     if (!rc && count && !(s->species = calloc((size_t)count, sizeof *s->species)))
-      rc = fail_nomem(p);
+      rc = sylva__fail_nomem(p);
     for (const cJSON *sp = rc ? NULL : item->child; sp && !rc; sp = sp->next) {
-      size_t o2 = ptr_push(p, sp->string);
+      size_t o2 = sylva__ptr_push(p, sp->string);
       size_t n = strlen(sp->string);
       if (n == 0 || n >= SYLVA_LABEL_MAX)
-        rc = fail(p, "a species name must be 1 to %d bytes long, got %zu", SYLVA_LABEL_MAX - 1, n);
+        rc = sylva__fail(p, "a species name must be 1 to %d bytes long, got %zu",
+                         SYLVA_LABEL_MAX - 1, n);
       for (int i = 0; !rc && i < s->species_count; i++)
-        if (strcmp(s->species[i].name, sp->string) == 0) rc = fail(p, "duplicate key");
+        if (strcmp(s->species[i].name, sp->string) == 0) rc = sylva__fail(p, "duplicate key");
       if (!rc) rc = parse_species(p, sp, &s->species[s->species_count].def);
       if (!rc) memcpy(s->species[s->species_count++].name, sp->string, n + 1);
-      ptr_pop(p, o2);
+      sylva__ptr_pop(p, o2);
     }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
 
   /* world: the box now, the voxel once the plants are known */
-  if (!(item = member(root, "world"))) return fail_at_key(p, "world", "required: {\"min\": [x, y, z], \"max\": [x, y, z]}");
-  old = ptr_push(p, "world");
+  if (!(item = member(root, "world")))
+    return sylva__fail_at_key(p, "world", "required: {\"min\": [x, y, z], \"max\": [x, y, z]}");
+  old = sylva__ptr_push(p, "world");
   static const char *const world_keys[] = {"min", "max", "voxel"};
-  rc = want_object(p, item);
-  if (!rc) rc = check_keys(p, item, world_keys, 3);
-  if (!rc && !member(item, "min")) rc = fail_at_key(p, "min", "required");
-  if (!rc && !member(item, "max")) rc = fail_at_key(p, "max", "required");
+  rc = sylva__want_object(p, item);
+  if (!rc) rc = sylva__check_keys(p, item, world_keys, 3);
+  if (!rc && !member(item, "min")) rc = sylva__fail_at_key(p, "min", "required");
+  if (!rc && !member(item, "max")) rc = sylva__fail_at_key(p, "max", "required");
   if (!rc) {
-    size_t o2 = ptr_push(p, "min");
-    rc = want_vec3(p, member(item, "min"), s->world_min);
-    ptr_pop(p, o2);
+    size_t o2 = sylva__ptr_push(p, "min");
+    rc = sylva__want_vec3(p, member(item, "min"), s->world_min);
+    sylva__ptr_pop(p, o2);
   }
   if (!rc) {
-    size_t o2 = ptr_push(p, "max");
-    rc = want_vec3(p, member(item, "max"), s->world_max);
+    size_t o2 = sylva__ptr_push(p, "max");
+    rc = sylva__want_vec3(p, member(item, "max"), s->world_max);
     for (int i = 0; !rc && i < 3; i++)
       if (!(s->world_max[i] > s->world_min[i])) {
         char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
-        rc = fail(p, "must be greater than /world/min on every axis (%c: %s <= %s)", "xyz"[i],
-                  num(a, s->world_max[i]), num(b, s->world_min[i]));
+        rc = sylva__fail(p, "must be greater than %.*s/world/min on every axis (%c: %s <= %s)",
+                         (int)p->base, p->ptr, "xyz"[i], sylva__num(a, s->world_max[i]),
+                         sylva__num(b, s->world_min[i]));
       }
-    ptr_pop(p, o2);
+    sylva__ptr_pop(p, o2);
   }
   const cJSON *voxel = rc ? NULL : member(item, "voxel");
   if (voxel) {
-    size_t o2 = ptr_push(p, "voxel");
+    size_t o2 = sylva__ptr_push(p, "voxel");
     rc = want_real(p, voxel, R_POSITIVE, &s->voxel);
-    ptr_pop(p, o2);
+    sylva__ptr_pop(p, o2);
   }
-  ptr_pop(p, old);
+  sylva__ptr_pop(p, old);
   if (rc) return rc;
 
   if ((item = member(root, "plants"))) {
-    old = ptr_push(p, "plants");
+    old = sylva__ptr_push(p, "plants");
     int count = cJSON_IsArray(item) ? cJSON_GetArraySize(item) : 0;
-    if (!cJSON_IsArray(item)) rc = fail(p, "expected an array, got %s", type_name(item));
+    if (!cJSON_IsArray(item))
+      rc = sylva__fail(p, "expected an array, got %s", sylva__type_name(item));
     else if (count > SYLVA_MAX_STEMS)
-      rc = fail(p, "%d plants; a world holds at most %d stems", count, SYLVA_MAX_STEMS);
-    if (!rc && count && !(s->plants = calloc((size_t)count, sizeof *s->plants))) rc = fail_nomem(p);
-    id_ref *by_name = NULL;
+      rc = sylva__fail(p, "%d plants; a world holds at most %d stems", count, SYLVA_MAX_STEMS);
+    if (!rc && count && !(s->plants = calloc((size_t)count, sizeof *s->plants)))
+      rc = sylva__fail_nomem(p);
+    sylva__id_ref *by_name = NULL;
     if (!rc && count && !(by_name = malloc(((size_t)s->species_count + 1) * sizeof *by_name)))
-      rc = fail_nomem(p);
+      rc = sylva__fail_nomem(p);
     if (by_name) {
-      for (int k = 0; k < s->species_count; k++) by_name[k] = (id_ref){s->species[k].name, k};
+      for (int k = 0; k < s->species_count; k++)
+        by_name[k] = (sylva__id_ref){s->species[k].name, k};
       qsort(by_name, (size_t)s->species_count, sizeof *by_name, cmp_id_ref);
     }
     int i = 0;
     for (const cJSON *pl = rc ? NULL : item->child; pl && !rc; pl = pl->next, i++) {
-      size_t o2 = ptr_push_index(p, (size_t)i);
+      size_t o2 = sylva__ptr_push_index(p, (size_t)i);
       s->plant_count = i + 1; /* so that a partial plant is freed */
-      rc = parse_plant(p, pl, s, by_name, &s->plants[i]);
-      ptr_pop(p, o2);
+      rc =
+          sylva__parse_plant(p, pl, by_name, s->species_count, &s->stem_count, &s->plants[i], NULL);
+      sylva__ptr_pop(p, o2);
     }
     free(by_name);
     if (!rc && count > 1) {
-      id_ref *refs = malloc((size_t)count * sizeof *refs);
+      sylva__id_ref *refs = malloc((size_t)count * sizeof *refs);
       if (!refs) {
-        rc = fail_nomem(p);
+        rc = sylva__fail_nomem(p);
       } else {
-        for (int k = 0; k < count; k++) refs[k] = (id_ref){s->plants[k].id, k};
+        for (int k = 0; k < count; k++) refs[k] = (sylva__id_ref){s->plants[k].id, k};
         int first, second;
-        if (find_duplicate(refs, count, &first, &second)) {
+        if (sylva__find_duplicate(refs, count, &first, &second)) {
           char q[80];
-          size_t o2 = ptr_push_index(p, (size_t)second);
-          rc = fail_at_key(p, "id", "duplicate plant id %s (also /plants/%d/id)",
-                           quote(q, s->plants[second].id), first);
-          ptr_pop(p, o2);
+          size_t o2 = sylva__ptr_push_index(p, (size_t)second);
+          rc = sylva__fail_at_key(p, "id", "duplicate plant id %s (also %.*s/plants/%d/id)",
+                                  sylva__quote(q, s->plants[second].id), (int)p->base, p->ptr,
+                                  first);
+          sylva__ptr_pop(p, o2);
         }
         free(refs);
       }
     }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
 
   if ((item = member(root, "obstacles"))) {
-    old = ptr_push(p, "obstacles");
+    old = sylva__ptr_push(p, "obstacles");
     int count = cJSON_IsArray(item) ? cJSON_GetArraySize(item) : 0;
-    if (!cJSON_IsArray(item)) rc = fail(p, "expected an array, got %s", type_name(item));
+    if (!cJSON_IsArray(item))
+      rc = sylva__fail(p, "expected an array, got %s", sylva__type_name(item));
     else if (count > SYLVA_SCENARIO_MAX_OBSTACLES)
-      rc = fail(p, "%d obstacles; at most %d are allowed", count, SYLVA_SCENARIO_MAX_OBSTACLES);
+      rc = sylva__fail(p, "%d obstacles; at most %d are allowed", count,
+                       SYLVA_SCENARIO_MAX_OBSTACLES);
     if (!rc && count && !(s->obstacles = calloc((size_t)count, sizeof *s->obstacles)))
-      rc = fail_nomem(p);
+      rc = sylva__fail_nomem(p);
     int i = 0;
     for (const cJSON *o = rc ? NULL : item->child; o && !rc; o = o->next, i++) {
-      size_t o2 = ptr_push_index(p, (size_t)i);
-      rc = parse_obstacle(p, o, &s->obstacles[i]);
-      ptr_pop(p, o2);
+      size_t o2 = sylva__ptr_push_index(p, (size_t)i);
+      rc = sylva__parse_obstacle(p, o, &s->obstacles[i]);
+      sylva__ptr_pop(p, o2);
       s->obstacle_count = i + 1;
     }
     if (!rc && count > 1) {
-      id_ref *refs = malloc((size_t)count * sizeof *refs);
+      sylva__id_ref *refs = malloc((size_t)count * sizeof *refs);
       if (!refs) {
-        rc = fail_nomem(p);
+        rc = sylva__fail_nomem(p);
       } else {
-        for (int k = 0; k < count; k++) refs[k] = (id_ref){s->obstacles[k].id, k};
+        for (int k = 0; k < count; k++) refs[k] = (sylva__id_ref){s->obstacles[k].id, k};
         int first, second;
-        if (find_duplicate(refs, count, &first, &second)) {
+        if (sylva__find_duplicate(refs, count, &first, &second)) {
           char q[80];
-          size_t o2 = ptr_push_index(p, (size_t)second);
-          rc = fail_at_key(p, "id", "duplicate obstacle id %s (also /obstacles/%d/id)",
-                           quote(q, s->obstacles[second].id), first);
-          ptr_pop(p, o2);
+          size_t o2 = sylva__ptr_push_index(p, (size_t)second);
+          rc = sylva__fail_at_key(p, "id", "duplicate obstacle id %s (also %.*s/obstacles/%d/id)",
+                                  sylva__quote(q, s->obstacles[second].id), (int)p->base, p->ptr,
+                                  first);
+          sylva__ptr_pop(p, o2);
         }
         free(refs);
       }
     }
-    ptr_pop(p, old);
+    sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
 
@@ -927,17 +956,30 @@ static int parse_top(parser *p, const cJSON *root, sylva_scenario *s) {
   return check_world_size(p, s);
 }
 
+int sylva__scenario_from_json(sylva__parser *p, const cJSON *root, sylva_scenario **out) {
+  *out = NULL;
+  sylva_scenario *s = calloc(1, sizeof *s);
+  int rc = s ? parse_top(p, root, s) : sylva__fail_nomem(p);
+  if (rc) {
+    scenario_free_parts(s);
+    return rc;
+  }
+  *out = s;
+  return 0;
+}
+
 int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, char *err,
                          size_t errlen) {
   *out = NULL;
   if (err && errlen) err[0] = '\0';
   char syntax[400];
-  if (sylva_json_check_ex(text, len, SYLVA_SCENARIO_MAX_DEPTH, SYLVA_JSON_NO_NUL_ESCAPE, syntax,
+  if (sylva_json_check_ex(text, len, SYLVA_SCENARIO_MAX_DEPTH,
+                          SYLVA_JSON_NO_NUL_ESCAPE | SYLVA_JSON_CJSON_NUMBERS, syntax,
                           sizeof syntax) != 0) {
     if (err && errlen) snprintf(err, errlen, "(syntax) %s", syntax);
     return SYLVA_EINVAL;
   }
-  parser p = {.ptr = "", .plen = 0, .err = err, .errlen = errlen};
+  sylva__parser p = {.ptr = "", .plen = 0, .base = 0, .err = err, .errlen = errlen};
   cJSON *root = cJSON_ParseWithLength(text, len);
   if (!root) {
     /* The text is valid JSON, so this is memory, or a limit of cJSON itself. */
@@ -947,15 +989,9 @@ int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, cha
       snprintf(err, errlen, "out of memory while parsing JSON (or cJSON could not read the text near byte %zu)", offset);
     return SYLVA_ENOMEM;
   }
-  sylva_scenario *s = calloc(1, sizeof *s);
-  int rc = s ? parse_top(&p, root, s) : fail_nomem(&p);
+  int rc = sylva__scenario_from_json(&p, root, out);
   cJSON_Delete(root);
-  if (rc) {
-    scenario_free_parts(s);
-    return rc;
-  }
-  *out = s;
-  return 0;
+  return rc;
 }
 
 /* ---- canonical JSON ---- */
@@ -1056,29 +1092,29 @@ char *sylva_scenario_json(const sylva_scenario *s) {
 int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, size_t errlen) {
   *out = NULL;
   if (err && errlen) err[0] = '\0';
-  parser p = {.ptr = "", .plen = 0, .err = err, .errlen = errlen};
+  sylva__parser p = {.ptr = "", .plen = 0, .base = 0, .err = err, .errlen = errlen};
   sylva_world_def def = world_def_of(s, s->voxel);
   sylva_world *w = NULL;
   int rc = sylva_world_create(&def, &w);
   if (rc < 0) {
-    if (rc == SYLVA_ENOMEM) return fail_nomem(&p);
-    size_t old = ptr_push(&p, "world");
+    if (rc == SYLVA_ENOMEM) return sylva__fail_nomem(&p);
+    size_t old = sylva__ptr_push(&p, "world");
     rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
-    ptr_pop(&p, old);
+    sylva__ptr_pop(&p, old);
     return rc;
   }
   int *species_ids = malloc(((size_t)s->species_count + 1) * sizeof *species_ids);
   if (!species_ids) {
     sylva_world_destroy(w);
-    return fail_nomem(&p);
+    return sylva__fail_nomem(&p);
   }
   for (int i = 0; i < s->species_count; i++) {
     rc = sylva_world_add_species(w, &s->species[i].def, s->species[i].name);
     if (rc < 0) {
-      size_t old = ptr_push(&p, "species");
-      ptr_push(&p, s->species[i].name);
+      size_t old = sylva__ptr_push(&p, "species");
+      sylva__ptr_push(&p, s->species[i].name);
       rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
-      ptr_pop(&p, old);
+      sylva__ptr_pop(&p, old);
       goto fail;
     }
     species_ids[i] = rc;
@@ -1091,10 +1127,10 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
     memcpy(od.max, o->max, sizeof od.max);
     rc = sylva_world_add_obstacle(w, &od);
     if (rc < 0) {
-      size_t old = ptr_push(&p, "obstacles");
-      ptr_push_index(&p, (size_t)i);
+      size_t old = sylva__ptr_push(&p, "obstacles");
+      sylva__ptr_push_index(&p, (size_t)i);
       rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
-      ptr_pop(&p, old);
+      sylva__ptr_pop(&p, old);
       goto fail;
     }
   }
@@ -1109,11 +1145,11 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
     int bad_root = -1;
     rc = sylva_world_add_plant(w, &pd, &bad_root);
     if (rc < 0) {
-      size_t old = ptr_push(&p, "plants");
-      ptr_push_index(&p, (size_t)i);
+      size_t old = sylva__ptr_push(&p, "plants");
+      sylva__ptr_push_index(&p, (size_t)i);
       if (bad_root >= 0 && bad_root < pl->root_count) {
-        ptr_push(&p, "roots");
-        ptr_push_index(&p, (size_t)bad_root);
+        sylva__ptr_push(&p, "roots");
+        sylva__ptr_push_index(&p, (size_t)bad_root);
       }
       if (rc == SYLVA_EBLOCKED) {
         rc = fail_status(&p, rc, "root inside an obstacle");
@@ -1125,7 +1161,7 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
       } else {
         rc = fail_status(&p, rc, "%s", sylva_strerror(rc));
       }
-      ptr_pop(&p, old);
+      sylva__ptr_pop(&p, old);
       goto fail;
     }
   }

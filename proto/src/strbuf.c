@@ -61,10 +61,38 @@ void sylva__strbuf_printf(sylva__strbuf *b, const char *fmt, ...) {
   b->len += (size_t)n;
 }
 
+/* Length of the valid UTF-8 sequence at p (lead byte >= 0x80), 0 if invalid. */
+static size_t utf8_length(const unsigned char *p) {
+  size_t n;
+  uint32_t cp, min;
+  if (p[0] >= 0xC2 && p[0] <= 0xDF) n = 2, cp = p[0] & 0x1Fu, min = 0x80;
+  else if (p[0] >= 0xE0 && p[0] <= 0xEF) n = 3, cp = p[0] & 0x0Fu, min = 0x800;
+  else if (p[0] >= 0xF0 && p[0] <= 0xF4) n = 4, cp = p[0] & 0x07u, min = 0x10000;
+  else return 0;
+  for (size_t i = 1; i < n; i++) {
+    if ((p[i] & 0xC0) != 0x80) return 0; /* also stops at the NUL */
+    cp = (cp << 6) | (p[i] & 0x3Fu);
+  }
+  if (cp < min || (cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) return 0;
+  return n;
+}
+
 void sylva__strbuf_json_string(sylva__strbuf *b, const char *s) {
   static const char hex[] = "0123456789abcdef";
   sylva__strbuf_putc(b, '"');
   for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+    if (*p >= 0x80) {
+      /* Invalid UTF-8 (a message cut in the middle of a character) becomes U+FFFD,
+       * so that the output is always valid JSON text. */
+      size_t n = utf8_length(p);
+      if (n == 0) {
+        sylva__strbuf_append(b, "\\ufffd", 6);
+      } else {
+        sylva__strbuf_append(b, (const char *)p, n);
+        p += n - 1;
+      }
+      continue;
+    }
     switch (*p) {
     case '"': sylva__strbuf_append(b, "\\\"", 2); break;
     case '\\': sylva__strbuf_append(b, "\\\\", 2); break;

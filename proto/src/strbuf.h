@@ -28,7 +28,8 @@ void sylva__strbuf_printf(sylva__strbuf *b, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
-/** Appends s as a JSON string literal (quotes and escapes included). */
+/** Appends s as a JSON string literal (quotes and escapes included); bytes that are
+ *  not valid UTF-8 become U+FFFD. */
 void sylva__strbuf_json_string(sylva__strbuf *b, const char *s);
 /** Appends a number with sylva_fmt_fixed(). */
 void sylva__strbuf_fixed(sylva__strbuf *b, double v, int decimals);

@@ -16,8 +16,15 @@
 enum {
   /** Also reject "\u0000" in strings: cJSON cuts a string at its first NUL, so a
    *  scenario label "a\u0000b" would silently become "a". */
-  SYLVA_JSON_NO_NUL_ESCAPE = 1
+  SYLVA_JSON_NO_NUL_ESCAPE = 1,
+  /** Also reject numbers longer than SYLVA_JSON_CJSON_NUMBER_MAX characters: cJSON
+   *  1.7.15 reads at most that many characters of a number and then fails on a
+   *  valid text. */
+  SYLVA_JSON_CJSON_NUMBERS = 2
 };
+
+/** Longest number text cJSON 1.7.15 can read (its buffer of 64 bytes with the NUL). */
+#define SYLVA_JSON_CJSON_NUMBER_MAX 63
 
 /** Checks that text[0..len) is exactly one RFC 8259 JSON value surrounded by
  *  optional whitespace (space, tab, LF, CR), in valid UTF-8, with arrays and

@@ -1,0 +1,188 @@
+/* sylva: the messages of the wire protocol `sylva.v1` (spec/protocol.md), both
+ * directions. Deterministic (the same input gives the same bytes), no I/O.
+ *
+ *   sylva_msg m; char err[512];
+ *   if (sylva_msg_parse(text, len, &m, err, sizeof err) < 0) {
+ *     char *reply = sylva_msg_error("bad_request", err, m.ref);   (m.ref may be NULL)
+ *     ...
+ *   }
+ *   ... m.type, m.run, ...
+ *   sylva_msg_free(&m);
+ *
+ * Encoders return compact JSON in a malloc'd NUL-terminated string (no newline),
+ * NULL when out of memory. Their `ref` argument is JSON text (as in sylva_msg.ref)
+ * appended as "ref":<ref> when not NULL. Positions print with 4 decimals and radii
+ * with 5 (trimmed), as in the skeleton format. */
+#ifndef SYLVA_PROTOCOL_H
+#define SYLVA_PROTOCOL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sylva/scenario.h"
+#include "sylva/world.h"
+
+/** The protocol version of `sylva.v1`, sent in "welcome". */
+#define SYLVA_PROTOCOL_VERSION 1
+/** The WebSocket subprotocol name. */
+#define SYLVA_PROTOCOL_NAME "sylva.v1"
+/** Deepest JSON nesting of a client message (the outermost object is depth 1). */
+#define SYLVA_MSG_MAX_DEPTH 64
+/** Longest run name, bytes. */
+#define SYLVA_MSG_NAME_MAX 255
+/** Most plants, obstacles or obstacle removals of one "edit" (each list). */
+#define SYLVA_MSG_MAX_EDIT 1000
+/** Largest step count of "control". */
+#define SYLVA_MSG_MAX_STEP 100000
+/** Largest run id and seq (2^53 - 1: the largest integer n such that n and n + 1
+ *  are exact doubles, so a larger number text can never be mistaken for it). */
+#define SYLVA_MSG_ID_MAX 9007199254740991.0
+
+/** Client message types. */
+typedef enum sylva_msg_type {
+  SYLVA_MSG_HELLO,
+  SYLVA_MSG_LIST,
+  SYLVA_MSG_CREATE,
+  SYLVA_MSG_SUBSCRIBE,
+  SYLVA_MSG_UNSUBSCRIBE,
+  SYLVA_MSG_CONTROL,
+  SYLVA_MSG_EDIT,
+  SYLVA_MSG_FORK,
+  SYLVA_MSG_GET,
+  SYLVA_MSG_LIGHT,
+  SYLVA_MSG_SCENARIOS
+} sylva_msg_type;
+
+/** Actions of a "control" message. */
+typedef enum sylva_control_action {
+  SYLVA_CONTROL_START,
+  SYLVA_CONTROL_PAUSE,
+  SYLVA_CONTROL_STEP,
+  SYLVA_CONTROL_STOP
+} sylva_control_action;
+
+/** A parsed client message. Only the fields of its type are set; the others are
+ *  zero/NULL. Free it with sylva_msg_free(). */
+typedef struct sylva_msg {
+  sylva_msg_type type;
+  /** The client's "id" re-encoded as compact JSON (a string or a number), NULL if
+   *  absent; echo it as "ref". */
+  char *ref;
+  /** subscribe, unsubscribe, control, edit, fork, get, light: the run id (>= 1). */
+  int64_t run;
+  /** subscribe: whether "since" was given, and the seq (>= 0). */
+  bool has_since;
+  int64_t since;
+  /** hello: the token, NULL if absent. */
+  char *token;
+  /** create (optional, else NULL), fork (required): the run name, 1 to
+   *  SYLVA_MSG_NAME_MAX bytes of UTF-8 without control characters. */
+  char *name;
+  /** create: start the run at once (default false). */
+  bool start;
+  /** create: the parsed and validated scenario. */
+  sylva_scenario *scenario;
+  /** control: the action, and for step the count (1..SYLVA_MSG_MAX_STEP, default 1). */
+  sylva_control_action action;
+  int count;
+  /** fork, get: the stored iteration (>= 0). */
+  int iteration;
+  /** light: the height, metres (finite). */
+  double z;
+  /** edit: plants to add, shaped like scenario plants; species is -1 and the
+   *  species' name (a label, resolved by the daemon against the run's world) is
+   *  add_plant_species[i]. */
+  sylva_scenario_plant *add_plants;
+  char **add_plant_species;
+  int add_plant_count;
+  /** edit: obstacles to add (kind "box", max > min on every axis). */
+  sylva_scenario_obstacle *add_obstacles;
+  int add_obstacle_count;
+  /** edit: ids of obstacles to remove (labels). */
+  char **remove_obstacles;
+  int remove_obstacle_count;
+} sylva_msg;
+
+/** Parses one client message: the strict JSON check (RFC 8259, no "\u0000", nesting
+ *  at most SYLVA_MSG_MAX_DEPTH), then a top-level object with a known string
+ *  "type", an optional "id" (string or number), only the keys of that type, and
+ *  every field's type and range. Returns 0, SYLVA_EINVAL (bad message) or
+ *  SYLVA_ENOMEM. On failure err (if given) says what and where, starting with the
+ *  JSON pointer of the offending value or "(syntax)": "/run: expected an integer
+ *  >= 1, got 0", "/type: unknown message type \"foo\" (known: ...)",
+ *  "/scenario/plants/0/roots/0: expected [x, y, z]", "(syntax) line 1, column 7
+ *  (byte 6): ...". *out is always initialised; after a failure only out->ref may
+ *  be set (when the id could be read), so that the error can echo it. Call
+ *  sylva_msg_free() in both cases. */
+int sylva_msg_parse(const char *text, size_t len, sylva_msg *out, char *err, size_t errlen);
+
+/** Frees what a message holds and zeroes it (a zeroed message is fine). */
+void sylva_msg_free(sylva_msg *m);
+
+/** The wire name of a message type ("hello", ...), or NULL for an unknown value. */
+const char *sylva_msg_type_name(sylva_msg_type type);
+
+/** {"type":"welcome","protocol":1,"server":{"name":"sylva","version":"..."},"auth":true}
+ *  auth: whether the daemon wants a token before changing messages. */
+char *sylva_msg_welcome(const char *server_version, bool auth);
+
+/** {"type":"error","code":"...","message":"...","ref":...}. code is one of
+ *  bad_request, unknown_run, unauthorized, too_large, busy, internal; message
+ *  says what is wrong and where (invalid UTF-8 in it prints as U+FFFD). */
+char *sylva_msg_error(const char *code, const char *message, const char *ref);
+
+/** {"type":"created","run":3,"name":"...","ref":...} */
+char *sylva_msg_created(int64_t run, const char *name, const char *ref);
+
+/** {"type":"status","run":3,"status":"running","iteration":7,"ref":...}; status is
+ *  one of running, paused, finished, failed. */
+char *sylva_msg_status(int64_t run, const char *status, int iteration, const char *ref);
+
+/** One run of a "runs" list. */
+typedef struct sylva_run_summary {
+  int64_t run;
+  const char *name;
+  const char *status;
+  int iteration;
+  int stems;
+  int64_t nodes;
+} sylva_run_summary;
+
+/** {"type":"runs","runs":[{"run":1,"name":"..","status":"running","iteration":4,
+ *  "stems":5,"nodes":1234}],"ref":...} */
+char *sylva_msg_runs(const sylva_run_summary *runs, size_t n, const char *ref);
+
+/** Just the array of sylva_msg_runs() ([{"run":1,...}]), for GET /api/runs. */
+char *sylva_runs_json(const sylva_run_summary *runs, size_t n);
+
+/** {"type":"snapshot","run":..,"seq":..,"iteration":..,"voxel":..,"world":{"min":[..],
+ *  "max":[..]},"obstacles":[..],"plants":[..],"stats":[..],"ref":..}: world,
+ *  obstacles and plants byte for byte as in sylva_encode_skeleton(); stats per
+ *  global stem as in the stats line (compact), the stems' current measures. */
+char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const char *ref);
+
+/** {"type":"delta","run":..,"seq":..,"iteration":..,"added":[[id,parent,plant,stem,x,
+ *  y,z,radius],..],"radii":[[id,radius],..],"shed":[id,..],"stats":[..]} of the step
+ *  that gave journal j (plant: the plant's index as in "plants" of the snapshot;
+ *  stem: the stem's index within the plant). A client that applies a snapshot and
+ *  then each delta (adds the nodes with birth = "iteration", sets the radii, then
+ *  removes every shed node with its whole subtree) holds the skeleton of that
+ *  iteration. */
+char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j);
+
+/** {"type":"light_slice","run":..,"iteration":..,"z":..,"origin":[x,y],"voxel":..,
+ *  "nx":..,"ny":..,"values":"<base64>","ref":..}: the light of the horizontal voxel
+ *  layer holding z (z clamped into the world; "z" reports the layer's centre),
+ *  sampled with sylva_world_light_at() at voxel centres. values: nx*ny bytes,
+ *  round(light * 255), x fastest; cell (i, j) spans origin + [i, i+1) * voxel in x
+ *  and origin + [j, j+1) * voxel in y. Its size is about 1.34 * nx * ny bytes; a
+ *  caller that caps its messages checks sylva_world_dims() first. */
+char *sylva_msg_light_slice(int64_t run, const sylva_world *w, double z, const char *ref);
+
+/** {"type":"scenarios","scenarios":[{"name":"..","title":".."}],"ref":..}; titles
+ *  (or one of them) may be NULL: the title is then the name. */
+char *sylva_msg_scenarios(const char *const *names, const char *const *titles, size_t n,
+                          const char *ref);
+
+#endif

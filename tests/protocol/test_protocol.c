@@ -1,0 +1,1317 @@
+/* The protocol messages (proto/include/sylva/protocol.h): parsing of every client
+ * message and of every kind of bad one, JSONTestSuite raw and wrapped, the
+ * encoders' JSON, a snapshot plus deltas that reproduce the skeleton, and the
+ * light slice.
+ *
+ * argv[1]: the JSONTestSuite test_parsing directory. */
+#include <cjson/cJSON.h>
+#include <dirent.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../check.h"
+#include "sylva/encode.h"
+#include "sylva/json_check.h"
+#include "sylva/protocol.h"
+#include "sylva/scenario.h"
+#include "sylva/status.h"
+#include "sylva/world.h"
+
+/* ---- helpers ---- */
+
+#define CHECK_STR(a, b)                                                                     \
+  do {                                                                                      \
+    const char *check_a_ = (a), *check_b_ = (b);                                            \
+    if (check_a_ && check_b_ && strcmp(check_a_, check_b_) == 0) check_passed++;            \
+    else {                                                                                  \
+      check_failed++;                                                                       \
+      fprintf(stderr, "%s:%d: %s == %s failed: \"%s\" != \"%s\"\n", __FILE__, __LINE__, #a, \
+              #b, check_a_ ? check_a_ : "(null)", check_b_ ? check_b_ : "(null)");          \
+    }                                                                                       \
+  } while (0)
+
+/* Parses text that must be valid; the message is returned for inspection. */
+static bool parse_ok_at(const char *text, sylva_msg *m, int line) {
+  char err[512];
+  int rc = sylva_msg_parse(text, strlen(text), m, err, sizeof err);
+  if (rc == 0) {
+    check_passed++;
+    return true;
+  }
+  check_failed++;
+  fprintf(stderr, "%s:%d: parse failed (%d): %s\n  input: %.300s\n", __FILE__, line, rc, err, text);
+  return false;
+}
+#define PARSE_OK(text, m) parse_ok_at((text), (m), __LINE__)
+
+/* Parses text that must be rejected with SYLVA_EINVAL and a message containing want
+ * (and the message must start with a pointer, "(root)" or "(syntax)"). */
+static void parse_bad_at(const char *text, size_t len, const char *want, int line) {
+  char err[512];
+  sylva_msg m;
+  int rc = sylva_msg_parse(text, len, &m, err, sizeof err);
+  bool ok = rc == SYLVA_EINVAL && strstr(err, want) != NULL &&
+            (err[0] == '/' || strncmp(err, "(root)", 6) == 0 || strncmp(err, "(syntax)", 8) == 0);
+  if (ok) {
+    check_passed++;
+  } else {
+    check_failed++;
+    fprintf(stderr, "%s:%d: expected an error containing \"%s\", got %d \"%s\"\n  input: %.300s\n",
+            __FILE__, line, want, rc, rc ? err : "", text);
+  }
+  sylva_msg_free(&m);
+}
+#define PARSE_BAD(text, want) parse_bad_at((text), strlen(text), (want), __LINE__)
+
+/* Checks that text is one strict JSON value and cJSON reads it; returns the tree. */
+static cJSON *valid_json_at(const char *text, int line) {
+  char err[256];
+  if (!text) {
+    check_failed++;
+    fprintf(stderr, "%s:%d: encoder returned NULL\n", __FILE__, line);
+    return NULL;
+  }
+  if (sylva_json_check(text, strlen(text), 1000, err, sizeof err) != 0) {
+    check_failed++;
+    fprintf(stderr, "%s:%d: invalid JSON (%s): %.300s\n", __FILE__, line, err, text);
+    return NULL;
+  }
+  cJSON *root = cJSON_Parse(text);
+  if (!root) {
+    check_failed++;
+    fprintf(stderr, "%s:%d: cJSON cannot read: %.300s\n", __FILE__, line, text);
+    return NULL;
+  }
+  check_passed++;
+  return root;
+}
+#define VALID_JSON(text) valid_json_at((text), __LINE__)
+
+static const char *str_of(const cJSON *obj, const char *key) {
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  return cJSON_IsString(item) ? item->valuestring : NULL;
+}
+
+static double num_of(const cJSON *obj, const char *key) {
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  return cJSON_IsNumber(item) ? item->valuedouble : NAN;
+}
+
+static char *read_file(const char *path, size_t *len) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  size_t cap = 4096, n = 0;
+  char *data = malloc(cap);
+  while (data) {
+    size_t got = fread(data + n, 1, cap - n, f);
+    n += got;
+    if (got == 0) break;
+    if (n == cap) {
+      char *bigger = realloc(data, cap * 2);
+      if (!bigger) {
+        free(data);
+        data = NULL;
+        break;
+      }
+      data = bigger;
+      cap *= 2;
+    }
+  }
+  fclose(f);
+  if (data) *len = n;
+  return data;
+}
+
+/* ---- valid messages ---- */
+
+static const char *const small_scenario =
+    "{\"format\":\"sylva.scenario/1\",\"name\":\"s\",\"world\":{\"min\":[-2,-2,0],\"max\":[2,2,4]},"
+    "\"species\":{\"oak\":{\"preset\":\"igm-fig11\"}},"
+    "\"plants\":[{\"id\":\"t1\",\"species\":\"oak\",\"roots\":[[0,0,0]]}]}";
+
+static void test_valid(void) {
+  sylva_msg m;
+  char text[4096];
+
+  if (PARSE_OK("{\"type\":\"hello\"}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_HELLO);
+    CHECK(m.token == NULL);
+    CHECK(m.ref == NULL);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK(" {\"type\": \"hello\", \"token\": \"s3cr\\u00e9t\", \"id\": \"a\\\"b\"} ", &m)) {
+    CHECK_STR(m.token, "s3cr\xc3\xa9t");
+    CHECK_STR(m.ref, "\"a\\\"b\"");
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"id\":12,\"type\":\"list\"}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_LIST);
+    CHECK_STR(m.ref, "12");
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"id\":-0.5e1,\"type\":\"scenarios\"}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_SCENARIOS);
+    CHECK_STR(m.ref, "-5");
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"id\":1.25,\"type\":\"list\"}", &m)) CHECK_STR(m.ref, "1.25");
+  sylva_msg_free(&m);
+
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s}", small_scenario);
+  if (PARSE_OK(text, &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_CREATE);
+    CHECK(m.scenario != NULL);
+    CHECK(m.name == NULL);
+    CHECK(!m.start);
+    if (m.scenario) {
+      CHECK_INT(m.scenario->plant_count, 1);
+      CHECK_STR(m.scenario->name, "s");
+    }
+  }
+  sylva_msg_free(&m);
+  snprintf(text, sizeof text,
+           "{\"type\":\"create\",\"id\":\"c1\",\"name\":\"Oak "
+           "\xc3\xa9t\xc3\xa9\",\"start\":true,\"scenario\":%s}",
+           small_scenario);
+  if (PARSE_OK(text, &m)) {
+    CHECK_STR(m.name, "Oak \xc3\xa9t\xc3\xa9");
+    CHECK(m.start);
+    CHECK_STR(m.ref, "\"c1\"");
+  }
+  sylva_msg_free(&m);
+
+  if (PARSE_OK("{\"type\":\"subscribe\",\"run\":3}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_SUBSCRIBE);
+    CHECK_INT(m.run, 3);
+    CHECK(!m.has_since);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"subscribe\",\"run\":9007199254740991,\"since\":0}", &m)) {
+    CHECK_INT(m.run, 9007199254740991LL);
+    CHECK(m.has_since);
+    CHECK_INT(m.since, 0);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"subscribe\",\"run\":1.0e0,\"since\":41}", &m)) {
+    CHECK_INT(m.run, 1);
+    CHECK_INT(m.since, 41);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"unsubscribe\",\"run\":2}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_UNSUBSCRIBE);
+    CHECK_INT(m.run, 2);
+  }
+  sylva_msg_free(&m);
+
+  static const char *const actions[] = {"start", "pause", "step", "stop"};
+  static const sylva_control_action codes[] = {SYLVA_CONTROL_START, SYLVA_CONTROL_PAUSE,
+                                               SYLVA_CONTROL_STEP, SYLVA_CONTROL_STOP};
+  for (int i = 0; i < 4; i++) {
+    snprintf(text, sizeof text, "{\"type\":\"control\",\"run\":5,\"action\":\"%s\"}", actions[i]);
+    if (PARSE_OK(text, &m)) {
+      CHECK_INT(m.type, SYLVA_MSG_CONTROL);
+      CHECK_INT(m.action, codes[i]);
+      CHECK_INT(m.count, 1);
+      CHECK_INT(m.run, 5);
+    }
+    sylva_msg_free(&m);
+  }
+  if (PARSE_OK("{\"type\":\"control\",\"run\":5,\"action\":\"step\",\"count\":100000}", &m))
+    CHECK_INT(m.count, 100000);
+  sylva_msg_free(&m);
+
+  if (PARSE_OK("{\"type\":\"edit\",\"run\":4}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_EDIT);
+    CHECK_INT(m.add_plant_count + m.add_obstacle_count + m.remove_obstacle_count, 0);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"edit\",\"run\":4,\"add_plants\":[{\"id\":\"t9\",\"species\":\"oak\","
+               "\"roots\":[[1,2,0],[1.5,2,0]]},{\"id\":\"t10\",\"species\":\"pine\",\"roots\":[[0,"
+               "0,0]]}],"
+               "\"add_obstacles\":[{\"id\":\"board\",\"kind\":\"box\",\"min\":[0,0,3],\"max\":[1,1,"
+               "3.1]}],"
+               "\"remove_obstacles\":[\"wall\",\"fence\"]}",
+               &m)) {
+    CHECK_INT(m.add_plant_count, 2);
+    if (m.add_plant_count == 2) {
+      CHECK_STR(m.add_plants[0].id, "t9");
+      CHECK_INT(m.add_plants[0].species, -1);
+      CHECK_STR(m.add_plant_species[0], "oak");
+      CHECK_STR(m.add_plant_species[1], "pine");
+      CHECK_INT(m.add_plants[0].root_count, 2);
+      CHECK(m.add_plants[0].roots[1][0] == 1.5);
+      CHECK_INT(m.add_plants[1].root_count, 1);
+    }
+    CHECK_INT(m.add_obstacle_count, 1);
+    if (m.add_obstacle_count == 1) {
+      CHECK_STR(m.add_obstacles[0].id, "board");
+      CHECK(m.add_obstacles[0].max[2] == 3.1);
+    }
+    CHECK_INT(m.remove_obstacle_count, 2);
+    if (m.remove_obstacle_count == 2) CHECK_STR(m.remove_obstacles[1], "fence");
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"edit\",\"run\":4,\"add_plants\":[],\"add_obstacles\":[],\"remove_"
+               "obstacles\":[]}",
+               &m))
+    CHECK_INT(m.add_plant_count + m.add_obstacle_count + m.remove_obstacle_count, 0);
+  sylva_msg_free(&m);
+
+  if (PARSE_OK("{\"type\":\"fork\",\"run\":7,\"iteration\":0,\"name\":\"branch\"}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_FORK);
+    CHECK_INT(m.run, 7);
+    CHECK_INT(m.iteration, 0);
+    CHECK_STR(m.name, "branch");
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"get\",\"run\":7,\"iteration\":12}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_GET);
+    CHECK_INT(m.iteration, 12);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"light\",\"run\":7,\"z\":-1.5e-1}", &m)) {
+    CHECK_INT(m.type, SYLVA_MSG_LIGHT);
+    CHECK(m.z == -0.15);
+  }
+  sylva_msg_free(&m);
+
+  /* 255-byte names are fine, as is every type's name round trip. */
+  char name[300];
+  memset(name, 'n', 255);
+  name[255] = '\0';
+  snprintf(text, sizeof text, "{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"%s\"}",
+           name);
+  if (PARSE_OK(text, &m)) CHECK_INT(strlen(m.name), 255);
+  sylva_msg_free(&m);
+  for (int t = SYLVA_MSG_HELLO; t <= SYLVA_MSG_SCENARIOS; t++)
+    CHECK(sylva_msg_type_name((sylva_msg_type)t) != NULL);
+  CHECK_STR(sylva_msg_type_name(SYLVA_MSG_LIGHT), "light");
+  CHECK(sylva_msg_type_name((sylva_msg_type)99) == NULL);
+  sylva_msg_free(NULL);
+}
+
+/* ---- bad messages ---- */
+
+static void test_invalid(void) {
+  char text[8192];
+
+  /* top level, type, id */
+  PARSE_BAD("[]", "(root): expected an object, got an array");
+  PARSE_BAD("\"hello\"", "(root): expected an object, got a string");
+  PARSE_BAD("null", "(root): expected an object, got null");
+  PARSE_BAD("{}", "/type: required");
+  PARSE_BAD("{\"type\":3}", "/type: expected a string, got a number");
+  PARSE_BAD("{\"type\":\"foo\"}", "/type: unknown message type \"foo\"");
+  PARSE_BAD("{\"type\":\"Hello\"}", "/type: unknown message type \"Hello\"");
+  PARSE_BAD("{\"type\":\"list\",\"id\":[1]}", "/id: expected a string or a number, got an array");
+  PARSE_BAD("{\"type\":\"list\",\"id\":null}", "/id: expected a string or a number, got null");
+  PARSE_BAD("{\"type\":\"list\",\"id\":1e400}", "/id: number out of range");
+  PARSE_BAD("{\"type\":\"list\",\"id\":true}", "/id: expected a string or a number, got a boolean");
+  {
+    char id[400];
+    memset(id, 'i', 300);
+    id[300] = '\0';
+    snprintf(text, sizeof text, "{\"type\":\"list\",\"id\":\"%s\"}", id);
+    PARSE_BAD(text, "/id: 302 bytes of JSON; at most 256");
+  }
+  PARSE_BAD("{\"type\":\"list\",\"run\":1}", "/run: unknown key");
+  PARSE_BAD("{\"type\":\"list\",\"typo\":1}", "/typo: unknown key");
+  PARSE_BAD("{\"type\":\"hello\",\"tokn\":\"x\"}", "/tokn: unknown key (did you mean \"token\"?)");
+  PARSE_BAD("{\"type\":\"list\",\"type\":\"list\"}", "/type: duplicate key");
+  PARSE_BAD("{\"type\":\"scenarios\",\"x\":{}}", "/x: unknown key");
+
+  /* syntax */
+  PARSE_BAD("", "(syntax) line 1, column 1");
+  PARSE_BAD("{\"type\":\"list\",}", "(syntax)");
+  PARSE_BAD("{\"type\": list}", "(syntax) line 1, column 10");
+  PARSE_BAD("{\"type\":\"li\\u0000st\"}", "(syntax)");
+  PARSE_BAD("{\"type\":\"list\"} {}", "(syntax)");
+  PARSE_BAD("{\"type\":\"list\",\"id\":01}", "leading zero");
+  PARSE_BAD("{\"type\":\"list\"\n,\"id\":NaN}", "(syntax) line 2");
+  parse_bad_at("{\"type\":\"list\"}\0", 16, "(syntax)", __LINE__);
+  PARSE_BAD("{\"type\":\"hello\",\"token\":\"\xff\"}", "invalid UTF-8");
+
+  /* hello */
+  PARSE_BAD("{\"type\":\"hello\",\"token\":5}", "/token: expected a string, got a number");
+  PARSE_BAD("{\"type\":\"hello\",\"token\":null}", "/token: expected a string, got null");
+
+  /* create */
+  PARSE_BAD("{\"type\":\"create\"}", "/scenario: required");
+  PARSE_BAD("{\"type\":\"create\",\"scenario\":[]}", "/scenario: expected an object, got an array");
+  PARSE_BAD("{\"type\":\"create\",\"scenario\":{}}", "/scenario/format: required");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"\"}",
+           small_scenario);
+  PARSE_BAD(text, "/name: must be 1 to 255 bytes long, got 0");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":7}", small_scenario);
+  PARSE_BAD(text, "/name: expected a string, got a number");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"a\\nb\"}",
+           small_scenario);
+  PARSE_BAD(text, "/name: must not contain control characters (byte 1)");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"ab\\u007f\"}",
+           small_scenario);
+  PARSE_BAD(text, "/name: must not contain control characters (byte 2)");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"\\u0085\"}",
+           small_scenario);
+  PARSE_BAD(text, "/name: must not contain control characters (byte 0)");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"start\":1}", small_scenario);
+  PARSE_BAD(text, "/start: expected a boolean, got a number");
+  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"start\":\"true\"}",
+           small_scenario);
+  PARSE_BAD(text, "/start: expected a boolean, got a string");
+  PARSE_BAD(
+      "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
+      "1\",\"world\":{\"min\":[0,0,0],"
+      "\"max\":[1,1,1]},\"species\":{\"oak\":{}},\"plants\":[{\"id\":\"t\",\"species\":\"oak\","
+      "\"roots\":[[0,0]]}]}}",
+      "/scenario/plants/0/roots/0: expected [x, y, z]");
+  PARSE_BAD(
+      "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
+      "1\",\"world\":{\"min\":[0,0,0],"
+      "\"max\":[1,0,1]}}}",
+      "/scenario/world/max: must be greater than /scenario/world/min on every axis (y: 0 <= 0)");
+  PARSE_BAD(
+      "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
+      "1\",\"world\":{\"min\":[0,0,0],"
+      "\"max\":[1,1,1]},\"plants\":[{\"id\":\"t\",\"species\":\"fir\",\"roots\":[[0,0,0]]}]}}",
+      "/scenario/plants/0/species: unknown species \"fir\" (not a key of /scenario/species)");
+  PARSE_BAD(
+      "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
+      "1\",\"world\":{\"min\":[0,0,0],"
+      "\"max\":[1,1,1]},\"species\":{\"oak\":{}},\"plants\":[{\"id\":\"t\",\"species\":\"oak\","
+      "\"roots\":[[0,0,0]]},{\"id\":\"t\",\"species\":\"oak\",\"roots\":[[0.5,0,0]]}]}}",
+      "/scenario/plants/1/id: duplicate plant id \"t\" (also /scenario/plants/0/id)");
+  PARSE_BAD(
+      "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
+      "1\",\"world\":{\"min\":[0,0,0],"
+      "\"max\":[1,1,1]},\"obstacles\":[{\"id\":\"w\",\"kind\":\"box\",\"min\":[0,0,0],\"max\":[1,1,"
+      "1]},"
+      "{\"id\":\"w\",\"kind\":\"box\",\"min\":[0,0,0],\"max\":[1,1,1]}]}}",
+      "/scenario/obstacles/1/id: duplicate obstacle id \"w\" (also /scenario/obstacles/0/id)");
+  PARSE_BAD("{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
+            "1\",\"world\":{\"min\":[0,0,0],"
+            "\"max\":[100000,100000,100],\"voxel\":0.01}}}",
+            "/scenario/world: ");
+  PARSE_BAD("{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/1\",\"seed\":2e400,"
+            "\"world\":{\"min\":[0,0,0],\"max\":[1,1,1]}}}",
+            "/scenario/seed: number out of range");
+
+  /* run of every type that has one */
+  static const char *const with_run[] = {"subscribe", "unsubscribe", "control", "edit",
+                                         "fork",      "get",         "light"};
+  for (size_t i = 0; i < sizeof with_run / sizeof with_run[0]; i++) {
+    snprintf(text, sizeof text, "{\"type\":\"%s\"}", with_run[i]);
+    PARSE_BAD(text, "/run: required");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":0}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1, got 0");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":-3}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1, got -3");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1.5}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1, got 1.5");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":\"1\"}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1, got a string");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1e400}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1, got a number out of range");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":-1e400}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1, got a number out of range");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":9223372036854775808}", with_run[i]);
+    PARSE_BAD(text, "/run: expected an integer >= 1 and <= 9007199254740991 (2^53 - 1), got "
+                    "9.223372036854776e+18");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":9007199254740993}", with_run[i]);
+    PARSE_BAD(text, "(2^53 - 1), got 9007199254740992");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1,\"bogus\":1}", with_run[i]);
+    PARSE_BAD(text, "/bogus: unknown key");
+    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1%s}", with_run[i],
+             "0000000000000000000000000000000000000000000000000000000000000000000");
+    PARSE_BAD(text, "(syntax) line 1, column");
+  }
+
+  /* subscribe */
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":-1}",
+            "/since: must be in [0, 9007199254740991], got -1");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":0.5}",
+            "/since: must be an integer, got 0.5");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":null}",
+            "/since: expected a number, got null");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":1e308}",
+            "/since: must be in [0, 9007199254740991]");
+
+  /* control */
+  PARSE_BAD("{\"type\":\"control\",\"run\":1}", "/action: required");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"go\"}", "/action: unknown action \"go\"");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":1}",
+            "/action: expected a string, got a number");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"step\",\"count\":0}",
+            "/count: must be in [1, 100000], got 0");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"step\",\"count\":100001}",
+            "/count: must be in [1, 100000], got 100001");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"step\",\"count\":2.5}",
+            "/count: must be an integer, got 2.5");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"step\",\"count\":\"2\"}",
+            "/count: expected a number, got a string");
+  PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"start\",\"count\":2}",
+            "/count: only allowed with \"action\": \"step\"");
+
+  /* edit */
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":{}}",
+            "/add_plants: expected an array, got an object");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[1]}",
+            "/add_plants/0: expected an object, got a number");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"oak\"}]}",
+            "/add_plants/0/roots: required");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"oak\","
+            "\"roots\":[[0,0,0]],\"x\":1}]}",
+            "/add_plants/0/x: unknown key");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"oak\","
+            "\"roots\":[]}]}",
+            "/add_plants/0/roots: must hold at least one root");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"oak\","
+            "\"roots\":[[0,0,0],[0,\"1\",0]]}]}",
+            "/add_plants/0/roots/1/1: expected a number, got a string");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"oak\","
+            "\"roots\":[[0,0,1e999]]}]}",
+            "/add_plants/0/roots/0/2: number out of range");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"\",\"species\":\"oak\","
+            "\"roots\":[[0,0,0]]}]}",
+            "/add_plants/0/id: must be 1 to 63 bytes long, got 0");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"\",\"roots\":"
+            "[[0,0,0]]}]}",
+            "/add_plants/0/species: must be 1 to 63 bytes long, got 0");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":3,\"roots\":[["
+            "0,0,0]]}]}",
+            "/add_plants/0/species: expected a string, got a number");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+            "\"roots\":[[0,0,0]]},"
+            "{\"id\":\"b\",\"species\":\"o\",\"roots\":[[1,0,0]]},{\"id\":\"a\",\"species\":\"o\","
+            "\"roots\":[[2,0,0]]}]}",
+            "/add_plants/2/id: duplicate plant id \"a\" (also /add_plants/0/id)");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":[{\"id\":\"w\",\"kind\":\"sphere\","
+            "\"min\":[0,0,0],\"max\":[1,1,1]}]}",
+            "/add_obstacles/0/kind: unknown obstacle kind \"sphere\"");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":[{\"id\":\"w\",\"kind\":\"box\","
+            "\"min\":[0,0,0],\"max\":[1,0,1]}]}",
+            "/add_obstacles/0/max: must be greater than min on every axis (y: 0 <= 0)");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":[{\"id\":\"w\",\"min\":[0,0,0],\"max\":"
+            "[1,1,1]}]}",
+            "/add_obstacles/0/kind: required");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":[{\"id\":\"w\",\"kind\":\"box\","
+            "\"min\":[0,0,0],\"max\":[1,1,1]},"
+            "{\"id\":\"w\",\"kind\":\"box\",\"min\":[0,0,0],\"max\":[1,1,1]}]}",
+            "/add_obstacles/1/id: duplicate obstacle id \"w\" (also /add_obstacles/0/id)");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":\"w\"}",
+            "/add_obstacles: expected an array, got a string");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"remove_obstacles\":[\"a\",2]}",
+            "/remove_obstacles/1: expected a string, got a number");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"remove_obstacles\":[\"\"]}",
+            "/remove_obstacles/0: must be 1 to 63 bytes long, got 0");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"remove_obstacles\":[\"a\",\"b\",\"a\"]}",
+            "/remove_obstacles/2: duplicate obstacle id \"a\" (also /remove_obstacles/0)");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"remove_obstacles\":\"a\"}",
+            "/remove_obstacles: expected an array, got a string");
+  {
+    /* 1001 elements of each list */
+    static const char *const lists[] = {"add_plants", "add_obstacles", "remove_obstacles"};
+    static const char *const elements[] = {
+        "{\"id\":\"p\",\"species\":\"o\",\"roots\":[[0,0,0]]}",
+        "{\"id\":\"o\",\"kind\":\"box\",\"min\":[0,0,0],\"max\":[1,1,1]}", "\"x\""};
+    for (int l = 0; l < 3; l++) {
+      size_t cap = 1001 * 64 + 256, n = 0;
+      char *big = malloc(cap);
+      if (!big) continue;
+      n += (size_t)snprintf(big + n, cap - n, "{\"type\":\"edit\",\"run\":1,\"%s\":[", lists[l]);
+      for (int i = 0; i < 1001; i++)
+        n += (size_t)snprintf(big + n, cap - n, "%s%s", i ? "," : "", elements[l]);
+      snprintf(big + n, cap - n, "]}");
+      char want[80];
+      snprintf(want, sizeof want, "/%s: 1001 elements; at most 1000", lists[l]);
+      PARSE_BAD(big, want);
+      free(big);
+    }
+  }
+
+  /* fork, get, light */
+  PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"name\":\"x\"}", "/iteration: required");
+  PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":2}", "/name: required");
+  PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":-1,\"name\":\"x\"}",
+            "/iteration: must be in [0, 2147483647], got -1");
+  PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":2147483648,\"name\":\"x\"}",
+            "/iteration: must be in [0, 2147483647]");
+  {
+    char name[300];
+    memset(name, 'n', 256);
+    name[256] = '\0';
+    snprintf(text, sizeof text, "{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"%s\"}",
+             name);
+    PARSE_BAD(text, "/name: must be 1 to 255 bytes long, got 256");
+  }
+  PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"\\t\"}",
+            "/name: must not contain control characters");
+  PARSE_BAD("{\"type\":\"get\",\"run\":1}", "/iteration: required");
+  PARSE_BAD("{\"type\":\"get\",\"run\":1,\"iteration\":\"3\"}",
+            "/iteration: expected a number, got a string");
+  PARSE_BAD("{\"type\":\"get\",\"run\":1,\"iteration\":1.5}",
+            "/iteration: must be an integer, got 1.5");
+  PARSE_BAD("{\"type\":\"get\",\"run\":1,\"iteration\":1,\"z\":1}", "/z: unknown key");
+  PARSE_BAD("{\"type\":\"light\",\"run\":1}", "/z: required");
+  PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":\"1\"}", "/z: expected a number, got a string");
+  PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":1e400}", "/z: number out of range");
+  PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":-1e400}", "/z: number out of range");
+  PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":[1]}", "/z: expected a number, got an array");
+
+  /* The ref survives a failure so that the error can echo it; nothing else does. */
+  {
+    sylva_msg m;
+    char err[256];
+    const char *bad = "{\"id\":\"r1\",\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\","
+                      "\"species\":\"o\","
+                      "\"roots\":[[0,0,0]]},{\"id\":\"b\",\"species\":\"o\",\"roots\":[[0,0]]}]}";
+    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, err, sizeof err), SYLVA_EINVAL);
+    CHECK_STR(m.ref, "\"r1\"");
+    CHECK(m.add_plants == NULL && m.add_plant_count == 0 && m.add_plant_species == NULL);
+    CHECK(strstr(err, "/add_plants/1/roots/0: expected [x, y, z]") != NULL);
+    sylva_msg_free(&m);
+    CHECK(m.ref == NULL);
+    /* err may be NULL */
+    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, NULL, 0), SYLVA_EINVAL);
+    sylva_msg_free(&m);
+    CHECK_INT(sylva_msg_parse("[", 1, &m, NULL, 0), SYLVA_EINVAL);
+    sylva_msg_free(&m);
+    /* a short err buffer is cut, still NUL-terminated */
+    char tiny[8];
+    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, tiny, sizeof tiny), SYLVA_EINVAL);
+    CHECK_INT(strlen(tiny), 7);
+    sylva_msg_free(&m);
+  }
+
+  /* A key so long that the pointer is cut stays valid UTF-8 in the message. */
+  {
+    size_t n = 0;
+    n += (size_t)snprintf(text + n, sizeof text - n, "{\"type\":\"list\",\"");
+    for (int i = 0; i < 700; i++) n += (size_t)snprintf(text + n, sizeof text - n, "\xc3\xa9");
+    snprintf(text + n, sizeof text - n, "\":1}");
+    sylva_msg m;
+    char err[2048];
+    CHECK_INT(sylva_msg_parse(text, strlen(text), &m, err, sizeof err), SYLVA_EINVAL);
+    char quoted[2200];
+    snprintf(quoted, sizeof quoted, "\"%s\"", err);
+    CHECK_INT(sylva_json_check(quoted, strlen(quoted), 1, NULL, 0), 0);
+    sylva_msg_free(&m);
+  }
+}
+
+/* Deep nesting: 64 levels pass the syntax check, 65 do not. */
+static void test_depth(void) {
+  char text[1024];
+  for (int depth = 63; depth <= 66; depth++) {
+    size_t n = (size_t)snprintf(text, sizeof text, "{\"type\":\"list\",\"x\":");
+    for (int i = 1; i < depth; i++) text[n++] = '[';
+    for (int i = 1; i < depth; i++) text[n++] = ']';
+    snprintf(text + n, sizeof text - n, "}");
+    PARSE_BAD(text, depth <= 64 ? "/x: unknown key" : "(syntax) line 1, column");
+  }
+  size_t n = 0;
+  for (int i = 0; i < 100000 && n + 2 < sizeof text; i++) text[n++] = '[';
+  text[n] = '\0';
+  PARSE_BAD(text, "nesting deeper than 64");
+  /* very deep, far past the limit: no stack trouble */
+  size_t big = 2000000;
+  char *deep = malloc(big + 1);
+  if (deep) {
+    memset(deep, '[', big / 2);
+    memset(deep + big / 2, ']', big / 2);
+    deep[big] = '\0';
+    PARSE_BAD(deep, "nesting deeper than 64");
+    free(deep);
+  }
+}
+
+/* ---- JSONTestSuite, raw and wrapped ---- */
+
+static int cmp_names(const void *a, const void *b) {
+  return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static void test_suite(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) {
+    check_failed++;
+    fprintf(stderr, "cannot open the JSONTestSuite directory %s\n", dir);
+    return;
+  }
+  char **names = NULL;
+  size_t count = 0, cap = 0;
+  for (struct dirent *e; (e = readdir(d));) {
+    size_t len = strlen(e->d_name);
+    if (len < 6 || strcmp(e->d_name + len - 5, ".json") != 0) continue;
+    if (count == cap) {
+      cap = cap ? cap * 2 : 512;
+      char **bigger = realloc(names, cap * sizeof *names);
+      if (!bigger) break;
+      names = bigger;
+    }
+    names[count++] = strdup(e->d_name);
+  }
+  closedir(d);
+  qsort(names, count, sizeof *names, cmp_names);
+  CHECK(count >= 300);
+
+  static const char *const wraps[][2] = {
+      {"{\"type\":\"create\",\"id\":7,\"scenario\":", "}"},
+      {"{\"type\":\"list\",\"id\":7,\"x\":", "}"},
+      {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"add_plants\":", "}"},
+      {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"add_obstacles\":[", "]}"},
+      {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"remove_obstacles\":", "}"},
+      {"{\"type\":\"hello\",\"id\":7,\"token\":", "}"},
+      {"{\"type\":\"light\",\"id\":7,\"run\":1,\"z\":", "}"},
+      {"{\"type\":\"control\",\"id\":7,\"run\":1,\"action\":\"step\",\"count\":", "}"},
+      {"{\"type\":\"list\",\"id\":", "}"},
+  };
+  size_t raw_errors = 0, wrapped_runs = 0;
+  for (size_t f = 0; f < count; f++) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, names[f]);
+    size_t len = 0;
+    char *data = read_file(path, &len);
+    if (!data) {
+      check_failed++;
+      fprintf(stderr, "cannot read %s\n", path);
+      continue;
+    }
+    sylva_msg m;
+    char err[512];
+    int rc = sylva_msg_parse(data, len, &m, err, sizeof err);
+    if (rc == SYLVA_EINVAL && err[0]) {
+      raw_errors++;
+    } else {
+      check_failed++;
+      fprintf(stderr, "JSONTestSuite %s raw: expected an error, got %d\n", names[f], rc);
+    }
+    sylva_msg_free(&m);
+
+    for (size_t w = 0; w < sizeof wraps / sizeof wraps[0]; w++) {
+      size_t n1 = strlen(wraps[w][0]), n2 = strlen(wraps[w][1]);
+      char *text = malloc(n1 + len + n2 + 1);
+      if (!text) continue;
+      memcpy(text, wraps[w][0], n1);
+      memcpy(text + n1, data, len);
+      memcpy(text + n1 + len, wraps[w][1], n2);
+      text[n1 + len + n2] = '\0';
+      rc = sylva_msg_parse(text, n1 + len + n2, &m, err, sizeof err);
+      wrapped_runs++;
+      bool valid_json = sylva_json_check_ex(text, n1 + len + n2, 64,
+                                            SYLVA_JSON_NO_NUL_ESCAPE | SYLVA_JSON_CJSON_NUMBERS,
+                                            NULL, 0) == 0;
+      /* An accepted message has no error text; a rejected one has, and a
+       * rejected message that is well-formed JSON still carries the ref. */
+      if (rc == 0) {
+        if (w < 2) {
+          check_failed++;
+          fprintf(stderr, "JSONTestSuite %s in wrap %zu: accepted\n", names[f], w);
+        }
+      } else if (rc != SYLVA_EINVAL || !err[0]) {
+        check_failed++;
+        fprintf(stderr, "JSONTestSuite %s in wrap %zu: status %d\n", names[f], w, rc);
+      } else if (valid_json && w + 1 < sizeof wraps / sizeof wraps[0] &&
+                 !(m.ref && strcmp(m.ref, "7") == 0)) {
+        check_failed++;
+        fprintf(stderr, "JSONTestSuite %s in wrap %zu: ref lost (%s)\n", names[f], w, err);
+      }
+      sylva_msg_free(&m);
+      free(text);
+    }
+    free(data);
+  }
+  CHECK_INT(raw_errors, count);
+  CHECK_INT(wrapped_runs, count * (sizeof wraps / sizeof wraps[0]));
+  for (size_t f = 0; f < count; f++) free(names[f]);
+  free(names);
+}
+
+/* ---- encoders ---- */
+
+static void test_encoders(void) {
+  char *text = sylva_msg_welcome("0.1.0", true);
+  CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
+                  "\"0.1.0\"},\"auth\":true}");
+  cJSON *j = VALID_JSON(text);
+  cJSON_Delete(j);
+  free(text);
+  text = sylva_msg_welcome(NULL, false);
+  j = VALID_JSON(text);
+  if (j) {
+    CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(j, "auth")));
+    CHECK_INT(num_of(j, "protocol"), 1);
+  }
+  cJSON_Delete(j);
+  free(text);
+
+  static const char *const codes[] = {"bad_request", "unknown_run", "unauthorized",
+                                      "too_large",   "busy",        "internal"};
+  for (size_t i = 0; i < 6; i++) {
+    text = sylva_msg_error(codes[i], "/run: expected an integer >= 1, got \"x\"\n\t\x01",
+                           i % 2 ? "\"r\\\"1\"" : NULL);
+    j = VALID_JSON(text);
+    if (j) {
+      CHECK_STR(str_of(j, "type"), "error");
+      CHECK_STR(str_of(j, "code"), codes[i]);
+      CHECK_STR(str_of(j, "message"), "/run: expected an integer >= 1, got \"x\"\n\t\x01");
+      if (i % 2) CHECK_STR(str_of(j, "ref"), "r\"1");
+      else CHECK(cJSON_GetObjectItemCaseSensitive(j, "ref") == NULL);
+    }
+    cJSON_Delete(j);
+    free(text);
+  }
+  text = sylva_msg_error("bad_request", "cut \xc3", "12");
+  CHECK_STR(text,
+            "{\"type\":\"error\",\"code\":\"bad_request\",\"message\":\"cut \\ufffd\",\"ref\":12}");
+  j = VALID_JSON(text);
+  cJSON_Delete(j);
+  free(text);
+
+  /* a parse error echoed through the encoder is valid JSON */
+  {
+    sylva_msg m;
+    char err[512];
+    const char *bad = "{\"id\":\"\\u00e9\\ud83c\\udf33\",\"type\":\"nope\\u00e9\"}";
+    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, err, sizeof err), SYLVA_EINVAL);
+    text = sylva_msg_error("bad_request", err, m.ref);
+    j = VALID_JSON(text);
+    if (j) {
+      CHECK_STR(str_of(j, "ref"), "\xc3\xa9\xf0\x9f\x8c\xb3");
+      CHECK(strstr(str_of(j, "message") ? str_of(j, "message") : "", "unknown message type") !=
+            NULL);
+    }
+    cJSON_Delete(j);
+    free(text);
+    sylva_msg_free(&m);
+  }
+
+  text = sylva_msg_created(3, "oak \"stand\"", "\"c\"");
+  CHECK_STR(text, "{\"type\":\"created\",\"run\":3,\"name\":\"oak \\\"stand\\\"\",\"ref\":\"c\"}");
+  j = VALID_JSON(text);
+  cJSON_Delete(j);
+  free(text);
+
+  text = sylva_msg_status(9007199254740992LL, "paused", 12, NULL);
+  CHECK_STR(
+      text,
+      "{\"type\":\"status\",\"run\":9007199254740992,\"status\":\"paused\",\"iteration\":12}");
+  j = VALID_JSON(text);
+  cJSON_Delete(j);
+  free(text);
+  static const char *const statuses[] = {"running", "paused", "finished", "failed"};
+  for (int i = 0; i < 4; i++) {
+    text = sylva_msg_status(2, statuses[i], i, "5");
+    j = VALID_JSON(text);
+    if (j) {
+      CHECK_STR(str_of(j, "status"), statuses[i]);
+      CHECK_INT(num_of(j, "iteration"), i);
+      CHECK_INT(num_of(j, "ref"), 5);
+    }
+    cJSON_Delete(j);
+    free(text);
+  }
+
+  sylva_run_summary runs[] = {
+      {1, "wall", "running", 4, 5, 1234},
+      {2, "tab\there \xe2\x9c\x93", "finished", 40, 1, 9000000000LL},
+      {3, NULL, "failed", 0, 0, 0},
+  };
+  text = sylva_msg_runs(runs, 3, "\"L\"");
+  j = VALID_JSON(text);
+  if (j) {
+    CHECK_STR(str_of(j, "type"), "runs");
+    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(j, "runs");
+    CHECK_INT(cJSON_GetArraySize(arr), 3);
+    const cJSON *r1 = cJSON_GetArrayItem(arr, 1);
+    CHECK_STR(str_of(r1, "name"), "tab\there \xe2\x9c\x93");
+    CHECK(num_of(r1, "nodes") == 9000000000.0);
+    CHECK_STR(str_of(cJSON_GetArrayItem(arr, 2), "name"), "");
+    CHECK_STR(str_of(j, "ref"), "L");
+  }
+  cJSON_Delete(j);
+  free(text);
+  text = sylva_msg_runs(runs, 1, NULL);
+  CHECK_STR(text, "{\"type\":\"runs\",\"runs\":[{\"run\":1,\"name\":\"wall\",\"status\":"
+                  "\"running\",\"iteration\":4,\"stems\":5,\"nodes\":1234}]}");
+  free(text);
+  text = sylva_runs_json(runs, 1);
+  CHECK_STR(text, "[{\"run\":1,\"name\":\"wall\",\"status\":\"running\",\"iteration\":4,\"stems\":"
+                  "5,\"nodes\":1234}]");
+  free(text);
+  text = sylva_runs_json(NULL, 0);
+  CHECK_STR(text, "[]");
+  free(text);
+  text = sylva_msg_runs(NULL, 0, NULL);
+  CHECK_STR(text, "{\"type\":\"runs\",\"runs\":[]}");
+  free(text);
+
+  const char *names[] = {"wall", "urban"};
+  const char *titles[] = {"Tree beside a wall", NULL};
+  text = sylva_msg_scenarios(names, titles, 2, "1");
+  CHECK_STR(
+      text,
+      "{\"type\":\"scenarios\",\"scenarios\":[{\"name\":\"wall\",\"title\":\"Tree beside a wall\"},"
+      "{\"name\":\"urban\",\"title\":\"urban\"}],\"ref\":1}");
+  j = VALID_JSON(text);
+  cJSON_Delete(j);
+  free(text);
+  text = sylva_msg_scenarios(names, NULL, 0, NULL);
+  CHECK_STR(text, "{\"type\":\"scenarios\",\"scenarios\":[]}");
+  free(text);
+}
+
+/* ---- snapshot + deltas = skeleton ---- */
+
+typedef struct model_node {
+  bool live;
+  double parent, plant, stem, x, y, z, r, birth;
+} model_node;
+
+typedef struct model {
+  model_node *nodes;
+  size_t cap;
+} model;
+
+static model_node *model_at(model *m, double id) {
+  if (!(id >= 0) || id > 1e8 || id != floor(id)) return NULL;
+  size_t i = (size_t)id;
+  if (i >= m->cap) {
+    size_t cap = m->cap ? m->cap : 1024;
+    while (cap <= i) cap *= 2;
+    model_node *bigger = realloc(m->nodes, cap * sizeof *bigger);
+    if (!bigger) return NULL;
+    memset(bigger + m->cap, 0, (cap - m->cap) * sizeof *bigger);
+    m->nodes = bigger;
+    m->cap = cap;
+  }
+  return &m->nodes[i];
+}
+
+static double item_num(const cJSON *arr, int i) {
+  const cJSON *e = cJSON_GetArrayItem(arr, i);
+  return cJSON_IsNumber(e) ? e->valuedouble : NAN;
+}
+
+/* Node lists of a skeleton-shaped tree ("plants": [{"stems": [{"nodes": ...}]}])
+ * into the model. */
+static void model_load(model *m, const cJSON *root) {
+  const cJSON *plants = cJSON_GetObjectItemCaseSensitive(root, "plants");
+  int p = 0;
+  for (const cJSON *pl = plants ? plants->child : NULL; pl; pl = pl->next, p++) {
+    int k = 0;
+    const cJSON *stems = cJSON_GetObjectItemCaseSensitive(pl, "stems");
+    for (const cJSON *st = stems ? stems->child : NULL; st; st = st->next, k++) {
+      const cJSON *nodes = cJSON_GetObjectItemCaseSensitive(st, "nodes");
+      for (const cJSON *n = nodes ? nodes->child : NULL; n; n = n->next) {
+        model_node *mn = model_at(m, item_num(n, 0));
+        if (!mn) {
+          check_failed++;
+          continue;
+        }
+        *mn = (model_node){true, item_num(n, 1), p, k, item_num(n, 2), item_num(n, 3),
+                           item_num(n, 4), item_num(n, 5), item_num(n, 6)};
+      }
+    }
+  }
+}
+
+/* Applies one delta; returns the number of shed subtree roots. */
+static size_t model_apply(model *m, const cJSON *delta) {
+  double iteration = num_of(delta, "iteration");
+  const cJSON *added = cJSON_GetObjectItemCaseSensitive(delta, "added");
+  for (const cJSON *n = added ? added->child : NULL; n; n = n->next) {
+    CHECK_INT(cJSON_GetArraySize(n), 8);
+    model_node *mn = model_at(m, item_num(n, 0));
+    if (!mn) {
+      check_failed++;
+      continue;
+    }
+    CHECK(!mn->live);
+    double parent = item_num(n, 1);
+    model_node *pn = parent >= 0 ? model_at(m, parent) : NULL;
+    CHECK(parent == -1 || (pn && pn->live));
+    *mn = (model_node){true, parent, item_num(n, 2), item_num(n, 3), item_num(n, 4),
+                       item_num(n, 5), item_num(n, 6), item_num(n, 7), iteration};
+  }
+  const cJSON *radii = cJSON_GetObjectItemCaseSensitive(delta, "radii");
+  for (const cJSON *r = radii ? radii->child : NULL; r; r = r->next) {
+    CHECK_INT(cJSON_GetArraySize(r), 2);
+    model_node *mn = model_at(m, item_num(r, 0));
+    CHECK(mn && mn->live);
+    if (mn) mn->r = item_num(r, 1);
+  }
+  const cJSON *shed = cJSON_GetObjectItemCaseSensitive(delta, "shed");
+  size_t shed_count = 0;
+  bool *dead = calloc(m->cap ? m->cap : 1, sizeof *dead);
+  if (!dead) return 0;
+  for (const cJSON *s = shed ? shed->child : NULL; s; s = s->next) {
+    model_node *mn = model_at(m, s->valuedouble);
+    if (mn && mn->live) dead[(size_t)s->valuedouble] = true;
+    shed_count++;
+  }
+  /* Subtrees, until nothing changes (no assumption on the id order). */
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t i = 0; i < m->cap; i++) {
+      model_node *mn = &m->nodes[i];
+      if (!mn->live || dead[i] || mn->parent < 0 || (size_t)mn->parent >= m->cap) continue;
+      if (dead[(size_t)mn->parent]) dead[i] = changed = true;
+    }
+  }
+  for (size_t i = 0; i < m->cap; i++)
+    if (dead[i]) m->nodes[i].live = false;
+  free(dead);
+  return shed_count;
+}
+
+/* The model must hold exactly the skeleton's nodes. */
+static void model_compare(model *m, const cJSON *skeleton, int iteration) {
+  size_t live = 0, seen = 0, bad = 0;
+  for (size_t i = 0; i < m->cap; i++) live += m->nodes[i].live;
+  const cJSON *plants = cJSON_GetObjectItemCaseSensitive(skeleton, "plants");
+  int p = 0;
+  for (const cJSON *pl = plants ? plants->child : NULL; pl; pl = pl->next, p++) {
+    int k = 0;
+    const cJSON *stems = cJSON_GetObjectItemCaseSensitive(pl, "stems");
+    for (const cJSON *st = stems ? stems->child : NULL; st; st = st->next, k++) {
+      const cJSON *nodes = cJSON_GetObjectItemCaseSensitive(st, "nodes");
+      for (const cJSON *n = nodes ? nodes->child : NULL; n; n = n->next) {
+        seen++;
+        double id = item_num(n, 0);
+        model_node *mn = id < (double)m->cap ? model_at(m, id) : NULL;
+        bool same = mn && mn->live && mn->parent == item_num(n, 1) && mn->plant == p &&
+                    mn->stem == k && mn->x == item_num(n, 2) && mn->y == item_num(n, 3) &&
+                    mn->z == item_num(n, 4) && mn->r == item_num(n, 5) &&
+                    mn->birth == item_num(n, 6);
+        if (!same && bad++ < 5) {
+          fprintf(stderr,
+                  "iteration %d: node %.0f differs: skeleton [%.17g,%.17g,%.17g,%.17g,%.17g,%.17g] "
+                  "p%d s%d",
+                  iteration, id, item_num(n, 1), item_num(n, 2), item_num(n, 3), item_num(n, 4),
+                  item_num(n, 5), item_num(n, 6), p, k);
+          if (mn && mn->live)
+            fprintf(stderr, ", model [%.17g,%.17g,%.17g,%.17g,%.17g,%.17g] p%.0f s%.0f\n",
+                    mn->parent, mn->x, mn->y, mn->z, mn->r, mn->birth, mn->plant, mn->stem);
+          else
+            fprintf(stderr, ", not in the model\n");
+        }
+      }
+    }
+  }
+  if (bad || seen != live) {
+    check_failed++;
+    fprintf(stderr, "iteration %d: %zu nodes differ; skeleton %zu nodes, model %zu\n", iteration,
+            bad, seen, live);
+  } else {
+    check_passed++;
+  }
+}
+
+/* The text from "\"obstacles\":" up to ",\"stats\"" or the closing "}" of a skeleton. */
+static char *obstacles_and_plants(const char *text) {
+  const char *from = text ? strstr(text, "\"obstacles\":") : NULL;
+  if (!from) return NULL;
+  const char *to = strstr(from, ",\"stats\":");
+  if (!to) to = strstr(from, "]}\n") ? strstr(from, "]}\n") + 1 : NULL;
+  if (!to) return NULL;
+  size_t n = (size_t)(to - from);
+  char *out = malloc(n + 1);
+  if (out) {
+    memcpy(out, from, n);
+    out[n] = '\0';
+  }
+  return out;
+}
+
+static void check_snapshot_matches_skeleton(const char *snapshot, const sylva_world *w) {
+  char *skeleton = sylva_encode_skeleton(w);
+  char *a = obstacles_and_plants(snapshot), *b = obstacles_and_plants(skeleton);
+  CHECK(a && b && strcmp(a, b) == 0);
+  /* and the world part */
+  const char *va = snapshot ? strstr(snapshot, "\"voxel\":") : NULL;
+  const char *vb = skeleton ? strstr(skeleton, "\"voxel\":") : NULL;
+  CHECK(va && vb && a && strncmp(va, vb, (size_t)(strstr(va, "\"obstacles\":") - va)) == 0);
+  free(a);
+  free(b);
+  free(skeleton);
+}
+
+static void test_snapshot_deltas(void) {
+  sylva_world_def def = sylva_default_world_def();
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_world_create(&def, &w), 0);
+  if (!w) return;
+  sylva_species_def sp = sylva_default_species_def();
+  sp.tropism[0] = 0, sp.tropism[1] = 0, sp.tropism[2] = 1;
+  int species = sylva_world_add_species(w, &sp, "oak");
+  CHECK(species >= 0);
+  sylva_obstacle_def wall = {.label = "wall", .min = {1.0, -5, 0}, .max = {1.2, 5, 4}};
+  CHECK(sylva_world_add_obstacle(w, &wall) >= 0);
+  const double tree_roots[][3] = {{0, 0, 0}};
+  const double shrub_roots[][3] = {{-2, -2, 0}, {-2.6, -1.7, 0}};
+  sylva_plant_def tree = {species, "t1", tree_roots, 1};
+  sylva_plant_def shrub = {species, "s\"1", shrub_roots, 2};
+  CHECK_INT(sylva_world_add_plant(w, &tree, NULL), 0);
+  CHECK_INT(sylva_world_add_plant(w, &shrub, NULL), 1);
+
+  char *snap = sylva_msg_snapshot(4, 10, w, "\"sub\"");
+  cJSON *sj = VALID_JSON(snap);
+  model m = {0};
+  if (sj) {
+    CHECK_STR(str_of(sj, "type"), "snapshot");
+    CHECK_INT(num_of(sj, "run"), 4);
+    CHECK_INT(num_of(sj, "seq"), 10);
+    CHECK_INT(num_of(sj, "iteration"), 0);
+    CHECK(num_of(sj, "voxel") == 0.05);
+    CHECK_STR(str_of(sj, "ref"), "sub");
+    CHECK_INT(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(sj, "stats")), 3);
+    CHECK_INT(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(sj, "plants")), 2);
+    CHECK_STR(str_of(cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(sj, "stats"), 2), "plant"),
+              "s\"1");
+    model_load(&m, sj);
+  }
+  check_snapshot_matches_skeleton(snap, w);
+  char *skel = sylva_encode_skeleton(w);
+  cJSON *kj = skel ? cJSON_Parse(skel) : NULL;
+  model_compare(&m, kj, 0);
+  cJSON_Delete(kj);
+  free(skel);
+  cJSON_Delete(sj);
+  free(snap);
+
+  size_t total_added = 0, total_radii = 0, total_shed = 0;
+  for (int it = 1; it <= 15; it++) {
+    const sylva_journal *j = NULL;
+    int rc = sylva_world_step(w, &j);
+    CHECK_INT(rc, 0);
+    if (rc || !j) break;
+    char *delta = sylva_msg_delta(4, 10 + it, w, j);
+    cJSON *dj = VALID_JSON(delta);
+    if (dj) {
+      CHECK_STR(str_of(dj, "type"), "delta");
+      CHECK_INT(num_of(dj, "run"), 4);
+      CHECK_INT(num_of(dj, "seq"), 10 + it);
+      CHECK_INT(num_of(dj, "iteration"), it);
+      CHECK(cJSON_GetObjectItemCaseSensitive(dj, "ref") == NULL);
+      total_added += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "added"));
+      total_radii += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "radii"));
+      total_shed += model_apply(&m, dj);
+      /* the stats are those of the stats line */
+      char *line = sylva_encode_stats_line(w, j, 0);
+      cJSON *lj = line ? cJSON_Parse(line) : NULL;
+      CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"),
+                                cJSON_GetObjectItemCaseSensitive(dj, "stats"), true));
+      cJSON_Delete(lj);
+      free(line);
+    }
+    skel = sylva_encode_skeleton(w);
+    kj = skel ? cJSON_Parse(skel) : NULL;
+    CHECK(kj != NULL);
+    model_compare(&m, kj, it);
+    cJSON_Delete(kj);
+    free(skel);
+    cJSON_Delete(dj);
+    free(delta);
+  }
+  /* the journal's stats are also what a fresh snapshot reports */
+  snap = sylva_msg_snapshot(4, 25, w, NULL);
+  sj = VALID_JSON(snap);
+  check_snapshot_matches_skeleton(snap, w);
+  if (sj) {
+    CHECK_INT(num_of(sj, "iteration"), 15);
+    CHECK(cJSON_GetObjectItemCaseSensitive(sj, "ref") == NULL);
+    model fresh = {0};
+    model_load(&fresh, sj);
+    skel = sylva_encode_skeleton(w);
+    kj = skel ? cJSON_Parse(skel) : NULL;
+    model_compare(&fresh, kj, 15);
+    cJSON_Delete(kj);
+    free(skel);
+    free(fresh.nodes);
+  }
+  cJSON_Delete(sj);
+  free(snap);
+  printf("snapshot + 15 deltas: %zu nodes added, %zu radii, %zu subtrees shed\n", total_added,
+         total_radii, total_shed);
+  CHECK(total_added > 100);
+  CHECK(total_radii > 0);
+  free(m.nodes);
+  sylva_world_destroy(w);
+}
+
+/* ---- light slice ---- */
+
+static int b64_value(char c) {
+  if (c >= 'A' && c <= 'Z') return c - 'A';
+  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+  if (c >= '0' && c <= '9') return c - '0' + 52;
+  if (c == '+') return 62;
+  if (c == '/') return 63;
+  return -1;
+}
+
+/* Decodes padded base64; NULL if malformed. */
+static unsigned char *b64_decode(const char *s, size_t *n) {
+  size_t len = strlen(s);
+  if (len % 4) return NULL;
+  unsigned char *out = malloc(len / 4 * 3 + 1);
+  if (!out) return NULL;
+  size_t k = 0;
+  for (size_t i = 0; i < len; i += 4) {
+    int v[4];
+    int pad = 0;
+    for (int q = 0; q < 4; q++) {
+      if (s[i + q] == '=' && i + 4 == len && q >= 2) {
+        v[q] = 0;
+        pad++;
+      } else if ((v[q] = b64_value(s[i + q])) < 0 || pad) {
+        free(out);
+        return NULL;
+      }
+    }
+    uint32_t x = (uint32_t)v[0] << 18 | (uint32_t)v[1] << 12 | (uint32_t)v[2] << 6 | (uint32_t)v[3];
+    out[k++] = (unsigned char)(x >> 16);
+    if (pad < 2) out[k++] = (unsigned char)(x >> 8);
+    if (pad < 1) out[k++] = (unsigned char)x;
+  }
+  *n = k;
+  return out;
+}
+
+static void check_slice(const sylva_world *w, double z, double want_z, const char *ref,
+                        unsigned char **values_out, int *nx_out) {
+  char *text = sylva_msg_light_slice(2, w, z, ref);
+  cJSON *j = VALID_JSON(text);
+  *values_out = NULL;
+  if (j) {
+    const sylva_world_def *def = sylva_world_get_def(w);
+    int dims[3];
+    sylva_world_dims(w, dims);
+    CHECK_STR(str_of(j, "type"), "light_slice");
+    CHECK_INT(num_of(j, "run"), 2);
+    CHECK_INT(num_of(j, "iteration"), sylva_world_iteration(w));
+    CHECK_NEAR(num_of(j, "z"), want_z, 1e-9);
+    CHECK(num_of(j, "voxel") == def->voxel);
+    const cJSON *origin = cJSON_GetObjectItemCaseSensitive(j, "origin");
+    CHECK(item_num(origin, 0) == def->min[0] && item_num(origin, 1) == def->min[1]);
+    CHECK_INT(num_of(j, "nx"), dims[0]);
+    CHECK_INT(num_of(j, "ny"), dims[1]);
+    if (ref) CHECK_STR(str_of(j, "ref"), "s");
+    size_t n = 0;
+    const char *b64 = str_of(j, "values");
+    unsigned char *values = b64 ? b64_decode(b64, &n) : NULL;
+    CHECK(values != NULL);
+    CHECK_INT(n, (size_t)dims[0] * (size_t)dims[1]);
+    if (values && n == (size_t)dims[0] * (size_t)dims[1]) {
+      /* every byte is round(light * 255) at the voxel centre, x fastest */
+      size_t differ = 0;
+      for (int y = 0; y < dims[1]; y++)
+        for (int x = 0; x < dims[0]; x++) {
+          double p[3] = {def->min[0] + (x + 0.5) * def->voxel, def->min[1] + (y + 0.5) * def->voxel,
+                         want_z};
+          long want = lround(sylva_world_light_at(w, p) * 255);
+          long got = values[(size_t)y * (size_t)dims[0] + (size_t)x];
+          if (want != got || want < 0 || want > 255) differ++;
+        }
+      CHECK_INT(differ, 0);
+      *values_out = values;
+      *nx_out = dims[0];
+    } else {
+      free(values);
+    }
+  }
+  cJSON_Delete(j);
+  free(text);
+}
+
+static void test_light_slice(void) {
+  sylva_world_def def = sylva_default_world_def();
+  def.min[0] = -2, def.min[1] = -1.5, def.max[0] = 2, def.max[1] = 1.5, def.max[2] = 4;
+  def.voxel = 0.1;
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_world_create(&def, &w), 0);
+  if (!w) return;
+  /* a board over x in [0, 2), y in [-1.5, 1.5), z in [2, 2.2) */
+  sylva_obstacle_def board = {.label = "board", .min = {0, -1.5, 2}, .max = {2, 1.5, 2.2}};
+  CHECK(sylva_world_add_obstacle(w, &board) >= 0);
+  sylva_species_def sp = sylva_default_species_def();
+  sp.tropism[2] = 1;
+  int species = sylva_world_add_species(w, &sp, "oak");
+  const double roots[][3] = {{-1, 0, 0}};
+  sylva_plant_def tree = {species, "t1", roots, 1};
+  CHECK_INT(sylva_world_add_plant(w, &tree, NULL), 0);
+  for (int i = 0; i < 3; i++) CHECK_INT(sylva_world_step(w, NULL), 0);
+
+  unsigned char *values = NULL;
+  int nx = 0;
+  /* inside the board: every cell over the board is 0 */
+  check_slice(w, 2.1, 2.15, "\"s\"", &values, &nx);
+  if (values) {
+    size_t zero = 0;
+    for (int y = 0; y < 30; y++)
+      for (int x = 20; x < 40; x++) zero += values[y * nx + x] == 0;
+    CHECK_INT(zero, 20 * 30);
+    CHECK(values[15 * nx + 2] > 0); /* beside the board, at the edge of the world */
+  }
+  free(values);
+  /* just under the board */
+  check_slice(w, 1.95, 1.95, NULL, &values, &nx);
+  if (values) {
+    size_t dark = 0;
+    for (int y = 0; y < 30; y++)
+      for (int x = 20; x < 40; x++) dark += values[y * nx + x] == 0;
+    CHECK_INT(dark, 20 * 30);
+    CHECK(values[15 * nx + 2] > 0);
+  }
+  free(values);
+  /* the top layer is in full light; z is clamped into the world */
+  check_slice(w, 1e9, 3.95, NULL, &values, &nx);
+  if (values) {
+    size_t full = 0;
+    for (int i = 0; i < 40 * 30; i++) full += values[i] == 255;
+    CHECK_INT(full, 40 * 30);
+  }
+  free(values);
+  check_slice(w, -7, 0.05, NULL, &values, &nx);
+  free(values);
+  check_slice(w, NAN, 0.05, NULL, &values, &nx);
+  free(values);
+  check_slice(w, 4.0, 3.95, NULL, &values, &nx);
+  free(values);
+  /* 0.3 / 0.1 is 2.9999999999999996: layer 2, as the core's voxel lookup has it */
+  check_slice(w, 0.3, 0.25, NULL, &values, &nx);
+  free(values);
+  sylva_world_destroy(w);
+
+  /* an odd number of cells exercises base64 padding: 3 x 1 and 1 x 1 and 2 x 1 */
+  for (int cells = 1; cells <= 4; cells++) {
+    sylva_world_def d = sylva_default_world_def();
+    d.min[0] = 0, d.max[0] = cells * 0.5, d.min[1] = 0, d.max[1] = 0.5, d.max[2] = 1;
+    d.voxel = 0.5;
+    CHECK_INT(sylva_world_create(&d, &w), 0);
+    if (!w) continue;
+    check_slice(w, 0.2, 0.25, NULL, &values, &nx);
+    CHECK(values != NULL);
+    free(values);
+    sylva_world_destroy(w);
+  }
+}
+
+int main(int argc, char **argv) {
+  test_valid();
+  test_invalid();
+  test_depth();
+  test_encoders();
+  test_snapshot_deltas();
+  test_light_slice();
+  if (argc > 1) test_suite(argv[1]);
+  else {
+    check_failed++;
+    fprintf(stderr, "usage: test-protocol JSONTESTSUITE_DIR\n");
+  }
+  return check_summary("protocol");
+}
