@@ -29,8 +29,12 @@ int sylva__shed(sylva_world *w, int iteration) {
       if (e < d->r_s) {
         s->flags[i] |= SYLVA__NODE_DOOMED;
         doomed++;
-        if (SYLVA__VEC_RESERVE(w->shed, w->shed.len + 1)) return SYLVA_ENOMEM;
-        w->shed.data[w->shed.len++] = s->id[i];
+        /* a branch born this iteration was never announced as added: it is not
+         * reported as shed either */
+        if (s->birth[i] != iteration) {
+          if (SYLVA__VEC_RESERVE(w->shed, w->shed.len + 1)) return SYLVA_ENOMEM;
+          w->shed.data[w->shed.len++] = s->id[i];
+        }
         s->lateral_child[p] = -1;
         s->flags[p] |= SYLVA__NODE_SCAR;
       }
