@@ -18,4 +18,7 @@ int cmd_runs(int argc, char **argv);
 /** `sylva export --db FILE --name NAME --format F -o OUT`: export a stored iteration. */
 int cmd_export(int argc, char **argv);
 
+/** `sylva serve [options]`: the daemon. */
+int cmd_serve(int argc, char **argv);
+
 #endif

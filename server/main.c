@@ -23,6 +23,7 @@ static void usage(FILE *f) {
         "  runs --db FILE          list the stored runs\n"
         "  export --db FILE --name NAME --format F -o OUT\n"
         "                          a stored iteration as skeleton, obj, ply or csv\n"
+        "  serve                   the daemon: runs, WebSocket protocol, the viewer\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -52,6 +53,7 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "resume") == 0) return cmd_resume(argc - 1, argv + 1);
   if (strcmp(cmd, "runs") == 0) return cmd_runs(argc - 1, argv + 1);
   if (strcmp(cmd, "export") == 0) return cmd_export(argc - 1, argv + 1);
+  if (strcmp(cmd, "serve") == 0) return cmd_serve(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else

@@ -564,6 +564,52 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
   return -1;
 }
 
+int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg),
+                   sylva_world **world_out) {
+  sylva_world *w;
+  int from;
+  *world_out = NULL;
+  if (store_load_world(st, run, at, warn, &w, &from)) return -1;
+  while (sylva_world_iteration(w) < at) {
+    int status = sylva_world_step(w, NULL);
+    int it = sylva_world_iteration(w);
+    uint64_t hash;
+    bool found = false;
+    if (status == SYLVA_OK && store_iteration_hash(st, run, it, &hash, &found)) {
+      sylva_world_destroy(w);
+      return -1;
+    }
+    if (status != SYLVA_OK || (found && hash != sylva_world_hash(w))) {
+      snprintf(st->error, sizeof st->error,
+               "%s: regrowing iteration %d from the snapshot of %d %s", st->path, it, from,
+               status != SYLVA_OK ? sylva_strerror(status)
+                                  : "gives another world than the one stored");
+      sylva_world_destroy(w);
+      return -1;
+    }
+  }
+  *world_out = w;
+  return 0;
+}
+
+int store_run_scenario(store *st, int64_t run, char **json) {
+  *json = NULL;
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, "SELECT scenario FROM runs WHERE id = ?", -1, &q, NULL) !=
+      SQLITE_OK)
+    return fail(st, "reading a run's scenario");
+  sqlite3_bind_int64(q, 1, run);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW) *json = dup_column(q, 0);
+  sqlite3_finalize(q);
+  if (rc != SQLITE_ROW) return fail(st, "reading a run's scenario");
+  if (!*json) {
+    snprintf(st->error, sizeof st->error, "%s: out of memory", st->path);
+    return -1;
+  }
+  return 0;
+}
+
 static double column_real(sqlite3_stmt *q, int col) {
   return sqlite3_column_type(q, col) == SQLITE_NULL ? NAN : sqlite3_column_double(q, col);
 }

@@ -85,6 +85,14 @@ int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, 
 int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
                      sylva_world **world_out, int *from);
 
+/** The world of a run at iteration `at`: the newest good snapshot at or before it,
+ *  regrown to `at` with each regrown iteration checked against the stored hash. */
+int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg),
+                   sylva_world **world_out);
+
+/** The scenario JSON of a run (malloc'd), for forks. */
+int store_run_scenario(store *st, int64_t run, char **json);
+
 /** One stored stats row. */
 typedef struct store_stats_row {
   int iteration, stem, plant_stem, cap;

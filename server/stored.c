@@ -4,7 +4,6 @@
 #include <stdlib.h>
 
 #include "options.h"
-#include "sylva/status.h"
 
 static void warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
 
@@ -51,32 +50,9 @@ int cli_store_find(store *st, const char *db, const char *name, store_run *out) 
 }
 
 int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
-  *out = NULL;
-  sylva_world *w;
-  int from;
-  if (store_load_world(st, r->id, at, warn, &w, &from)) {
-    fprintf(stderr, "sylva: %s\n", store_error(st));
+  if (store_world_at(st, r->id, at, warn, out)) {
+    fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));
     return CLI_EXIT_FAILURE;
   }
-  while (sylva_world_iteration(w) < at) {
-    int status = sylva_world_step(w, NULL);
-    int it = sylva_world_iteration(w);
-    uint64_t hash;
-    bool found = false;
-    if (status == SYLVA_OK && store_iteration_hash(st, r->id, it, &hash, &found)) {
-      fprintf(stderr, "sylva: %s\n", store_error(st));
-      sylva_world_destroy(w);
-      return CLI_EXIT_FAILURE;
-    }
-    if (status != SYLVA_OK || (found && hash != sylva_world_hash(w))) {
-      fprintf(stderr, "sylva: run \"%s\": regrowing iteration %d from the snapshot of %d %s\n",
-              r->name, it, from,
-              status != SYLVA_OK ? sylva_strerror(status)
-                                 : "gives another world than the one stored");
-      sylva_world_destroy(w);
-      return CLI_EXIT_FAILURE;
-    }
-  }
-  *out = w;
   return CLI_EXIT_OK;
 }

@@ -1,0 +1,122 @@
+/* `sylva serve`: the daemon. */
+#include <arpa/inet.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "commands.h"
+#include "daemon.h"
+#include "options.h"
+
+enum { OPT_DB, OPT_LISTEN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_ORIGIN, OPT_INSECURE,
+       OPT_MAX_MESSAGE, OPT_RATE, OPT_HELP, OPT_COUNT };
+
+static const cli_option serve_options[OPT_COUNT] = {
+    [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
+    [OPT_LISTEN] = {"listen", 0, "HOST:PORT", "where to listen (default 127.0.0.1:8080)"},
+    [OPT_WEB] = {"web", 0, "DIR", "the viewer's files (default ./web when it exists)"},
+    [OPT_SCENARIOS] = {"scenarios", 0, "DIR",
+                       "ready scenarios offered to clients (default ./scenarios when it exists)"},
+    [OPT_TOKEN] = {"token", 0, "T", "changing messages need a hello with this token"},
+    [OPT_ORIGIN] = {"allow-origin", 0, "ORIGIN",
+                    "also accept WebSockets from this Origin (repeatable)"},
+    [OPT_INSECURE] = {"insecure", 0, NULL, "allow a non-loopback address without --token"},
+    [OPT_MAX_MESSAGE] = {"max-message", 0, "BYTES", "largest client message (default 1 MiB)"},
+    [OPT_RATE] = {"rate-limit", 0, "N", "most client messages per second (default 50)"},
+    [OPT_HELP] = {"help", 'h', NULL, "show this help"},
+};
+
+static void serve_usage(FILE *f) {
+  fputs("Usage: sylva serve [OPTIONS]\n"
+        "\n"
+        "Runs the daemon: one port serves the viewer's files, the WebSocket endpoint /ws\n"
+        "(subprotocol sylva.v1), /healthz, /metrics (Prometheus), /api/runs and\n"
+        "/api/runs/NAME/stats.csv. Stored runs are loaded at start; those that were\n"
+        "running continue from their last stored iteration. SIGINT or SIGTERM stops it:\n"
+        "iterations in flight are stored and clients are closed with 1001.\n"
+        "\n"
+        "Options:\n",
+        f);
+  cli_print_options(f, serve_options, OPT_COUNT);
+}
+
+static bool is_dir(const char *path) {
+  struct stat sb;
+  return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+static bool loopback(const char *host) {
+  struct in_addr a4;
+  if (strcmp(host, "localhost") == 0) return true;
+  if (inet_pton(AF_INET, host, &a4) == 1) return (ntohl(a4.s_addr) >> 24) == 127;
+  return strcmp(host, "::1") == 0;
+}
+
+int cmd_serve(int argc, char **argv) {
+  cli_parser p;
+  cli_parser_init(&p, "serve", serve_options, OPT_COUNT, argc, argv);
+  server_options o = {.db = "sylva.db", .host = "127.0.0.1", .port = 8080,
+                      .max_message = DAEMON_MAX_MESSAGE, .rate_limit = DAEMON_RATE_LIMIT,
+                      .max_pending = DAEMON_MAX_PENDING};
+  static char host[256];
+  bool insecure = false, web_given = false, scenarios_given = false;
+  const char *arg;
+  int first = argc, opt;
+  uint64_t v;
+  while ((opt = cli_next(&p, &arg, &first)) >= 0) {
+    switch (opt) {
+    case OPT_DB: o.db = arg; break;
+    case OPT_LISTEN: {
+      const char *colon = strrchr(arg, ':');
+      if (!colon || colon == arg || (size_t)(colon - arg) >= sizeof host)
+        return cli_usage_error("serve", "--listen: expected HOST:PORT, got '%s'", arg);
+      memcpy(host, arg, (size_t)(colon - arg));
+      host[colon - arg] = 0;
+      if (cli_parse_u64("serve", "listen", colon + 1, 1, 65535, &v)) return CLI_EXIT_USAGE;
+      o.host = host;
+      o.port = (int)v;
+      break;
+    }
+    case OPT_WEB:
+      if (!is_dir(arg)) return cli_usage_error("serve", "--web: '%s' is not a directory", arg);
+      o.web = arg;
+      web_given = true;
+      break;
+    case OPT_SCENARIOS:
+      if (!is_dir(arg)) return cli_usage_error("serve", "--scenarios: '%s' is not a directory", arg);
+      o.scenarios = arg;
+      scenarios_given = true;
+      break;
+    case OPT_TOKEN:
+      if (!arg[0]) return cli_usage_error("serve", "--token: empty token");
+      o.token = arg;
+      break;
+    case OPT_ORIGIN:
+      if (o.origin_count == DAEMON_MAX_ORIGINS)
+        return cli_usage_error("serve", "--allow-origin: at most %d", DAEMON_MAX_ORIGINS);
+      o.origins[o.origin_count++] = arg;
+      break;
+    case OPT_INSECURE: insecure = true; break;
+    case OPT_MAX_MESSAGE:
+      if (cli_parse_u64("serve", "max-message", arg, 1024, 1u << 30, &v)) return CLI_EXIT_USAGE;
+      o.max_message = (size_t)v;
+      break;
+    case OPT_RATE:
+      if (cli_parse_u64("serve", "rate-limit", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
+      o.rate_limit = (int)v;
+      break;
+    default:
+      serve_usage(stdout);
+      return CLI_EXIT_OK;
+    }
+  }
+  if (opt == -2) return CLI_EXIT_USAGE;
+  if (first != argc) return cli_usage_error("serve", "unexpected argument '%s'", argv[first]);
+  if (!loopback(o.host) && !o.token && !insecure)
+    return cli_usage_error("serve", "--listen %s is not a loopback address: give --token (or "
+                           "--insecure to serve anyone who can reach it)", o.host);
+  if (!web_given && is_dir("web")) o.web = "web";
+  if (!scenarios_given && is_dir("scenarios")) o.scenarios = "scenarios";
+  return server_main(&o);
+}

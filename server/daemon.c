@@ -1,0 +1,426 @@
+/* The daemon: the loop, libwebsockets on it, HTTP routes, WebSocket sessions,
+ * signals and an orderly shutdown. */
+#include "daemon.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "client.h"
+#include "csv.h"
+#include "handlers.h"
+#include "runs.h"
+#include "sylva/protocol.h"
+
+void server_log(const char *run_name, const char *fmt, ...) {
+  char msg[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  if (run_name)
+    fprintf(stderr, "sylva: [run %s] %s\n", run_name, msg);
+  else
+    fprintf(stderr, "sylva: %s\n", msg);
+}
+
+uint64_t server_now_ms(server *d) { return uv_now(&d->loop); }
+
+static void on_closer(uv_timer_t *t) { clients_close_pending(t->data); }
+
+void server_schedule_closes(server *d) {
+  if (!uv_is_closing((uv_handle_t *)&d->closer)) uv_timer_start(&d->closer, on_closer, 0, 0);
+}
+
+/* ---- HTTP routes ------------------------------------------------------------- */
+
+typedef struct http_pss {
+  char *body;
+  size_t len, off;
+} http_pss;
+
+static char *metrics_text(server *d) {
+  int64_t runs = 0, running = 0;
+  for (run *r = d->runs; r; r = r->next) {
+    runs++;
+    running += strcmp(r->status, "running") == 0;
+  }
+  char *text = NULL;
+  size_t size = 0;
+  FILE *f = open_memstream(&text, &size);
+  if (!f) return NULL;
+  fprintf(f,
+          "# HELP sylva_runs Runs held by the daemon.\n# TYPE sylva_runs gauge\nsylva_runs %lld\n"
+          "# HELP sylva_runs_running Runs growing now.\n# TYPE sylva_runs_running gauge\n"
+          "sylva_runs_running %lld\n"
+          "# HELP sylva_clients Connected WebSocket clients.\n# TYPE sylva_clients gauge\n"
+          "sylva_clients %lld\n"
+          "# HELP sylva_iterations_total Iterations grown since start.\n"
+          "# TYPE sylva_iterations_total counter\nsylva_iterations_total %lld\n"
+          "# HELP sylva_iteration_seconds_total Time spent growing iterations.\n"
+          "# TYPE sylva_iteration_seconds_total counter\nsylva_iteration_seconds_total %.6f\n"
+          "# HELP sylva_messages_received_total Client messages received.\n"
+          "# TYPE sylva_messages_received_total counter\nsylva_messages_received_total %lld\n"
+          "# HELP sylva_bytes_sent_total WebSocket payload bytes sent.\n"
+          "# TYPE sylva_bytes_sent_total counter\nsylva_bytes_sent_total %lld\n",
+          (long long)runs, (long long)running, (long long)d->clients_now,
+          (long long)d->iterations_total, d->iteration_ms_total / 1e3,
+          (long long)d->messages_received, (long long)d->bytes_sent);
+  if (fclose(f) != 0) {
+    free(text);
+    return NULL;
+  }
+  return text;
+}
+
+/* The body and type of a route, or status 404. */
+static int route(server *d, const char *uri, char **body, const char **type) {
+  *type = "application/json";
+  if (strcmp(uri, "/healthz") == 0) {
+    int64_t runs = 0;
+    for (run *r = d->runs; r; r = r->next) runs++;
+    char buf[160];
+    snprintf(buf, sizeof buf, "{\"ok\": true, \"runs\": %lld, \"clients\": %lld}\n",
+             (long long)runs, (long long)d->clients_now);
+    *body = strdup(buf);
+    return *body ? 200 : 500;
+  }
+  if (strcmp(uri, "/metrics") == 0) {
+    *type = "text/plain; version=0.0.4";
+    *body = metrics_text(d);
+    return *body ? 200 : 500;
+  }
+  if (strcmp(uri, "/api/runs") == 0) {
+    *body = handlers_runs_json(d, false, NULL);
+    return *body ? 200 : 500;
+  }
+  const char *prefix = "/api/runs/", *suffix = "/stats.csv";
+  size_t lp = strlen(prefix), ls = strlen(suffix), lu = strlen(uri);
+  if (lu > lp + ls && strncmp(uri, prefix, lp) == 0 && strcmp(uri + lu - ls, suffix) == 0) {
+    char name[512];
+    size_t n = lu - lp - ls;
+    if (n >= sizeof name) return 404;
+    memcpy(name, uri + lp, n);
+    name[n] = 0;
+    lws_urldecode(name, name, (int)n + 1);
+    for (run *r = d->runs; r; r = r->next) {
+      if (strcmp(r->name, name) != 0) continue;
+      *type = "text/csv";
+      size_t size = 0;
+      FILE *f = open_memstream(body, &size);
+      if (!f) return 500;
+      uv_mutex_lock(&d->store_lock);
+      int failed = csv_write_stats(f, d->st, r->id, r->iteration);
+      uv_mutex_unlock(&d->store_lock);
+      if (fclose(f) != 0 || failed) {
+        free(*body);
+        *body = NULL;
+        return 500;
+      }
+      return 200;
+    }
+  }
+  return 404;
+}
+
+static int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
+                         size_t len) {
+  http_pss *pss = user;
+  server *d = lws_context_user(lws_get_context(wsi));
+  uint8_t buf[LWS_PRE + 16384], *start = &buf[LWS_PRE], *p = start, *end = &buf[sizeof buf - 1];
+  switch (reason) {
+  case LWS_CALLBACK_HTTP: {
+    char uri[1024];
+    if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) < 0) return -1;
+    char *body = NULL;
+    const char *type;
+    int status = route(d, uri, &body, &type);
+    if (status != 200) {
+      free(body);
+      return lws_return_http_status(wsi, (unsigned)status, NULL) ? -1
+             : lws_http_transaction_completed(wsi) ? -1 : 0;
+    }
+    pss->body = body;
+    pss->len = strlen(body);
+    pss->off = 0;
+    if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, type, pss->len, &p, end) ||
+        lws_finalize_write_http_header(wsi, start, &p, end))
+      return 1;
+    lws_callback_on_writable(wsi);
+    return 0;
+  }
+  case LWS_CALLBACK_HTTP_WRITEABLE: {
+    if (!pss || !pss->body) break;
+    size_t n = pss->len - pss->off;
+    if (n > sizeof buf - LWS_PRE - 1) n = sizeof buf - LWS_PRE - 1;
+    memcpy(start, pss->body + pss->off, n);
+    bool last = pss->off + n == pss->len;
+    if (lws_write(wsi, start, n, last ? LWS_WRITE_HTTP_FINAL : LWS_WRITE_HTTP) != (int)n) return 1;
+    pss->off += n;
+    if (last) {
+      free(pss->body);
+      pss->body = NULL;
+      if (lws_http_transaction_completed(wsi)) return -1;
+    } else {
+      lws_callback_on_writable(wsi);
+    }
+    return 0;
+  }
+  case LWS_CALLBACK_HTTP_DROP_PROTOCOL:
+  case LWS_CALLBACK_CLOSED_HTTP:
+    if (pss) {
+      free(pss->body);
+      pss->body = NULL;
+    }
+    break;
+  default: break;
+  }
+  return lws_callback_http_dummy(wsi, reason, user, in, len);
+}
+
+/* ---- WebSocket sessions --------------------------------------------------------- */
+
+/* Origin must be the daemon's own (the Host it was reached at) or allowed. */
+static bool origin_allowed(server *d, struct lws *wsi) {
+  char origin[256], host[256];
+  if (lws_hdr_total_length(wsi, WSI_TOKEN_ORIGIN) <= 0) return true; /* not a browser */
+  if (lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN) < 0) return false;
+  for (int i = 0; i < d->opt.origin_count; i++)
+    if (strcmp(origin, d->opt.origins[i]) == 0) return true;
+  if (lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST) < 0) return false;
+  char self[300];
+  snprintf(self, sizeof self, "http://%s", host);
+  return strcmp(origin, self) == 0;
+}
+
+static void rx_append(client *c, const char *in, size_t len) {
+  if (c->rx_too_large) return;
+  if (c->rx_len + len > c->d->opt.max_message) {
+    c->rx_too_large = true;
+    return;
+  }
+  if (c->rx_len + len + 1 > c->rx_cap) {
+    size_t cap = c->rx_cap ? c->rx_cap : 4096;
+    while (cap < c->rx_len + len + 1) cap *= 2;
+    char *p = realloc(c->rx, cap);
+    if (!p) {
+      c->rx_too_large = true;
+      return;
+    }
+    c->rx = p;
+    c->rx_cap = cap;
+  }
+  memcpy(c->rx + c->rx_len, in, len);
+  c->rx_len += len;
+}
+
+static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
+                       size_t len) {
+  client *c = user;
+  server *d = lws_context_user(lws_get_context(wsi));
+  switch (reason) {
+  case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
+    char uri[64];
+    if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) < 0 || strcmp(uri, "/ws") != 0)
+      return 1;
+    if (d->stopping) return 1;
+    if (!origin_allowed(d, wsi)) {
+      server_log(NULL, "refused a WebSocket from a foreign origin");
+      return 1;
+    }
+    return 0;
+  }
+  case LWS_CALLBACK_ESTABLISHED: {
+    static uint64_t serial;
+    memset(c, 0, sizeof *c);
+    c->d = d;
+    c->wsi = wsi;
+    c->serial = ++serial;
+    c->authed = d->opt.token == NULL;
+    c->window_start = server_now_ms(d);
+    c->next = d->clients;
+    if (d->clients) d->clients->prev = c;
+    d->clients = c;
+    d->clients_now++;
+    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL));
+    break;
+  }
+  case LWS_CALLBACK_CLOSED:
+    if (!c || !c->d) break;
+    if (c->prev)
+      c->prev->next = c->next;
+    else
+      d->clients = c->next;
+    if (c->next) c->next->prev = c->prev;
+    d->clients_now--;
+    client_release(c);
+    c->d = NULL;
+    break;
+  case LWS_CALLBACK_RECEIVE: {
+    if (!c || !c->d || c->close_code) break;
+    if (lws_is_first_fragment(wsi)) {
+      c->rx_len = 0;
+      c->rx_too_large = false;
+      c->rx_binary = lws_frame_is_binary(wsi);
+    }
+    rx_append(c, in, len);
+    if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi)) break;
+    d->messages_received++;
+    uint64_t now = server_now_ms(d);
+    if (now - c->window_start >= 1000) {
+      c->window_start = now;
+      c->window_count = 0;
+    }
+    if (++c->window_count > d->opt.rate_limit) {
+      client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "rate limit exceeded");
+      break;
+    }
+    if (c->rx_too_large) {
+      client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+      break;
+    }
+    if (c->rx_binary) {
+      client_send_text(c, sylva_msg_error("bad_request", "binary frames are not accepted", NULL));
+      break;
+    }
+    handle_message(c, c->rx, c->rx_len);
+    break;
+  }
+  case LWS_CALLBACK_SERVER_WRITEABLE:
+    if (!c || !c->d) break;
+    return client_writable(c);
+  default: break;
+  }
+  return 0;
+}
+
+static struct lws_protocols protocols[] = {
+    {"http", http_callback, sizeof(http_pss), 0, 0, NULL, 0},
+    {"sylva.v1", ws_callback, sizeof(client), 65536, 0, NULL, 0},
+    {NULL, NULL, 0, 0, 0, NULL, 0},
+};
+
+static const struct lws_protocol_vhost_options mime_wasm = {NULL, NULL, ".wasm",
+                                                            "application/wasm"};
+static const struct lws_protocol_vhost_options mime_map = {&mime_wasm, NULL, ".map",
+                                                           "application/json"};
+static const struct lws_protocol_vhost_options mime_mjs = {&mime_map, NULL, ".mjs",
+                                                           "text/javascript"};
+
+/* ---- start and stop ------------------------------------------------------------ */
+
+static void stop(server *d) {
+  if (d->stopping) return;
+  d->stopping = true;
+  d->stop_at = uv_now(&d->loop);
+  server_log(NULL, "stopping: closing clients, finishing the iterations in flight");
+  for (client *c = d->clients; c; c = c->next) client_close(c, LWS_CLOSE_STATUS_GOINGAWAY,
+                                                            "server shutting down");
+  uv_signal_stop(&d->sigint);
+  uv_signal_stop(&d->sigterm);
+}
+
+static void on_signal(uv_signal_t *h, int signum) {
+  (void)signum;
+  stop(h->data);
+}
+
+static uv_timer_t shutdown_timer;
+
+static void on_shutdown_tick(uv_timer_t *t) {
+  server *d = t->data;
+  /* close frames need a moment on the wire before the context goes */
+  bool busy = false;
+  for (run *r = d->runs; r; r = r->next) busy |= r->busy;
+  uint64_t since = uv_now(&d->loop) - d->stop_at;
+  /* wait for the iterations in flight, and give the close frames time to leave
+   * (up to two seconds for clients that do not answer) */
+  if (!d->stopping || busy || since < 100 || (d->clients && since < 2000)) return;
+  uv_timer_stop(t);
+  uv_close((uv_handle_t *)t, NULL);
+  uv_close((uv_handle_t *)&d->closer, NULL);
+  uv_close((uv_handle_t *)&d->sigint, NULL);
+  uv_close((uv_handle_t *)&d->sigterm, NULL);
+  lws_context_destroy(d->ctx);
+}
+
+int server_main(const server_options *opt) {
+  server *d = calloc(1, sizeof *d);
+  if (!d) return 1;
+  d->opt = *opt;
+  if (uv_loop_init(&d->loop) || uv_mutex_init(&d->store_lock)) {
+    free(d);
+    return 1;
+  }
+  if (store_open(opt->db, true, &d->st)) {
+    server_log(NULL, "%s", store_open_error());
+    uv_loop_close(&d->loop);
+    free(d);
+    return 2;
+  }
+  lws_set_log_level(LLL_ERR, NULL);
+  struct lws_http_mount static_mount = {
+      .mountpoint = "/", .origin = opt->web, .def = "index.html",
+      .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 1, .extra_mimetypes = &mime_mjs};
+  struct lws_http_mount api = {.mount_next = opt->web ? &static_mount : NULL,
+                               .mountpoint = "/api", .protocol = "http",
+                               .origin_protocol = LWSMPRO_CALLBACK, .mountpoint_len = 4};
+  struct lws_http_mount metrics = {.mount_next = &api, .mountpoint = "/metrics",
+                                   .protocol = "http", .origin_protocol = LWSMPRO_CALLBACK,
+                                   .mountpoint_len = 8};
+  struct lws_http_mount healthz = {.mount_next = &metrics, .mountpoint = "/healthz",
+                                   .protocol = "http", .origin_protocol = LWSMPRO_CALLBACK,
+                                   .mountpoint_len = 8};
+  void *foreign[1] = {&d->loop};
+  struct lws_context_creation_info info;
+  memset(&info, 0, sizeof info);
+  info.port = opt->port;
+  info.iface = opt->host;
+  info.protocols = protocols;
+  info.mounts = &healthz;
+  info.options = LWS_SERVER_OPTION_LIBUV | LWS_SERVER_OPTION_VALIDATE_UTF8 |
+                 LWS_SERVER_OPTION_DISABLE_IPV6;
+  info.foreign_loops = foreign;
+  info.pcontext = &d->ctx;
+  info.user = d;
+  info.timeout_secs = 30;
+  d->ctx = lws_create_context(&info);
+  int rc = 0;
+  if (!d->ctx || !lws_get_vhost_by_name(d->ctx, "default")) {
+    server_log(NULL, "cannot listen on %s:%d (in use, or not an address of this machine)",
+               opt->host, opt->port);
+    rc = 1;
+  }
+  if (!rc && runs_load(d)) rc = 1;
+  if (!rc) {
+    uv_signal_init(&d->loop, &d->sigint);
+    uv_signal_init(&d->loop, &d->sigterm);
+    d->sigint.data = d->sigterm.data = d;
+    uv_signal_start(&d->sigint, on_signal, SIGINT);
+    uv_signal_start(&d->sigterm, on_signal, SIGTERM);
+    uv_timer_init(&d->loop, &d->closer);
+    d->closer.data = d;
+    uv_timer_init(&d->loop, &shutdown_timer);
+    shutdown_timer.data = d;
+    uv_timer_start(&shutdown_timer, on_shutdown_tick, 100, 100);
+    server_log(NULL, "listening on http://%s:%d/ (WebSocket /ws, protocol sylva.v1), store %s",
+               opt->host, opt->port, opt->db);
+    uv_run(&d->loop, UV_RUN_DEFAULT);
+  } else if (d->ctx) {
+    lws_context_destroy(d->ctx);
+    uv_run(&d->loop, UV_RUN_DEFAULT);
+  }
+  /* lws needs a second destroy after its handles drained on the loop */
+  if (d->ctx) lws_context_destroy(d->ctx);
+  uv_run(&d->loop, UV_RUN_DEFAULT);
+  runs_free(d);
+  store_close(d->st);
+  uv_mutex_destroy(&d->store_lock);
+  if (uv_loop_close(&d->loop)) server_log(NULL, "the loop still had handles at exit");
+  free(d);
+  if (!rc) server_log(NULL, "stopped");
+  return rc;
+}

@@ -1,0 +1,171 @@
+#include "handlers.h"
+
+#include <dirent.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runs.h"
+#include "sylva/protocol.h"
+#include "sylva/status.h"
+
+static void reply_error(client *c, const char *code, const char *message, const char *ref) {
+  client_send_text(c, sylva_msg_error(code, message, ref));
+}
+
+char *handlers_runs_json(server *d, bool message, const char *ref) {
+  size_t n = 0;
+  for (run *r = d->runs; r; r = r->next) n++;
+  sylva_run_summary *list = calloc(n + 1, sizeof *list);
+  if (!list) return NULL;
+  size_t i = 0;
+  for (run *r = d->runs; r; r = r->next, i++) {
+    list[i].run = r->id;
+    list[i].name = r->name;
+    list[i].status = r->status;
+    run_summary(r, &list[i].nodes, &list[i].iteration, &list[i].stems);
+  }
+  char *text = message ? sylva_msg_runs(list, n, ref) : sylva_runs_json(list, n);
+  free(list);
+  return text;
+}
+
+/* Messages that change something need a hello with the token first. */
+static bool changes(sylva_msg_type t) {
+  return t == SYLVA_MSG_CREATE || t == SYLVA_MSG_CONTROL || t == SYLVA_MSG_EDIT ||
+         t == SYLVA_MSG_FORK;
+}
+
+static void handle_control(client *c, run *r, const sylva_msg *m) {
+  switch (m->action) {
+  case SYLVA_CONTROL_START:
+    if (strcmp(r->status, "finished") == 0 || strcmp(r->status, "failed") == 0) {
+      reply_error(c, "bad_request", "/action: the run has ended; fork it to go on", m->ref);
+      return;
+    }
+    run_set_status(r, "running");
+    break;
+  case SYLVA_CONTROL_PAUSE:
+    if (strcmp(r->status, "running") == 0) run_set_status(r, "paused");
+    r->steps = 0;
+    break;
+  case SYLVA_CONTROL_STEP:
+    if (strcmp(r->status, "finished") == 0 || strcmp(r->status, "failed") == 0) {
+      reply_error(c, "bad_request", "/action: the run has ended; fork it to go on", m->ref);
+      return;
+    }
+    if (strcmp(r->status, "running") == 0) run_set_status(r, "paused");
+    r->steps += m->count;
+    break;
+  case SYLVA_CONTROL_STOP:
+    r->steps = 0;
+    if (r->busy)
+      r->stop_after = true; /* ends when the iteration in flight is stored */
+    else
+      run_set_status(r, "finished");
+    break;
+  }
+  run_schedule(r);
+  client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
+}
+
+static void handle_scenarios(client *c, const sylva_msg *m) {
+  const char *dir = c->d->opt.scenarios;
+  const char *names[256] = {0}, *titles[256] = {0};
+  char *owned[512] = {0};
+  size_t n = 0, k = 0;
+  DIR *dh = dir ? opendir(dir) : NULL;
+  struct dirent *e;
+  while (dh && n < 256 && (e = readdir(dh))) {
+    size_t len = strlen(e->d_name);
+    if (len < 6 || strcmp(e->d_name + len - 5, ".json") != 0) continue;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+    FILE *f = fopen(path, "rb");
+    if (!f) continue;
+    static char buf[1 << 20];
+    size_t got = fread(buf, 1, sizeof buf, f);
+    fclose(f);
+    sylva_scenario *s;
+    char err[256];
+    if (sylva_scenario_parse(buf, got, &s, err, sizeof err) < 0) continue;
+    char *name = strndup(e->d_name, len - 5), *title = strdup(s->name);
+    sylva_scenario_free(s);
+    if (!name || !title) {
+      free(name);
+      free(title);
+      break;
+    }
+    owned[k++] = name;
+    owned[k++] = title;
+    names[n] = name;
+    titles[n] = title;
+    n++;
+  }
+  if (dh) closedir(dh);
+  client_send_text(c, sylva_msg_scenarios(names, titles, n, m->ref));
+  for (size_t i = 0; i < k; i++) free(owned[i]);
+}
+
+void handle_message(client *c, const char *text, size_t len) {
+  server *d = c->d;
+  sylva_msg m;
+  char err[512];
+  if (sylva_msg_parse(text, len, &m, err, sizeof err) != SYLVA_OK) {
+    reply_error(c, "bad_request", err, NULL);
+    return;
+  }
+  if (changes(m.type) && d->opt.token && !c->authed) {
+    reply_error(c, "unauthorized", "send a hello with the token first", m.ref);
+    sylva_msg_free(&m);
+    return;
+  }
+  run *r = NULL;
+  if (m.type == SYLVA_MSG_SUBSCRIBE || m.type == SYLVA_MSG_UNSUBSCRIBE ||
+      m.type == SYLVA_MSG_CONTROL || m.type == SYLVA_MSG_EDIT || m.type == SYLVA_MSG_FORK ||
+      m.type == SYLVA_MSG_GET || m.type == SYLVA_MSG_LIGHT) {
+    r = run_find(d, m.run);
+    if (!r) {
+      snprintf(err, sizeof err, "/run: no run %lld", (long long)m.run);
+      reply_error(c, "unknown_run", err, m.ref);
+      sylva_msg_free(&m);
+      return;
+    }
+  }
+  switch (m.type) {
+  case SYLVA_MSG_HELLO:
+    if (d->opt.token && (!m.token || strcmp(m.token, d->opt.token) != 0)) {
+      reply_error(c, "unauthorized", "/token: wrong token", m.ref);
+      break;
+    }
+    c->authed = true;
+    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL));
+    break;
+  case SYLVA_MSG_LIST: client_send_text(c, handlers_runs_json(d, true, m.ref)); break;
+  case SYLVA_MSG_SCENARIOS: handle_scenarios(c, &m); break;
+  case SYLVA_MSG_CREATE: {
+    const char *code;
+    const char *name = m.name ? m.name : m.scenario->name;
+    run *nr = run_create(d, m.scenario, name, m.start, &code, err, sizeof err);
+    if (!nr)
+      reply_error(c, code, err, m.ref);
+    else
+      client_send_text(c, sylva_msg_created(nr->id, nr->name, m.ref));
+    break;
+  }
+  case SYLVA_MSG_SUBSCRIBE: run_subscribe(r, c, m.has_since, m.since, m.ref); break;
+  case SYLVA_MSG_UNSUBSCRIBE: client_unsubscribe(c, r->id); break;
+  case SYLVA_MSG_CONTROL: handle_control(c, r, &m); break;
+  case SYLVA_MSG_LIGHT:
+    if (r->busy)
+      reply_error(c, "busy", "an iteration is in flight; ask again", m.ref);
+    else
+      client_send_text(c, sylva_msg_light_slice(r->id, r->w, m.z, m.ref));
+    break;
+  case SYLVA_MSG_EDIT:
+  case SYLVA_MSG_FORK:
+  case SYLVA_MSG_GET:
+    reply_error(c, "bad_request", "/type: not served by this daemon", m.ref);
+    break;
+  }
+  sylva_msg_free(&m);
+}

@@ -1,0 +1,13 @@
+/* sylva server: what the daemon does with each protocol message (protocol.md). */
+#ifndef SYLVA_SERVER_HANDLERS_H
+#define SYLVA_SERVER_HANDLERS_H
+
+#include "client.h"
+
+/** Handles one complete text message of a client. A bad message gets an `error`
+ *  reply and changes nothing. */
+void handle_message(client *c, const char *text, size_t len);
+
+/** The JSON array of every run (for `list` and GET /api/runs); malloc'd. */
+char *handlers_runs_json(server *d, bool message, const char *ref);
+#endif

@@ -1,0 +1,284 @@
+#include "runs.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "stored.h"
+#include "sylva/protocol.h"
+#include "sylva/status.h"
+
+run *run_find(server *d, int64_t id) {
+  for (run *r = d->runs; r; r = r->next)
+    if (r->id == id) return r;
+  return NULL;
+}
+
+void run_summary(const run *r, int64_t *nodes, int *iteration, int *stems) {
+  *nodes = r->nodes;
+  *iteration = r->iteration;
+  *stems = r->stems;
+}
+
+/* Caches the counts the loop may report while a worker steps the world. */
+static void run_note(run *r) {
+  r->nodes = (int64_t)sylva_world_node_count(r->w);
+  r->iteration = sylva_world_iteration(r->w);
+  r->stems = sylva_world_stem_count(r->w);
+}
+
+static bool run_wants_step(const run *r) {
+  if (strcmp(r->status, "running") != 0 && !(strcmp(r->status, "paused") == 0 && r->steps > 0))
+    return false;
+  return !sylva_world_finished(r->w) && sylva_world_iteration(r->w) < r->limit;
+}
+
+static void persist_status(run *r, const char *reason) {
+  server *d = r->d;
+  uv_mutex_lock(&d->store_lock);
+  int failed = store_set_status(d->st, r->id, r->status, reason, r->limit);
+  uv_mutex_unlock(&d->store_lock);
+  if (failed) server_log(r->name, "%s", store_error(d->st));
+}
+
+void run_broadcast_status(run *r) {
+  char *text = sylva_msg_status(r->id, r->status, r->iteration, NULL);
+  msgbuf *m = text ? msgbuf_new(text, strlen(text)) : NULL;
+  free(text);
+  if (!m) return;
+  for (client *c = r->d->clients; c; c = c->next)
+    if (client_subscription(c, r->id)) client_send(c, m);
+  msgbuf_unref(m);
+}
+
+void run_set_status(run *r, const char *status) {
+  if (strcmp(r->status, status) == 0) return;
+  snprintf(r->status, sizeof r->status, "%s", status);
+  const char *reason = NULL;
+  if (strcmp(status, "finished") == 0)
+    reason = sylva_world_finished(r->w) ? "finished" : "limit";
+  persist_status(r, reason);
+  server_log(r->name, "%s at iteration %d", status, r->iteration);
+  run_broadcast_status(r);
+}
+
+static double mono_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+/* Worker thread: one iteration, stored, and its delta encoded once. */
+static void work_cb(uv_work_t *req) {
+  run *r = req->data;
+  server *d = r->d;
+  const sylva_journal *j;
+  double t0 = mono_ms();
+  r->work_status = sylva_world_step(r->w, &j);
+  r->work_ms = mono_ms() - t0;
+  r->work_delta = NULL;
+  r->work_error[0] = 0;
+  if (r->work_status != SYLVA_OK) {
+    snprintf(r->work_error, sizeof r->work_error, "iteration %d: %s",
+             sylva_world_iteration(r->w) + 1, sylva_strerror(r->work_status));
+    return;
+  }
+  int it = j->iteration;
+  bool last = sylva_world_finished(r->w) || it >= r->limit;
+  uv_mutex_lock(&d->store_lock);
+  int failed = store_save_iteration(d->st, r->id, r->w, j, last || it % r->snapshot_every == 0);
+  if (failed) snprintf(r->work_error, sizeof r->work_error, "%s", store_error(d->st));
+  uv_mutex_unlock(&d->store_lock);
+  if (failed) {
+    r->work_status = -1;
+    return;
+  }
+  r->work_delta = sylva_msg_delta(r->id, r->seq + 1, r->w, j);
+}
+
+static void send_snapshot(run *r, client *c, const char *ref) {
+  client_send_text(c, sylva_msg_snapshot(r->id, r->seq, r->w, ref));
+}
+
+static void after_cb(uv_work_t *req, int status) {
+  run *r = req->data;
+  server *d = r->d;
+  r->busy = false;
+  (void)status;
+  if (r->work_status != SYLVA_OK) {
+    server_log(r->name, "failed: %s", r->work_error);
+    snprintf(r->status, sizeof r->status, "failed");
+    persist_status(r, NULL);
+    run_broadcast_status(r);
+    return;
+  }
+  d->iterations_total++;
+  d->iteration_ms_total += r->work_ms;
+  run_note(r);
+  r->seq++;
+  msgbuf *m = r->work_delta ? msgbuf_new(r->work_delta, strlen(r->work_delta)) : NULL;
+  free(r->work_delta);
+  r->work_delta = NULL;
+  msgbuf **slot = &r->history[r->seq % DAEMON_DELTA_HISTORY];
+  msgbuf_unref(*slot);
+  *slot = m;
+  for (client *c = d->clients; c; c = c->next) {
+    subscription *s = client_subscription(c, r->id);
+    if (!s) continue;
+    if (s->need_snapshot || !m) {
+      s->need_snapshot = false;
+      send_snapshot(r, c, NULL);
+    } else {
+      client_send(c, m);
+    }
+  }
+  if (r->steps > 0) r->steps--;
+  if (d->stopping) return;
+  if (r->stop_after || sylva_world_finished(r->w) || sylva_world_iteration(r->w) >= r->limit) {
+    r->stop_after = false;
+    run_set_status(r, "finished");
+    return;
+  }
+  if (strcmp(r->status, "paused") == 0 && r->steps == 0) run_broadcast_status(r);
+  run_schedule(r);
+}
+
+void run_schedule(run *r) {
+  if (r->busy || r->d->stopping || !run_wants_step(r)) return;
+  r->busy = true;
+  r->work.data = r;
+  if (uv_queue_work(&r->d->loop, &r->work, work_cb, after_cb) != 0) {
+    r->busy = false;
+    server_log(r->name, "cannot queue an iteration");
+  }
+}
+
+void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref) {
+  subscription *s = client_subscribe(c, r->id);
+  if (!s) {
+    client_send_text(c, sylva_msg_error("internal", "out of memory", ref));
+    return;
+  }
+  /* the deltas after `since` can be replayed when every one of them is held */
+  if (has_since && since >= 0 && since <= r->seq && r->seq - since < DAEMON_DELTA_HISTORY) {
+    bool all = true;
+    for (int64_t q = since + 1; q <= r->seq; q++)
+      if (!r->history[q % DAEMON_DELTA_HISTORY]) all = false;
+    if (all) {
+      for (int64_t q = since + 1; q <= r->seq; q++)
+        client_send(c, r->history[q % DAEMON_DELTA_HISTORY]);
+      s->need_snapshot = false;
+      return;
+    }
+  }
+  if (r->busy)
+    s->need_snapshot = true; /* sent when the iteration in flight is done */
+  else
+    send_snapshot(r, c, ref);
+}
+
+static run *run_new(server *d, int64_t id, const char *name, sylva_world *w, const char *status,
+                    int limit, int snapshot_every) {
+  run *r = calloc(1, sizeof *r);
+  if (!r || !(r->name = strdup(name))) {
+    free(r);
+    return NULL;
+  }
+  r->d = d;
+  r->id = id;
+  r->w = w;
+  r->limit = limit;
+  r->snapshot_every = snapshot_every;
+  snprintf(r->status, sizeof r->status, "%s", status);
+  run_note(r);
+  /* append, so that runs stay in creation order */
+  run **tail = &d->runs;
+  while (*tail) tail = &(*tail)->next;
+  *tail = r;
+  return r;
+}
+
+int runs_load(server *d) {
+  store_run *stored;
+  size_t n;
+  if (store_list_runs(d->st, &stored, &n)) {
+    server_log(NULL, "%s", store_error(d->st));
+    return -1;
+  }
+  for (size_t i = 0; i < n; i++) {
+    store_run *sr = &stored[i];
+    sylva_world *w;
+    if (cli_store_world_at(d->st, sr, sr->last_iteration, &w)) {
+      server_log(sr->name, "not loaded (see above)");
+      continue;
+    }
+    run *r = run_new(d, sr->id, sr->name, w, sr->status, sr->iterations, sr->snapshot_every);
+    if (!r) {
+      sylva_world_destroy(w);
+      store_runs_free(stored, n);
+      return -1;
+    }
+    server_log(r->name, "loaded at iteration %d (%s)", sr->last_iteration, sr->status);
+    if (strcmp(r->status, "running") == 0) run_schedule(r);
+  }
+  store_runs_free(stored, n);
+  return 0;
+}
+
+void runs_free(server *d) {
+  run *r = d->runs;
+  while (r) {
+    run *next = r->next;
+    for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
+    free(r->work_delta);
+    sylva_world_destroy(r->w);
+    free(r->name);
+    free(r);
+    r = next;
+  }
+  d->runs = NULL;
+}
+
+run *run_create(server *d, const sylva_scenario *s, const char *name, bool start,
+                const char **code, char *err, size_t errlen) {
+  *code = "bad_request";
+  sylva_world *w;
+  char why[512];
+  if (sylva_scenario_build(s, &w, why, sizeof why) < 0) {
+    snprintf(err, errlen, "/scenario%s%s", why[0] == '/' ? "" : ": ", why);
+    return NULL;
+  }
+  char *json = sylva_scenario_json(s);
+  if (!json) {
+    sylva_world_destroy(w);
+    *code = "internal";
+    snprintf(err, errlen, "out of memory");
+    return NULL;
+  }
+  int64_t id;
+  uv_mutex_lock(&d->store_lock);
+  int failed = store_create_run(d->st, name, json, s->seed, s->iterations, STORE_SNAPSHOT_EVERY,
+                                w, &id);
+  if (failed) snprintf(err, errlen, "%s", store_error(d->st));
+  uv_mutex_unlock(&d->store_lock);
+  free(json);
+  if (failed) {
+    sylva_world_destroy(w);
+    if (!strstr(err, "exists already")) *code = "internal";
+    return NULL;
+  }
+  run *r = run_new(d, id, name, w, start ? "running" : "paused", s->iterations,
+                   STORE_SNAPSHOT_EVERY);
+  if (!r) {
+    sylva_world_destroy(w);
+    *code = "internal";
+    snprintf(err, errlen, "out of memory");
+    return NULL;
+  }
+  uv_mutex_lock(&d->store_lock);
+  store_set_status(d->st, id, r->status, NULL, 0);
+  uv_mutex_unlock(&d->store_lock);
+  server_log(r->name, "created (%s)", r->status);
+  run_schedule(r);
+  return r;
+}

@@ -1,0 +1,206 @@
+// Test harness for the sylva daemon: starts the real binary on 127.0.0.1 with a
+// fresh store, and talks to it with the `ws` package (a client this project did
+// not write).
+import { spawn, spawnSync } from 'node:child_process';
+import { mkdtempSync, rmSync, readFileSync } from 'node:fs';
+import { createServer } from 'node:net';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import WebSocket from 'ws';
+
+export const SYLVA = process.env.SYLVA_EXE;
+export const ROOT = process.env.SYLVA_ROOT;
+if (!SYLVA || !ROOT) throw new Error('set SYLVA_EXE and SYLVA_ROOT (meson does)');
+// The sanitizer build is slower: scale waits.
+export const SLOW = Number(process.env.SYLVA_SLOW || '1');
+
+export function freePort() {
+  return new Promise((resolve, reject) => {
+    const s = createServer();
+    s.once('error', reject);
+    s.listen(0, '127.0.0.1', () => {
+      const { port } = s.address();
+      s.close(() => resolve(port));
+    });
+  });
+}
+
+export function tempDir() {
+  return mkdtempSync(join(tmpdir(), 'sylva-serve-'));
+}
+
+// Starts `sylva serve`; resolves when it listens. Returns {proc, port, url, stderr()}.
+export async function startDaemon({ dir, port, args = [] } = {}) {
+  dir ??= tempDir();
+  port ??= await freePort();
+  const db = join(dir, 'runs.db');
+  const proc = spawn(SYLVA, ['serve', '--db', db, '--listen', `127.0.0.1:${port}`,
+    '--scenarios', join(ROOT, 'scenarios'), ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+  let err = '';
+  proc.stderr.on('data', (d) => { err += d; });
+  await new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`daemon did not start: ${err}`)), 20000 * SLOW);
+    const check = () => {
+      if (err.includes('listening on')) { clearTimeout(timer); resolve(); }
+    };
+    proc.stderr.on('data', check);
+    proc.on('exit', (code) => { clearTimeout(timer); reject(new Error(`daemon exited ${code}: ${err}`)); });
+    check();
+  });
+  proc.removeAllListeners('exit');
+  return { proc, port, dir, db, url: `ws://127.0.0.1:${port}/ws`, http: `http://127.0.0.1:${port}`,
+    stderr: () => err };
+}
+
+export function stopDaemon(d, signal = 'SIGTERM') {
+  return new Promise((resolve) => {
+    if (d.proc.exitCode !== null || d.proc.signalCode !== null) {
+      resolve({ code: d.proc.exitCode, signal: d.proc.signalCode });
+      return;
+    }
+    d.proc.once('exit', (code, sig) => resolve({ code, signal: sig }));
+    d.proc.kill(signal);
+  });
+}
+
+// A protocol client: queues every message; next(pred) waits for the first match.
+export class Client {
+  constructor(url, opts = {}) {
+    this.ws = new WebSocket(url, 'sylva.v1', opts);
+    this.messages = [];
+    this.waiters = [];
+    this.closed = null;
+    this.ws.on('message', (data, isBinary) => {
+      const msg = JSON.parse(isBinary ? data : data.toString());
+      this.messages.push(msg);
+      this.flush();
+    });
+    this.ws.on('close', (code, reason) => {
+      this.closed = { code, reason: reason.toString() };
+      this.flush();
+    });
+    this.ws.on('error', (e) => { this.error = e; this.flush(); });
+  }
+
+  opened() {
+    return new Promise((resolve, reject) => {
+      if (this.ws.readyState === WebSocket.OPEN) return resolve();
+      this.ws.once('open', resolve);
+      this.ws.once('error', reject);
+      this.ws.once('unexpected-response', (req, res) => reject(new Error(`HTTP ${res.statusCode}`)));
+    });
+  }
+
+  send(obj) { this.ws.send(typeof obj === 'string' ? obj : JSON.stringify(obj)); }
+
+  flush() {
+    this.waiters = this.waiters.filter((w) => {
+      const i = this.messages.findIndex(w.pred);
+      if (i >= 0) {
+        const [m] = this.messages.splice(i, 1);
+        clearTimeout(w.timer);
+        w.resolve(m);
+        return false;
+      }
+      if (this.closed || this.error) {
+        clearTimeout(w.timer);
+        w.reject(new Error(`closed while waiting: ${JSON.stringify(this.closed)} ${this.error}`));
+        return false;
+      }
+      return true;
+    });
+  }
+
+  next(pred = () => true, ms = 30000) {
+    return new Promise((resolve, reject) => {
+      const w = { pred, resolve, reject };
+      w.timer = setTimeout(() => {
+        this.waiters = this.waiters.filter((x) => x !== w);
+        reject(new Error(`timed out waiting; have ${JSON.stringify(this.messages.map((m) => m.type))}`));
+      }, ms * SLOW);
+      this.waiters.push(w);
+      this.flush();
+    });
+  }
+
+  type(t, ms) { return this.next((m) => m.type === t, ms); }
+
+  close() { this.ws.close(); }
+
+  whenClosed(ms = 10000) {
+    return new Promise((resolve, reject) => {
+      if (this.closed) return resolve(this.closed);
+      const timer = setTimeout(() => reject(new Error('not closed')), ms * SLOW);
+      this.ws.once('close', (code, reason) => { clearTimeout(timer); resolve({ code, reason: reason.toString() }); });
+    });
+  }
+}
+
+export async function connect(url, opts) {
+  const c = new Client(url, opts);
+  await c.opened();
+  await c.type('welcome');
+  return c;
+}
+
+export function scenario(name, overrides = {}) {
+  const s = JSON.parse(readFileSync(join(ROOT, 'scenarios', name), 'utf8'));
+  return { ...s, ...overrides };
+}
+
+// A skeleton held by a client: snapshot, then deltas.
+export class Model {
+  constructor(snapshot) {
+    this.iteration = snapshot.iteration;
+    this.seq = snapshot.seq;
+    this.plants = snapshot.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: new Map(s.nodes.map((n) => [n[0], n])) })) }));
+  }
+
+  apply(delta) {
+    if (delta.seq !== this.seq + 1) throw new Error(`gap: have ${this.seq}, got ${delta.seq}`);
+    this.seq = delta.seq;
+    this.iteration = delta.iteration;
+    const where = new Map();
+    this.plants.forEach((p) => p.stems.forEach((s) => s.nodes.forEach((n, id) => where.set(id, s))));
+    for (const [id, parent, plant, stem, x, y, z, radius] of delta.added) {
+      const s = this.plants[plant].stems[stem];
+      s.nodes.set(id, [id, parent, x, y, z, radius, delta.iteration]);
+      where.set(id, s);
+    }
+    for (const [id, radius] of delta.radii) {
+      const s = where.get(id);
+      if (!s) throw new Error(`radius of unknown node ${id}`);
+      s.nodes.get(id)[5] = radius;
+    }
+    for (const root of delta.shed) {
+      const s = where.get(root);
+      if (!s) throw new Error(`shed of unknown node ${root}`);
+      const gone = new Set([root]);
+      let grew = true;
+      while (grew) {
+        grew = false;
+        for (const [id, n] of s.nodes) if (!gone.has(id) && gone.has(n[1])) { gone.add(id); grew = true; }
+      }
+      for (const id of gone) s.nodes.delete(id);
+    }
+  }
+
+  // The plants part of a skeleton, nodes in id order, as JSON.
+  plantsJSON() {
+    return JSON.stringify(this.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: [...s.nodes.values()].sort((a, b) => a[0] - b[0]) })) })));
+  }
+}
+
+export function exportSkeleton(db, name, iteration) {
+  const args = ['export', '--db', db, '--name', name, '--format', 'skeleton', '-o', '-'];
+  if (iteration !== undefined) args.push('--iteration', String(iteration));
+  const r = spawnSync(SYLVA, args, { encoding: 'utf8', maxBuffer: 1 << 30 });
+  if (r.status !== 0) throw new Error(`export failed: ${r.stderr}`);
+  return JSON.parse(r.stdout);
+}
+
+export function plantsJSON(skeleton) {
+  return JSON.stringify(skeleton.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: s.nodes })) })));
+}
+
+export function cleanup(dir) { rmSync(dir, { recursive: true, force: true }); }

@@ -1,0 +1,227 @@
+// The daemon's protocol against a real daemon on 127.0.0.1, with the ws client.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readdirSync, readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import WebSocket from 'ws';
+import { startDaemon, stopDaemon, connect, Client, scenario, Model, exportSkeleton, plantsJSON,
+  cleanup, ROOT, SLOW } from './harness.mjs';
+
+test('HTTP: /healthz, /metrics, /api/runs, and 404', async () => {
+  const d = await startDaemon();
+  try {
+    const h = await (await fetch(`${d.http}/healthz`)).json();
+    assert.equal(h.ok, true);
+    const m = await (await fetch(`${d.http}/metrics`)).text();
+    assert.match(m, /^sylva_runs 0$/m);
+    assert.match(m, /^# TYPE sylva_iterations_total counter$/m);
+    const runs = await (await fetch(`${d.http}/api/runs`)).json();
+    assert.deepEqual(runs, []);
+    assert.equal((await fetch(`${d.http}/api/nothing`)).status, 404);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('create, subscribe, step: snapshot + deltas equal the stored export', async () => {
+  const d = await startDaemon();
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'list', id: 1 });
+    const list = await c.type('runs');
+    assert.deepEqual(list.runs, []);
+    assert.equal(list.ref, 1);
+    c.send({ type: 'create', id: 'c1', name: 'stand', start: false,
+      scenario: scenario('stand.json', { iterations: 12 }) });
+    const created = await c.type('created');
+    assert.equal(created.ref, 'c1');
+    const run = created.run;
+    c.send({ type: 'subscribe', run });
+    const snap = await c.type('snapshot');
+    assert.equal(snap.iteration, 0);
+    const model = new Model(snap);
+    assert.equal(model.plantsJSON(), plantsJSON(exportSkeleton(d.db, 'stand', 0)));
+    c.send({ type: 'control', run, action: 'step', count: 4, id: 2 });
+    const st = await c.type('status');
+    assert.equal(st.status, 'paused');
+    for (let i = 1; i <= 4; i++) {
+      const delta = await c.type('delta');
+      assert.equal(delta.iteration, i);
+      assert.equal(delta.stats.length, 5);
+      model.apply(delta);
+      assert.equal(model.plantsJSON(), plantsJSON(exportSkeleton(d.db, 'stand', i)), `iteration ${i}`);
+    }
+    // a late subscriber, and a resubscriber with since, end equal too
+    const late = await connect(d.url);
+    late.send({ type: 'subscribe', run });
+    const lateModel = new Model(await late.type('snapshot'));
+    const again = await connect(d.url);
+    again.send({ type: 'subscribe', run, since: 2 });
+    const sinceModel = new Model({ ...snap, seq: 0 });
+    // the resubscriber gets deltas 3 and 4 replayed: rebuild from a fresh snapshot at 2
+    const base = exportSkeleton(d.db, 'stand', 2);
+    const m2 = new Model({ iteration: 2, seq: 2, plants: base.plants });
+    const r3 = await again.type('delta');
+    assert.equal(r3.seq, 3);
+    m2.apply(r3);
+    m2.apply(await again.type('delta'));
+    assert.equal(m2.plantsJSON(), model.plantsJSON());
+    void sinceModel;
+    c.send({ type: 'control', run, action: 'start' });
+    let last = 4;
+    for (;;) {
+      const msg = await c.next((m) => m.type === 'delta' || (m.type === 'status' && m.status === 'finished'), 120000);
+      if (msg.type === 'status') break;
+      model.apply(msg);
+      lateModel.apply(await late.type('delta', 120000));
+      last = msg.iteration;
+    }
+    assert.equal(last, 12);
+    const final = plantsJSON(exportSkeleton(d.db, 'stand'));
+    assert.equal(model.plantsJSON(), final);
+    assert.equal(lateModel.plantsJSON(), final);
+    const csv = await (await fetch(`${d.http}/api/runs/stand/stats.csv`)).text();
+    assert.equal(csv.trim().split('\n').length, 1 + 12 * 5);
+    const m = await (await fetch(`${d.http}/metrics`)).text();
+    assert.match(m, /^sylva_iterations_total 12$/m);
+    for (const x of [c, late, again]) x.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('bad messages get an error and change nothing; other clients unaffected', async () => {
+  const d = await startDaemon();
+  try {
+    const c = await connect(d.url);
+    const other = await connect(d.url);
+    const cases = [
+      ['{"type":"list"', 'bad_request'],
+      ['[1,2]', 'bad_request'],
+      ['{"type":"nope"}', 'bad_request'],
+      ['{"type":"subscribe","run":"x"}', 'bad_request'],
+      ['{"type":"subscribe","run":1e400}', 'bad_request'],
+      ['{"type":"subscribe","run":99}', 'unknown_run'],
+      ['{"type":"control","run":1,"action":"fly"}', 'bad_request'],
+      ['{"type":"create","scenario":{"format":"sylva.scenario/1","plants":[{"id":1}]}}', 'bad_request'],
+      ['{"type":"list","extra":true}', 'bad_request'],
+      ['[' .repeat(100) + ']'.repeat(100), 'bad_request'],
+    ];
+    for (const [text, code] of cases) {
+      c.send(text);
+      const e = await c.type('error');
+      assert.equal(e.code, code, text);
+      assert.ok(e.message.length > 0);
+    }
+    // every JSONTestSuite file: an error (or, for valid JSON that is no message, an error too)
+    const suite = join(ROOT, '..', 'shared', 'testdata', 'JSONTestSuite', 'test_parsing');
+    let sent = 0;
+    for (const f of readdirSync(suite)) {
+      const bytes = readFileSync(join(suite, f));
+      // text frames must be UTF-8; send invalid UTF-8 as a binary frame
+      c.ws.send(bytes, { binary: !isUtf8(bytes) });
+      const e = await c.type('error');
+      assert.ok(['bad_request'].includes(e.code), f);
+      sent++;
+      if (sent % 40 === 0) await new Promise((r) => setTimeout(r, 1000)); // stay under the rate limit
+    }
+    other.send({ type: 'list' });
+    await other.type('runs');
+    const h = await (await fetch(`${d.http}/healthz`)).json();
+    assert.equal(h.ok, true);
+    assert.equal(h.runs, 0);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+function isUtf8(buf) {
+  try { new TextDecoder('utf-8', { fatal: true }).decode(buf); return true; } catch { return false; }
+}
+
+test('over-size messages close with 1009, floods with 1008', async () => {
+  const d = await startDaemon({ args: ['--max-message', '65536', '--rate-limit', '20'] });
+  try {
+    const big = await connect(d.url);
+    big.send('{"type":"list","x":"' + 'a'.repeat(100000) + '"}');
+    const closed = await big.whenClosed();
+    assert.equal(closed.code, 1009);
+    const flood = await connect(d.url);
+    for (let i = 0; i < 100; i++) flood.send({ type: 'list' });
+    const fc = await flood.whenClosed();
+    assert.equal(fc.code, 1008);
+    const ok = await connect(d.url);
+    ok.send({ type: 'list' });
+    await ok.type('runs');
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('token: changing messages need a hello with the token', async () => {
+  const d = await startDaemon({ args: ['--token', 's3cret'] });
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'create', scenario: scenario('shrub.json') });
+    assert.equal((await c.type('error')).code, 'unauthorized');
+    c.send({ type: 'hello', token: 'wrong' });
+    assert.equal((await c.type('error')).code, 'unauthorized');
+    c.send({ type: 'list' });
+    await c.type('runs'); // reading needs no token
+    c.send({ type: 'hello', token: 's3cret' });
+    const w = await c.type('welcome');
+    assert.equal(w.auth, true);
+    c.send({ type: 'create', scenario: scenario('shrub.json') });
+    await c.type('created');
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('origin: a foreign Origin is refused, the own one and --allow-origin accepted', async () => {
+  const d = await startDaemon({ args: ['--allow-origin', 'http://viewer.example'] });
+  try {
+    const evil = new Client(d.url, { origin: 'http://evil.example' });
+    await assert.rejects(evil.opened());
+    const own = new Client(d.url, { origin: `http://127.0.0.1:${d.port}` });
+    await own.opened();
+    const allowed = new Client(d.url, { origin: 'http://viewer.example' });
+    await allowed.opened();
+    own.close();
+    allowed.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('a non-loopback address without a token is refused at start-up', async () => {
+  const { spawnSync } = await import('node:child_process');
+  const r = spawnSync(process.env.SYLVA_EXE, ['serve', '--listen', '0.0.0.0:1', '--db', '/nonexistent/x.db'],
+    { encoding: 'utf8' });
+  assert.equal(r.status, 2);
+  assert.match(r.stderr, /not a loopback address/);
+});
+
+test('SIGTERM: clients closed with 1001, exit 0', async () => {
+  const d = await startDaemon();
+  const c = await connect(d.url);
+  c.send({ type: 'create', name: 'long', start: true, scenario: scenario('stand.json', { iterations: 30 }) });
+  const created = await c.type('created');
+  c.send({ type: 'subscribe', run: created.run });
+  await c.type('snapshot');
+  await c.type('delta', 60000);
+  const closed = c.whenClosed(20000);
+  const exit = await stopDaemon(d, 'SIGTERM');
+  assert.equal((await closed).code, 1001);
+  assert.equal(exit.code, 0);
+  assert.match(d.stderr(), /stopped/);
+  cleanup(d.dir);
+  void WebSocket;
+  void SLOW;
+});
