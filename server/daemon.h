@@ -88,6 +88,7 @@ struct run {
   char *work_delta;  /**< encoded delta (malloc'd) */
   double work_ms;
   msgbuf *history[DAEMON_DELTA_HISTORY]; /**< the last deltas, by seq % size */
+  struct pending_edit *edits; /**< edits waiting for the iteration in flight */
   run *next;
 };
 

@@ -162,10 +162,13 @@ void handle_message(client *c, const char *text, size_t len) {
       client_send_text(c, sylva_msg_light_slice(r->id, r->w, m.z, m.ref));
     break;
   case SYLVA_MSG_EDIT:
-  case SYLVA_MSG_FORK:
-  case SYLVA_MSG_GET:
-    reply_error(c, "bad_request", "/type: not served by this daemon", m.ref);
+    if (strcmp(r->status, "failed") == 0)
+      reply_error(c, "bad_request", "/run: the run has failed", m.ref);
+    else
+      run_edit(r, c, &m, text, len);
     break;
+  case SYLVA_MSG_FORK: run_fork(r, c, m.iteration, m.name, m.ref); break;
+  case SYLVA_MSG_GET: run_get(r, c, m.iteration, m.ref); break;
   }
   sylva_msg_free(&m);
 }

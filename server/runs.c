@@ -4,9 +4,20 @@
 #include <string.h>
 #include <time.h>
 
+#include "edit.h"
 #include "stored.h"
 #include "sylva/protocol.h"
 #include "sylva/status.h"
+
+/** An edit waiting for the iteration in flight. */
+typedef struct pending_edit {
+  sylva_msg msg;
+  char *json;
+  uint64_t client;
+  struct pending_edit *next;
+} pending_edit;
+
+static void apply_pending_edits(run *r);
 
 run *run_find(server *d, int64_t id) {
   for (run *r = d->runs; r; r = r->next)
@@ -133,6 +144,7 @@ static void after_cb(uv_work_t *req, int status) {
     }
   }
   if (r->steps > 0) r->steps--;
+  apply_pending_edits(r);
   if (d->stopping) return;
   if (r->stop_after || sylva_world_finished(r->w) || sylva_world_iteration(r->w) >= r->limit) {
     r->stop_after = false;
@@ -229,6 +241,13 @@ void runs_free(server *d) {
   run *r = d->runs;
   while (r) {
     run *next = r->next;
+    while (r->edits) {
+      pending_edit *e = r->edits;
+      r->edits = e->next;
+      sylva_msg_free(&e->msg);
+      free(e->json);
+      free(e);
+    }
     for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
     free(r->work_delta);
     sylva_world_destroy(r->w);
@@ -281,4 +300,205 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
   server_log(r->name, "created (%s)", r->status);
   run_schedule(r);
   return r;
+}
+
+/* ---- edits, forks, history ------------------------------------------------------ */
+
+/* Applies one edit to the idle run; answers the client when it is still there. */
+static void edit_now(run *r, client *c, const sylva_msg *m, const char *json) {
+  server *d = r->d;
+  char err[512];
+  sylva_world *edited;
+  int rc = edit_apply(r->w, m, &edited, err, sizeof err);
+  if (rc != SYLVA_OK) {
+    if (c) client_send_text(c, sylva_msg_error(rc == SYLVA_ENOMEM ? "internal" : "bad_request",
+                                               err, m->ref));
+    return;
+  }
+  uv_mutex_lock(&d->store_lock);
+  int failed = store_apply_edit(d->st, r->id, edited, json);
+  if (failed) snprintf(err, sizeof err, "%s", store_error(d->st));
+  uv_mutex_unlock(&d->store_lock);
+  if (failed) {
+    sylva_world_destroy(edited);
+    server_log(r->name, "edit not stored: %s", err);
+    if (c) client_send_text(c, sylva_msg_error("internal", err, m->ref));
+    return;
+  }
+  sylva_world_destroy(r->w);
+  r->w = edited;
+  run_note(r);
+  server_log(r->name, "edited after iteration %d (+%d plants, +%d obstacles, -%d obstacles)",
+             r->iteration, m->add_plant_count, m->add_obstacle_count, m->remove_obstacle_count);
+  /* deltas cannot carry an edit: every subscriber gets a fresh snapshot, and the
+   * deltas held for resubscribers end here */
+  r->seq++;
+  for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) {
+    msgbuf_unref(r->history[i]);
+    r->history[i] = NULL;
+  }
+  char *text = sylva_msg_snapshot(r->id, r->seq, r->w, NULL);
+  msgbuf *snap = text ? msgbuf_new(text, strlen(text)) : NULL;
+  free(text);
+  for (client *o = d->clients; o; o = o->next) {
+    subscription *s = client_subscription(o, r->id);
+    if (!s) continue;
+    s->need_snapshot = false;
+    if (snap) client_send(o, snap);
+    else client_send_text(o, sylva_msg_snapshot(r->id, r->seq, r->w, NULL));
+  }
+  msgbuf_unref(snap);
+  if (c) client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
+}
+
+static void apply_pending_edits(run *r) {
+  while (r->edits) {
+    pending_edit *e = r->edits;
+    r->edits = e->next;
+    if (!r->d->stopping) edit_now(r, client_find(r->d, e->client), &e->msg, e->json);
+    sylva_msg_free(&e->msg);
+    free(e->json);
+    free(e);
+  }
+}
+
+void run_edit(run *r, client *c, sylva_msg *m, const char *json, size_t len) {
+  char *text = strndup(json, len);
+  if (!text) {
+    client_send_text(c, sylva_msg_error("internal", "out of memory", m->ref));
+    return;
+  }
+  if (!r->busy) {
+    edit_now(r, c, m, text);
+    free(text);
+    return;
+  }
+  pending_edit *e = calloc(1, sizeof *e);
+  if (!e) {
+    free(text);
+    client_send_text(c, sylva_msg_error("internal", "out of memory", m->ref));
+    return;
+  }
+  e->msg = *m;
+  memset(m, 0, sizeof *m); /* the queue owns the message now */
+  e->json = text;
+  e->client = c->serial;
+  pending_edit **tail = &r->edits;
+  while (*tail) tail = &(*tail)->next;
+  *tail = e;
+}
+
+/* A fork or a history snapshot, computed off the loop. */
+typedef struct job {
+  uv_work_t work;
+  server *d;
+  uint64_t client;
+  int64_t run;
+  int iteration, limit, snapshot_every;
+  bool fork;
+  char *name, *ref, *text;
+  sylva_world *w;
+  int64_t new_id;
+  char err[512];
+  const char *code;
+} job;
+
+static void job_free(job *j) {
+  free(j->name);
+  free(j->ref);
+  free(j->text);
+  sylva_world_destroy(j->w);
+  free(j);
+}
+
+static void job_work(uv_work_t *req) {
+  job *j = req->data;
+  server *d = j->d;
+  j->code = NULL;
+  uv_mutex_lock(&d->store_lock);
+  int failed = store_world_at(d->st, j->run, j->iteration, NULL, edit_replay, &j->w);
+  char *scenario = NULL;
+  if (!failed && j->fork) {
+    failed = store_run_scenario(d->st, j->run, &scenario) ||
+             store_create_run(d->st, j->name, scenario, sylva_world_get_def(j->w)->seed, j->limit,
+                              j->snapshot_every, j->w, &j->new_id);
+    if (!failed) failed = store_set_status(d->st, j->new_id, "paused", NULL, 0);
+  }
+  if (failed) {
+    snprintf(j->err, sizeof j->err, "%s", store_error(d->st));
+    j->code = strstr(j->err, "exists already") ? "bad_request" : "internal";
+  }
+  uv_mutex_unlock(&d->store_lock);
+  free(scenario);
+  if (!failed && !j->fork) {
+    j->text = sylva_msg_snapshot(j->run, 0, j->w, j->ref);
+    if (!j->text) {
+      j->code = "internal";
+      snprintf(j->err, sizeof j->err, "out of memory");
+    }
+  }
+}
+
+static void job_done(uv_work_t *req, int status) {
+  job *j = req->data;
+  (void)status;
+  client *c = client_find(j->d, j->client);
+  if (j->code) {
+    if (c) client_send_text(c, sylva_msg_error(j->code, j->err, j->ref));
+  } else if (j->fork) {
+    run *nr = run_new(j->d, j->new_id, j->name, j->w, "paused", j->limit, j->snapshot_every);
+    if (nr) {
+      j->w = NULL; /* the run owns it */
+      server_log(nr->name, "forked at iteration %d", nr->iteration);
+      if (c) client_send_text(c, sylva_msg_created(nr->id, nr->name, j->ref));
+    } else if (c) {
+      client_send_text(c, sylva_msg_error("internal", "out of memory", j->ref));
+    }
+  } else if (c) {
+    client_send_text(c, j->text);
+    j->text = NULL;
+  }
+  job_free(j);
+}
+
+static void start_job(run *r, client *c, int iteration, const char *name, const char *ref) {
+  job *j = calloc(1, sizeof *j);
+  if (!j || (name && !(j->name = strdup(name))) || (ref && !(j->ref = strdup(ref)))) {
+    if (j) job_free(j);
+    client_send_text(c, sylva_msg_error("internal", "out of memory", ref));
+    return;
+  }
+  if (iteration > r->iteration) {
+    char err[128];
+    snprintf(err, sizeof err, "/iteration: run %lld has iterations 0 to %d", (long long)r->id,
+             r->iteration);
+    client_send_text(c, sylva_msg_error("bad_request", err, ref));
+    job_free(j);
+    return;
+  }
+  j->d = r->d;
+  j->client = c->serial;
+  j->run = r->id;
+  j->iteration = iteration;
+  j->fork = name != NULL;
+  j->limit = r->limit;
+  j->snapshot_every = r->snapshot_every;
+  j->work.data = j;
+  if (uv_queue_work(&r->d->loop, &j->work, job_work, job_done) != 0) {
+    client_send_text(c, sylva_msg_error("internal", "cannot queue the work", ref));
+    job_free(j);
+  }
+}
+
+void run_fork(run *r, client *c, int iteration, const char *name, const char *ref) {
+  for (run *o = r->d->runs; o; o = o->next)
+    if (strcmp(o->name, name) == 0) {
+      client_send_text(c, sylva_msg_error("bad_request", "/name: a run with this name exists", ref));
+      return;
+    }
+  start_job(r, c, iteration, name, ref);
+}
+
+void run_get(run *r, client *c, int iteration, const char *ref) {
+  start_job(r, c, iteration, NULL, ref);
 }

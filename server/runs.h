@@ -6,6 +6,7 @@
 
 #include "client.h"
 #include "daemon.h"
+#include "sylva/protocol.h"
 #include "sylva/scenario.h"
 
 /** Loads every stored run; runs that were running continue. 0 or -1 (logged). */
@@ -27,6 +28,14 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
 void run_set_status(run *r, const char *status);
 /** Sends a status message to every subscriber of the run. */
 void run_broadcast_status(run *r);
+/** Applies an edit between iterations (now, or after the iteration in flight):
+ *  takes the parsed message (m is emptied) and its JSON text for the log. */
+void run_edit(run *r, client *c, sylva_msg *m, const char *json, size_t len);
+/** Forks run r at its stored iteration into a new paused run named `name`, off the
+ *  loop; the client gets `created` (or an error). */
+void run_fork(run *r, client *c, int iteration, const char *name, const char *ref);
+/** Sends the client a snapshot of stored iteration `iteration`, off the loop. */
+void run_get(run *r, client *c, int iteration, const char *ref);
 /** The run's current summary for `list` and /api/runs. */
 void run_summary(const run *r, int64_t *nodes, int *iteration, int *stems);
 #endif

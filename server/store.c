@@ -564,8 +564,72 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
   return -1;
 }
 
+/* Replays the commands logged at iteration `it` on *w. */
+static int replay_commands(store *st, int64_t run, int it, store_replay_fn replay,
+                           sylva_world **w) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "SELECT seq, command FROM commands WHERE run = ? AND iteration = ?"
+                         " ORDER BY seq",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "reading the command log");
+  sqlite3_bind_int64(q, 1, run);
+  sqlite3_bind_int(q, 2, it);
+  int rc;
+  while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
+    const char *json = (const char *)sqlite3_column_text(q, 1);
+    char why[400];
+    if (!replay || !json || replay(w, json, why, sizeof why)) {
+      snprintf(st->error, sizeof st->error, "%s: replaying command %lld after iteration %d: %s",
+               st->path, (long long)sqlite3_column_int64(q, 0), it,
+               replay && json ? why : "cannot replay it here");
+      sqlite3_finalize(q);
+      return -1;
+    }
+  }
+  sqlite3_finalize(q);
+  return rc == SQLITE_DONE ? 0 : fail(st, "reading the command log");
+}
+
+int store_apply_edit(store *st, int64_t run, const sylva_world *w, const char *command_json) {
+  int it = sylva_world_iteration(w);
+  char what[64], now[32];
+  snprintf(what, sizeof what, "storing an edit after iteration %d", it);
+  utc_now(now);
+  uint8_t *img;
+  size_t size;
+  int rc = sylva_snapshot_save(w, &img, &size);
+  if (rc) return fail(st, "%s: %s", what, sylva_strerror(rc));
+  if (exec(st, "BEGIN IMMEDIATE", what)) {
+    free(img);
+    return -1;
+  }
+  sqlite3_stmt *q;
+  rc = sqlite3_prepare_v2(st->db,
+                          "UPDATE iterations SET snapshot = ?, hash = ?, nodes = ?"
+                          " WHERE run = ? AND iteration = ?",
+                          -1, &q, NULL);
+  if (rc == SQLITE_OK) {
+    sqlite3_bind_blob64(q, 1, img, size, SQLITE_STATIC);
+    sqlite3_bind_int64(q, 2, (int64_t)sylva_world_hash(w));
+    sqlite3_bind_int64(q, 3, (int64_t)sylva_world_node_count(w));
+    sqlite3_bind_int64(q, 4, run);
+    sqlite3_bind_int(q, 5, it);
+    rc = sqlite3_step(q);
+    sqlite3_finalize(q);
+  }
+  free(img);
+  if (rc != SQLITE_DONE || sqlite3_changes(st->db) != 1 ||
+      store_log_command(st, run, it, command_json, NULL) || exec(st, "COMMIT", what)) {
+    if (rc != SQLITE_DONE) fail(st, "%s", what);
+    rollback(st);
+    return -1;
+  }
+  return 0;
+}
+
 int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg),
-                   sylva_world **world_out) {
+                   store_replay_fn replay, sylva_world **world_out) {
   sylva_world *w;
   int from;
   *world_out = NULL;
@@ -575,7 +639,8 @@ int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg)
     int it = sylva_world_iteration(w);
     uint64_t hash;
     bool found = false;
-    if (status == SYLVA_OK && store_iteration_hash(st, run, it, &hash, &found)) {
+    if (status == SYLVA_OK &&
+        (replay_commands(st, run, it, replay, &w) || store_iteration_hash(st, run, it, &hash, &found))) {
       sylva_world_destroy(w);
       return -1;
     }

@@ -85,10 +85,20 @@ int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, 
 int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
                      sylva_world **world_out, int *from);
 
+/** Replays a logged command (JSON) on *w; returns 0 or fills err. */
+typedef int (*store_replay_fn)(sylva_world **w, const char *json, char *err, size_t errlen);
+
 /** The world of a run at iteration `at`: the newest good snapshot at or before it,
- *  regrown to `at` with each regrown iteration checked against the stored hash. */
+ *  regrown to `at`. After each regrown iteration the commands logged at it are
+ *  replayed (replay may be NULL when a run has none) and the world is checked
+ *  against the stored hash. */
 int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg),
-                   sylva_world **world_out);
+                   store_replay_fn replay, sylva_world **world_out);
+
+/** Records an edit applied to a run's world after its current iteration, in one
+ *  transaction: the command is logged and that iteration's record (snapshot,
+ *  hash) becomes the edited world, so restoring it needs no replay. */
+int store_apply_edit(store *st, int64_t run, const sylva_world *w, const char *command_json);
 
 /** The scenario JSON of a run (malloc'd), for forks. */
 int store_run_scenario(store *st, int64_t run, char **json);

@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "edit.h"
 #include "options.h"
 
 static void warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
@@ -50,7 +51,7 @@ int cli_store_find(store *st, const char *db, const char *name, store_run *out) 
 }
 
 int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
-  if (store_world_at(st, r->id, at, warn, out)) {
+  if (store_world_at(st, r->id, at, warn, edit_replay, out)) {
     fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));
     return CLI_EXIT_FAILURE;
   }
