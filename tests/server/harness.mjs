@@ -30,16 +30,17 @@ export function tempDir() {
 }
 
 // Starts `sylva serve`; resolves when it listens. Returns {proc, port, url, stderr()}.
-export async function startDaemon({ dir, port, args = [] } = {}) {
+export async function startDaemon({ dir, port, args = [], wrapper = [] } = {}) {
   dir ??= tempDir();
   port ??= await freePort();
   const db = join(dir, 'runs.db');
-  const proc = spawn(SYLVA, ['serve', '--db', db, '--listen', `127.0.0.1:${port}`,
-    '--scenarios', join(ROOT, 'scenarios'), ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+  const argv = [...wrapper, SYLVA, 'serve', '--db', db, '--listen', `127.0.0.1:${port}`,
+    '--scenarios', join(ROOT, 'scenarios'), ...args];
+  const proc = spawn(argv[0], argv.slice(1), { stdio: ['ignore', 'pipe', 'pipe'] });
   let err = '';
   proc.stderr.on('data', (d) => { err += d; });
   await new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`daemon did not start: ${err}`)), 20000 * SLOW);
+    const timer = setTimeout(() => reject(new Error(`daemon did not start: ${err}`)), 60000 * SLOW);
     const check = () => {
       if (err.includes('listening on')) { clearTimeout(timer); resolve(); }
     };

@@ -1,0 +1,33 @@
+// The daemon under valgrind through a session that creates, steps, edits, forks and
+// reads a run, then SIGTERM: exit 0, no memory errors, nothing left allocated.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { startDaemon, stopDaemon, connect, scenario, cleanup } from './harness.mjs';
+
+test('valgrind: a full session ends with every block freed', { timeout: 600000 }, async () => {
+  const d = await startDaemon({ wrapper: ['valgrind', '--leak-check=full', '--error-exitcode=99',
+    '--errors-for-leak-kinds=definite,indirect,possible'] });
+  const c = await connect(d.url);
+  c.send({ type: 'create', name: 'v', scenario: scenario('wall.json', { iterations: 6 }) });
+  const { run } = await c.type('created', 120000);
+  c.send({ type: 'subscribe', run });
+  await c.type('snapshot', 120000);
+  c.send({ type: 'control', run, action: 'step', count: 3 });
+  for (let i = 0; i < 3; i++) await c.type('delta', 120000);
+  c.send({ type: 'edit', run, add_obstacles: [{ id: 'board', kind: 'box', min: [-1, -1, 2], max: [1, 1, 2.1] }] });
+  await c.type('snapshot', 120000);
+  c.send({ type: 'get', run, iteration: 1, id: 'g' });
+  await c.next((m) => m.type === 'snapshot' && m.ref === 'g', 120000);
+  c.send({ type: 'fork', run, iteration: 2, name: 'v2' });
+  await c.type('created', 120000);
+  c.send({ type: 'light', run, z: 1 });
+  await c.next((m) => m.type === 'light_slice' || m.type === 'error', 120000);
+  c.send('{"type":"bogus"}');
+  await c.type('error', 120000);
+  const exit = await stopDaemon(d, 'SIGTERM');
+  const err = d.stderr();
+  assert.equal(exit.code, 0, err.slice(-3000));
+  assert.match(err, /All heap blocks were freed|definitely lost: 0 bytes/);
+  assert.match(err, /ERROR SUMMARY: 0 errors/);
+  cleanup(d.dir);
+});
