@@ -9,12 +9,14 @@
 #include "daemon.h"
 #include "options.h"
 
-enum { OPT_DB, OPT_LISTEN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_ORIGIN, OPT_INSECURE,
+enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_ORIGIN, OPT_INSECURE,
        OPT_MAX_MESSAGE, OPT_RATE, OPT_HELP, OPT_COUNT };
 
 static const cli_option serve_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
     [OPT_LISTEN] = {"listen", 0, "HOST:PORT", "where to listen (default 127.0.0.1:8080)"},
+    [OPT_RUN] = {"run", 0, "SCENARIO.json",
+                 "start growing this scenario (unless a run of its name exists)"},
     [OPT_WEB] = {"web", 0, "DIR", "the viewer's files (default ./web when it exists)"},
     [OPT_SCENARIOS] = {"scenarios", 0, "DIR",
                        "ready scenarios offered to clients (default ./scenarios when it exists)"},
@@ -78,6 +80,7 @@ int cmd_serve(int argc, char **argv) {
       o.port = (int)v;
       break;
     }
+    case OPT_RUN: o.start_scenario = arg; break;
     case OPT_WEB:
       if (!is_dir(arg)) return cli_usage_error("serve", "--web: '%s' is not a directory", arg);
       o.web = arg;

@@ -12,6 +12,7 @@
 #include "client.h"
 #include "csv.h"
 #include "handlers.h"
+#include "input.h"
 #include "runs.h"
 #include "sylva/protocol.h"
 
@@ -312,6 +313,28 @@ static const struct lws_protocol_vhost_options mime_mjs = {&mime_map, NULL, ".mj
 
 /* ---- start and stop ------------------------------------------------------------ */
 
+/* `--run SCENARIO.json`: grow it, unless a run of its name is already held. */
+static int start_scenario(server *d, const char *path) {
+  sylva_scenario *s;
+  int rc = cli_load_scenario(path, &s);
+  if (rc) return rc;
+  for (run *r = d->runs; r; r = r->next)
+    if (strcmp(r->name, s->name) == 0) {
+      server_log(r->name, "already held (%s); not created again", r->status);
+      sylva_scenario_free(s);
+      return 0;
+    }
+  const char *code;
+  char err[512];
+  run *r = run_create(d, s, s->name, true, &code, err, sizeof err);
+  sylva_scenario_free(s);
+  if (!r) {
+    server_log(NULL, "%s: %s", path, err);
+    return 2;
+  }
+  return 0;
+}
+
 static void stop(server *d) {
   if (d->stopping) return;
   d->stopping = true;
@@ -395,6 +418,7 @@ int server_main(const server_options *opt) {
     rc = 1;
   }
   if (!rc && runs_load(d)) rc = 1;
+  if (!rc && opt->start_scenario) rc = start_scenario(d, opt->start_scenario);
   if (!rc) {
     uv_signal_init(&d->loop, &d->sigint);
     uv_signal_init(&d->loop, &d->sigterm);
@@ -408,6 +432,7 @@ int server_main(const server_options *opt) {
     uv_timer_start(&shutdown_timer, on_shutdown_tick, 100, 100);
     server_log(NULL, "listening on http://%s:%d/ (WebSocket /ws, protocol sylva.v1), store %s",
                opt->host, opt->port, opt->db);
+    if (opt->web) server_log(NULL, "viewer: http://%s:%d/", opt->host, opt->port);
     uv_run(&d->loop, UV_RUN_DEFAULT);
   } else if (d->ctx) {
     lws_context_destroy(d->ctx);

@@ -42,6 +42,7 @@ typedef struct server_options {
   const char *web;       /**< the viewer's files, or NULL */
   const char *scenarios; /**< ready scenarios offered to clients, or NULL */
   const char *token;     /**< required for changing messages, or NULL */
+  const char *start_scenario; /**< a scenario to grow at start unless its run exists */
   const char *origins[DAEMON_MAX_ORIGINS];
   int origin_count;
   size_t max_message;
