@@ -1,11 +1,11 @@
 // The daemon's protocol against a real daemon on 127.0.0.1, with the ws client.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { readdirSync, readFileSync } from 'node:fs';
+import { readdirSync, readFileSync, mkdtempSync } from 'node:fs';
+import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import WebSocket from 'ws';
 import { startDaemon, stopDaemon, connect, Client, scenario, Model, exportSkeleton, plantsJSON,
-  cleanup, ROOT, SLOW } from './harness.mjs';
+  cleanup, ROOT } from './harness.mjs';
 
 test('HTTP: /healthz, /metrics, /api/runs, and 404', async () => {
   const d = await startDaemon();
@@ -58,7 +58,6 @@ test('create, subscribe, step: snapshot + deltas equal the stored export', async
     const lateModel = new Model(await late.type('snapshot'));
     const again = await connect(d.url);
     again.send({ type: 'subscribe', run, since: 2 });
-    const sinceModel = new Model({ ...snap, seq: 0 });
     // the resubscriber gets deltas 3 and 4 replayed: rebuild from a fresh snapshot at 2
     const base = exportSkeleton(d.db, 'stand', 2);
     const m2 = new Model({ iteration: 2, seq: 2, plants: base.plants });
@@ -67,7 +66,6 @@ test('create, subscribe, step: snapshot + deltas equal the stored export', async
     m2.apply(r3);
     m2.apply(await again.type('delta'));
     assert.equal(m2.plantsJSON(), model.plantsJSON());
-    void sinceModel;
     c.send({ type: 'control', run, action: 'start' });
     let last = 4;
     for (;;) {
@@ -222,6 +220,43 @@ test('SIGTERM: clients closed with 1001, exit 0', async () => {
   assert.equal(exit.code, 0);
   assert.match(d.stderr(), /stopped/);
   cleanup(d.dir);
-  void WebSocket;
-  void SLOW;
 });
+
+test('static files: MIME types, index, and no path escapes', async () => {
+  const { mkdirSync, writeFileSync } = await import('node:fs');
+  const { connect: tcp } = await import('node:net');
+  const web = join(tempDirFor(), 'web');
+  mkdirSync(web, { recursive: true });
+  writeFileSync(join(web, 'index.html'), '<!doctype html><title>v</title>');
+  writeFileSync(join(web, 'app.mjs'), 'export const x = 1;\n');
+  writeFileSync(join(web, 'style.css'), 'body{}\n');
+  const d = await startDaemon({ args: ['--web', web] });
+  try {
+    const root = await fetch(`${d.http}/`);
+    assert.equal(root.status, 200);
+    assert.match(root.headers.get('content-type'), /text\/html/);
+    const mjs = await fetch(`${d.http}/app.mjs`);
+    assert.equal(mjs.status, 200);
+    assert.match(mjs.headers.get('content-type'), /javascript/);
+    assert.match((await fetch(`${d.http}/style.css`)).headers.get('content-type'), /text\/css/);
+    assert.equal((await fetch(`${d.http}/missing.js`)).status, 404);
+    for (const path of ['/../../../../etc/passwd', '/%2e%2e/%2e%2e/etc/passwd', '/..%2f..%2fetc/passwd']) {
+      const reply = await new Promise((resolve) => {
+        const s = tcp(d.port, '127.0.0.1', () => s.write(`GET ${path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n`));
+        let buf = '';
+        s.on('data', (x) => { buf += x; });
+        s.on('close', () => resolve(buf));
+        s.on('error', () => resolve(buf));
+      });
+      assert.doesNotMatch(reply, /root:x:0:0/, path);
+      assert.doesNotMatch(reply.split('\r\n')[0] || '', / 200 /, path);
+    }
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+function tempDirFor() {
+  return mkdtempSync(join(tmpdir(), 'sylva-web-'));
+}
