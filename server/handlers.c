@@ -111,7 +111,8 @@ void handle_message(client *c, const char *text, size_t len) {
   sylva_msg m;
   char err[512];
   if (sylva_msg_parse(text, len, &m, err, sizeof err) != SYLVA_OK) {
-    reply_error(c, "bad_request", err, NULL);
+    reply_error(c, "bad_request", err, m.ref); /* the id, when it could be read */
+    sylva_msg_free(&m);
     return;
   }
   if (changes(m.type) && d->opt.token && !c->authed) {

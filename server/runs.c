@@ -224,12 +224,21 @@ int runs_load(server *d) {
       server_log(sr->name, "not loaded (see above)");
       continue;
     }
+    int64_t edits = 0;
+    if (store_command_count(d->st, sr->id, &edits)) {
+      server_log(sr->name, "%s", store_error(d->st));
+      sylva_world_destroy(w);
+      continue;
+    }
     run *r = run_new(d, sr->id, sr->name, w, sr->status, sr->iterations, sr->snapshot_every);
     if (!r) {
       sylva_world_destroy(w);
       store_runs_free(stored, n);
       return -1;
     }
+    /* one seq per delta and per edit since the run was planted, so that the numbers a
+     * client holds keep their meaning across restarts of the daemon */
+    r->seq = (int64_t)sr->last_iteration + edits;
     server_log(r->name, "loaded at iteration %d (%s)", sr->last_iteration, sr->status);
     if (strcmp(r->status, "running") == 0) run_schedule(r);
   }
@@ -448,6 +457,7 @@ static void job_done(uv_work_t *req, int status) {
   } else if (j->fork) {
     run *nr = run_new(j->d, j->new_id, j->name, j->w, "paused", j->limit, j->snapshot_every);
     if (nr) {
+      nr->seq = j->iteration; /* a fork starts with no edits of its own */
       j->w = NULL; /* the run owns it */
       server_log(nr->name, "forked at iteration %d", nr->iteration);
       if (c) client_send_text(c, sylva_msg_created(nr->id, nr->name, j->ref));

@@ -154,7 +154,7 @@ export class Model {
   constructor(snapshot) {
     this.iteration = snapshot.iteration;
     this.seq = snapshot.seq;
-    this.plants = snapshot.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: new Map(s.nodes.map((n) => [n[0], n])) })) }));
+    this.plants = snapshot.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: new Map(s.nodes.map((n) => [n[0], n.slice()])) })) }));
   }
 
   apply(delta) {
