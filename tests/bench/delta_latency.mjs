@@ -1,0 +1,260 @@
+// Benchmark (not a test): how fast the daemon fans a run's deltas out to many
+// viewers, and how long a fresh subscriber waits for the snapshot of a big world.
+//
+//   node tests/bench/delta_latency.mjs [--exe build/server/sylva] [--viewers 100]
+//        [--iterations5 20] [--iterations100 24] [--threads 2] [--only 5|100]
+//
+// Two runs: the five-tree stand (scenarios/stand.json) and a generated 100-tree
+// stand (igm-fig17b, tropism up, 10 x 10 trees 2 m apart in a 26 x 26 x 14 m world).
+// The viewers live in worker threads (each its own event loop) and stamp every
+// message on arrival with the system's monotonic clock. The daemon does not stamp
+// deltas, so the latency reported is relative: for each delta, arrival at a viewer
+// minus the first arrival at any viewer (the fan-out spread), as p50/p99 over every
+// (delta, viewer) pair and the largest spread per delta; plus bytes per delta. After
+// the run, a fresh client subscribes and times the snapshot of the final world (sent,
+// received and parsed), and asks for the same iteration with `get` (from the store).
+// Use a release build on a quiet machine; the numbers include the viewers' own
+// receive path on the same machine.
+import { Worker, isMainThread, parentPort, workerData } from 'node:worker_threads';
+import { spawn } from 'node:child_process';
+import { createRequire } from 'node:module';
+import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const require = createRequire(new URL('../server/package.json', import.meta.url));
+const WebSocket = require('ws');
+const now = () => Number(process.hrtime.bigint()) / 1e6; // ms, monotonic, shared by threads
+
+// ---- viewer threads ----------------------------------------------------------------
+
+if (!isMainThread) {
+  const { url, run, count } = workerData;
+  const records = []; // [viewer, type, seq, iteration, bytes, t]
+  let subscribed = 0;
+  let finished = 0;
+  const sockets = [];
+  for (let v = 0; v < count; v++) {
+    const ws = new WebSocket(url, 'sylva.v1', { perMessageDeflate: false, maxPayload: 2 ** 31 });
+    sockets.push(ws);
+    ws.on('message', (data) => {
+      const t = now();
+      const head = data.toString('latin1', 0, Math.min(data.length, 100));
+      const type = (head.match(/^\{"type":"(\w+)"/) || [])[1];
+      if (type === 'welcome') {
+        ws.send(JSON.stringify({ type: 'subscribe', run }));
+      } else if (type === 'snapshot' || type === 'delta') {
+        const m = head.match(/"seq":(\d+),"iteration":(\d+)/);
+        records.push([v, type, Number(m[1]), Number(m[2]), data.length, t]);
+        if (type === 'snapshot' && ++subscribed === count) parentPort.postMessage({ subscribed: true });
+      } else if (type === 'status' && /"status":"(finished|failed)"/.test(head)) {
+        if (++finished === count) {
+          parentPort.postMessage({ records });
+          for (const s of sockets) s.close();
+        }
+      }
+    });
+    ws.on('error', (e) => parentPort.postMessage({ error: String(e) }));
+  }
+}
+
+// ---- main ---------------------------------------------------------------------------
+
+function arg(name, def) {
+  const i = process.argv.indexOf(`--${name}`);
+  return i > 0 ? process.argv[i + 1] : def;
+}
+
+async function startDaemon(exe, root) {
+  const dir = mkdtempSync(join(tmpdir(), 'sylva-bench-'));
+  const port = 20000 + Math.floor(Math.random() * 20000);
+  const proc = spawn(exe, ['serve', '--db', join(dir, 'runs.db'), '--listen', `127.0.0.1:${port}`,
+    '--scenarios', join(root, 'scenarios'), '--max-message', String(1 << 26)],
+  { stdio: ['ignore', 'ignore', 'pipe'] });
+  let err = '';
+  proc.stderr.on('data', (d) => { err += d; });
+  await new Promise((ok, fail) => {
+    const timer = setInterval(() => {
+      if (err.includes('listening on')) { clearInterval(timer); ok(); }
+      if (proc.exitCode !== null) { clearInterval(timer); fail(new Error(err)); }
+    }, 20);
+  });
+  return { proc, dir, port, url: `ws://127.0.0.1:${port}/ws`, http: `http://127.0.0.1:${port}`, log: () => err };
+}
+
+// A client that parses everything (for the control connection and the fresh subscriber).
+function client(url) {
+  const ws = new WebSocket(url, 'sylva.v1', { perMessageDeflate: false, maxPayload: 2 ** 31 });
+  const queue = [];
+  const waiters = [];
+  ws.on('message', (data) => {
+    const t = now();
+    queue.push({ data, t });
+    for (const w of [...waiters]) w();
+  });
+  const next = (pred) => new Promise((ok) => {
+    const check = () => {
+      const i = queue.findIndex((x) => pred(x));
+      if (i < 0) return false;
+      waiters.splice(waiters.indexOf(check), 1);
+      ok(queue.splice(i, 1)[0]);
+      return true;
+    };
+    waiters.push(check);
+    check();
+  });
+  const opened = new Promise((ok, fail) => { ws.once('open', ok); ws.once('error', fail); });
+  return { ws, next, opened, send: (o) => ws.send(JSON.stringify(o)) };
+}
+
+const headType = (x) => (x.data.toString('latin1', 0, 40).match(/^\{"type":"(\w+)"/) || [])[1];
+
+function quantile(sorted, q) {
+  if (!sorted.length) return NaN;
+  return sorted[Math.min(sorted.length - 1, Math.floor(q * sorted.length))];
+}
+
+function stand100() {
+  const plants = [];
+  for (let i = 0; i < 10; i++) {
+    for (let j = 0; j < 10; j++) {
+      plants.push({ id: `t${plants.length + 1}`, species: 'tree', roots: [[-9 + 2 * i, -9 + 2 * j, 0]] });
+    }
+  }
+  return { format: 'sylva.scenario/1', name: '100-tree stand', seed: 17, iterations: 24,
+    world: { min: [-13, -13, 0], max: [13, 13, 14] },
+    species: { tree: { preset: 'igm-fig17b', tropism: [0, 0, 1] } }, plants };
+}
+
+async function bench(label, scenario, opts) {
+  const d = await startDaemon(opts.exe, opts.root);
+  try {
+    const ctl = client(d.url);
+    await ctl.opened;
+    ctl.send({ type: 'create', name: 'bench', start: false, scenario });
+    const created = JSON.parse((await ctl.next((x) => headType(x) === 'created')).data);
+    const run = created.run;
+    const per = Math.ceil(opts.viewers / opts.threads);
+    const workers = [];
+    const results = [];
+    for (let k = 0, left = opts.viewers; left > 0; k++, left -= per) {
+      const count = Math.min(per, left);
+      const w = new Worker(fileURLToPath(import.meta.url), { workerData: { url: d.url, run, count } });
+      const sub = new Promise((ok, fail) => {
+        w.on('message', (m) => {
+          if (m.error) fail(new Error(m.error));
+          if (m.subscribed) ok();
+          if (m.records) results.push(m.records.map((r) => [r[0] + k * per, ...r.slice(1)]));
+        });
+        w.on('error', fail);
+      });
+      workers.push({ w, sub, done: new Promise((ok) => w.on('exit', ok)) });
+    }
+    await Promise.all(workers.map((x) => x.sub));
+    ctl.send({ type: 'subscribe', run }); // for the status broadcasts
+    await ctl.next((x) => headType(x) === 'snapshot');
+    const t0 = now();
+    ctl.send({ type: 'control', run, action: 'start' });
+    await ctl.next((x) => headType(x) === 'status' && /"status":"(finished|failed)"/.test(x.data.toString('latin1', 0, 80)));
+    const grow = now() - t0;
+    await Promise.all(workers.map((x) => x.done));
+    const records = results.flat();
+
+    // per delta: arrivals at every viewer
+    const bySeq = new Map();
+    for (const [v, type, seq, it, bytes, t] of records) {
+      if (type !== 'delta') continue;
+      if (!bySeq.has(seq)) bySeq.set(seq, { it, bytes, arrivals: [] });
+      bySeq.get(seq).arrivals.push(t);
+      void v;
+    }
+    const rel = [];
+    const spreads = [];
+    const rows = [];
+    let incomplete = 0;
+    for (const [seq, x] of [...bySeq].sort((a, b) => a[0] - b[0])) {
+      if (x.arrivals.length !== opts.viewers) incomplete++;
+      const first = Math.min(...x.arrivals);
+      const last = Math.max(...x.arrivals);
+      const r = x.arrivals.map((t) => t - first).sort((a, b) => a - b);
+      rel.push(...r);
+      spreads.push(last - first);
+      rows.push({ seq, iteration: x.it, bytes: x.bytes, p50: quantile(r, 0.5), p99: quantile(r, 0.99), spread: last - first });
+    }
+    rel.sort((a, b) => a - b);
+    spreads.sort((a, b) => a - b);
+
+    // a fresh subscriber of the final world, and `get` of the same iteration
+    const snaps = [];
+    for (let i = 0; i < 3; i++) {
+      const f = client(d.url);
+      await f.opened;
+      await f.next((x) => headType(x) === 'welcome');
+      const s0 = now();
+      f.send({ type: 'subscribe', run });
+      const msg = await f.next((x) => headType(x) === 'snapshot');
+      const tArrive = msg.t;
+      const snap = JSON.parse(msg.data);
+      const tParsed = now();
+      let nodes = 0;
+      for (const p of snap.plants) for (const s of p.stems) nodes += s.nodes.length;
+      snaps.push({ kind: 'subscribe', arrive: tArrive - s0, parsed: tParsed - s0, bytes: msg.data.length, nodes, iteration: snap.iteration });
+      const g0 = now();
+      f.send({ type: 'get', run, iteration: snap.iteration, id: 'g' });
+      const gm = await f.next((x) => headType(x) === 'snapshot' || headType(x) === 'error');
+      const gParsed = JSON.parse(gm.data);
+      snaps.push({ kind: 'get', arrive: gm.t - g0, parsed: now() - g0, bytes: gm.data.length,
+        nodes: gParsed.plants ? gParsed.plants.reduce((n, p) => n + p.stems.reduce((m, s) => m + s.nodes.length, 0), 0) : gParsed.message, iteration: gParsed.iteration });
+      f.ws.close();
+    }
+    const metrics = await (await fetch(`${d.http}/metrics`)).text();
+    const pick = (n) => (metrics.match(new RegExp(`^${n} (\\S+)$`, 'm')) || [])[1];
+    const status = readFileSync(`/proc/${d.proc.pid}/status`, 'utf8');
+    const hwm = Number(status.match(/VmHWM:\s+(\d+)/)[1]) / 1024;
+    ctl.ws.close();
+    return { label, grow, rows, rel, spreads, incomplete, snaps, hwm,
+      iterSeconds: Number(pick('sylva_iteration_seconds_total')), sent: Number(pick('sylva_bytes_sent_total')) };
+  } finally {
+    d.proc.kill('SIGTERM');
+    await new Promise((ok) => d.proc.once('exit', ok));
+    rmSync(d.dir, { recursive: true, force: true });
+  }
+}
+
+function fmtMs(x) { return x < 10 ? x.toFixed(2) : x.toFixed(0); }
+function fmtBytes(x) { return x >= 2 ** 20 ? `${(x / 2 ** 20).toFixed(1)} MiB` : `${(x / 1024).toFixed(1)} KiB`; }
+
+function report(r, viewers) {
+  console.log(`\n== ${r.label}: ${viewers} viewers ==`);
+  console.log(`grew ${r.rows.length} iterations in ${(r.grow / 1000).toFixed(2)} s (${r.iterSeconds.toFixed(2)} s of it growing, the rest fan-out and scheduling); ${fmtBytes(r.sent)} sent; daemon peak RSS ${r.hwm.toFixed(0)} MiB; deltas missing at some viewer: ${r.incomplete}`);
+  console.log('iter  delta bytes   p50 ms   p99 ms  spread ms   (arrival at a viewer - first arrival)');
+  for (const x of r.rows) {
+    console.log(`${String(x.iteration).padStart(4)}  ${fmtBytes(x.bytes).padStart(11)}  ${fmtMs(x.p50).padStart(7)}  ${fmtMs(x.p99).padStart(7)}  ${fmtMs(x.spread).padStart(9)}`);
+  }
+  console.log(`all deltas x viewers: p50 ${fmtMs(quantile(r.rel, 0.5))} ms, p99 ${fmtMs(quantile(r.rel, 0.99))} ms; spread per delta: p50 ${fmtMs(quantile(r.spreads, 0.5))} ms, p99 ${fmtMs(quantile(r.spreads, 0.99))} ms, max ${fmtMs(r.spreads[r.spreads.length - 1])} ms`);
+  console.log('final world, fresh client: kind       iteration  nodes      bytes        arrived ms  parsed ms');
+  for (const s of r.snaps) {
+    console.log(`                           ${s.kind.padEnd(10)} ${String(s.iteration).padStart(9)}  ${String(s.nodes).padEnd(9)}  ${fmtBytes(s.bytes).padStart(11)}  ${fmtMs(s.arrive).padStart(10)}  ${fmtMs(s.parsed).padStart(9)}`);
+  }
+}
+
+async function main() {
+  const root = resolve(dirname(fileURLToPath(import.meta.url)), '..', '..');
+  const opts = {
+    root,
+    exe: resolve(arg('exe', process.env.SYLVA_EXE || join(root, 'build', 'server', 'sylva'))),
+    viewers: Number(arg('viewers', '100')),
+    threads: Number(arg('threads', '2')),
+  };
+  const only = arg('only', null);
+  const stand = JSON.parse(readFileSync(join(root, 'scenarios', 'stand.json'), 'utf8'));
+  if (!only || only === '5') {
+    report(await bench('five-tree stand (scenarios/stand.json)', { ...stand, iterations: Number(arg('iterations5', '20')) }, opts), opts.viewers);
+  }
+  if (!only || only === '100') {
+    report(await bench('100-tree stand (igm-fig17b, 10 x 10, 2 m)', { ...stand100(), iterations: Number(arg('iterations100', '24')) }, opts), opts.viewers);
+  }
+}
+
+if (isMainThread) await main();
