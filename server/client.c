@@ -70,16 +70,34 @@ void client_send_text(client *c, char *text) {
   msgbuf_unref(m);
 }
 
+/* Largest fragment written at once: lws copies what the socket does not take, so
+ * whole messages of megabytes would sit in its buffers outside the client's cap. */
+#define CLIENT_FRAGMENT (128u << 10)
+
 int client_writable(client *c) {
   if (!c->qlen) return 0;
   msgbuf *m = c->queue[c->qhead];
-  int n = lws_write(c->wsi, m->data + LWS_PRE, m->len, LWS_WRITE_TEXT);
-  if (n < (int)m->len) return -1;
-  c->qhead = (c->qhead + 1) % c->qcap;
-  c->qlen--;
-  c->pending -= m->len;
-  c->d->bytes_sent += (int64_t)m->len;
-  msgbuf_unref(m);
+  size_t n = m->len - c->sent;
+  if (n > CLIENT_FRAGMENT) n = CLIENT_FRAGMENT;
+  bool first = c->sent == 0, last = c->sent + n == m->len;
+  int flags = lws_write_ws_flags(LWS_WRITE_TEXT, first, last);
+  /* each fragment needs LWS_PRE bytes of headroom in front of it: the shared buffer
+   * has them before its start, and later fragments borrow the bytes just sent */
+  unsigned char *p = m->data + LWS_PRE + c->sent;
+  unsigned char saved[LWS_PRE];
+  if (!first) memcpy(saved, p - LWS_PRE, LWS_PRE);
+  int w = lws_write(c->wsi, p, n, (enum lws_write_protocol)flags);
+  if (!first) memcpy(p - LWS_PRE, saved, LWS_PRE);
+  if (w < (int)n) return -1;
+  c->sent += n;
+  c->d->bytes_sent += (int64_t)n;
+  if (last) {
+    c->sent = 0;
+    c->qhead = (c->qhead + 1) % c->qcap;
+    c->qlen--;
+    c->pending -= m->len;
+    msgbuf_unref(m);
+  }
   if (c->qlen) lws_callback_on_writable(c->wsi);
   return 0;
 }

@@ -18,6 +18,7 @@ struct client {
   bool authed;
   msgbuf **queue;       /**< ring of messages waiting to be sent */
   size_t qhead, qlen, qcap, pending;
+  size_t sent;          /**< bytes of the message at the head already written */
   char *rx;             /**< the message being received */
   size_t rx_len, rx_cap;
   bool rx_binary, rx_too_large;

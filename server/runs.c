@@ -107,8 +107,25 @@ static void work_cb(uv_work_t *req) {
   r->work_delta = sylva_msg_delta(r->id, r->seq + 1, r->w, j);
 }
 
+/* The snapshot of the run's current seq, encoded once and shared by every client
+ * that needs it (a reply with a ref is encoded for its client alone). */
 static void send_snapshot(run *r, client *c, const char *ref) {
-  client_send_text(c, sylva_msg_snapshot(r->id, r->seq, r->w, ref));
+  if (ref) {
+    client_send_text(c, sylva_msg_snapshot(r->id, r->seq, r->w, ref));
+    return;
+  }
+  if (!r->snapshot || r->snapshot_seq != r->seq) {
+    msgbuf_unref(r->snapshot);
+    r->snapshot = NULL;
+    char *text = sylva_msg_snapshot(r->id, r->seq, r->w, NULL);
+    if (text) r->snapshot = msgbuf_new(text, strlen(text));
+    free(text);
+    r->snapshot_seq = r->seq;
+  }
+  if (r->snapshot)
+    client_send(c, r->snapshot);
+  else
+    client_send_text(c, NULL); /* out of memory: an error */
 }
 
 static void after_cb(uv_work_t *req, int status) {
@@ -258,6 +275,7 @@ void runs_free(server *d) {
       free(e);
     }
     for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
+    msgbuf_unref(r->snapshot);
     free(r->work_delta);
     sylva_world_destroy(r->w);
     free(r->name);
@@ -346,17 +364,12 @@ static void edit_now(run *r, client *c, const sylva_msg *m, const char *json) {
     msgbuf_unref(r->history[i]);
     r->history[i] = NULL;
   }
-  char *text = sylva_msg_snapshot(r->id, r->seq, r->w, NULL);
-  msgbuf *snap = text ? msgbuf_new(text, strlen(text)) : NULL;
-  free(text);
   for (client *o = d->clients; o; o = o->next) {
     subscription *s = client_subscription(o, r->id);
     if (!s) continue;
     s->need_snapshot = false;
-    if (snap) client_send(o, snap);
-    else client_send_text(o, sylva_msg_snapshot(r->id, r->seq, r->w, NULL));
+    send_snapshot(r, o, NULL);
   }
-  msgbuf_unref(snap);
   if (c) client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
 }
 
