@@ -82,20 +82,13 @@ int cmd_export(int argc, char **argv) {
   }
   if (opt == -2) return CLI_EXIT_USAGE;
   if (first != argc) return cli_usage_error("export", "unexpected argument '%s'", argv[first]);
-  if (!db || !db[0]) return cli_usage_error("export", "--db FILE is required");
-  if (!name || !name[0]) return cli_usage_error("export", "--name NAME is required");
   if (format < 0) return cli_usage_error("export", "--format is required");
   if (!out || !out[0]) return cli_usage_error("export", "-o OUT is required");
 
   store *st;
-  int rc = cli_store_open(db, false, &st);
-  if (rc) return rc;
   store_run r;
-  rc = cli_store_find(st, db, name, &r);
-  if (rc) {
-    store_close(st);
-    return rc;
-  }
+  int rc = cli_open_run("export", db, name, &st, &r);
+  if (rc) return rc;
   int at = has_iteration ? (int)iteration : r.last_iteration;
   if (at > r.last_iteration) {
     fprintf(stderr, "sylva: %s: run \"%s\" has no iteration %d (it has 0 to %d)\n", db, name, at,

@@ -57,18 +57,10 @@ int cmd_resume(int argc, char **argv) {
   }
   if (opt == -2) return CLI_EXIT_USAGE;
   if (first != argc) return cli_usage_error("resume", "unexpected argument '%s'", argv[first]);
-  if (!db || !db[0]) return cli_usage_error("resume", "--db FILE is required");
-  if (!name || !name[0]) return cli_usage_error("resume", "--name NAME is required");
-
   store *st;
-  int rc = cli_store_open(db, false, &st);
-  if (rc) return rc;
   store_run r;
-  rc = cli_store_find(st, db, name, &r);
-  if (rc) {
-    store_close(st);
-    return rc;
-  }
+  int rc = cli_open_run("resume", db, name, &st, &r);
+  if (rc) return rc;
   grow_job job = {.label = r.name, .limit = iterations ? (int)iterations : r.iterations,
                   .progress = !quiet && isatty(STDERR_FILENO), .st = st, .run = r.id,
                   .snapshot_every = r.snapshot_every};

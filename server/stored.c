@@ -50,6 +50,21 @@ int cli_store_find(store *st, const char *db, const char *name, store_run *out) 
   return CLI_EXIT_OK;
 }
 
+int cli_open_run(const char *command, const char *db, const char *name, store **st,
+                 store_run *out) {
+  *st = NULL;
+  if (!db || !db[0]) return cli_usage_error(command, "--db FILE is required");
+  if (!name || !name[0]) return cli_usage_error(command, "--name NAME is required");
+  int rc = cli_store_open(db, false, st);
+  if (rc) return rc;
+  rc = cli_store_find(*st, db, name, out);
+  if (rc) {
+    store_close(*st);
+    *st = NULL;
+  }
+  return rc;
+}
+
 int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
   if (store_world_at(st, r->id, at, warn, edit_replay, out)) {
     fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));

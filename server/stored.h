@@ -18,6 +18,11 @@ int cli_store_open(const char *path, bool create, store **out);
 int cli_store_new_run(const char *db, const char *name, const sylva_scenario *s, int limit,
                       grow_job *job);
 
+/** For a command given --db and --name: checks both were given, opens the store
+ *  (not creating it) and finds the run. On failure nothing stays open. */
+int cli_open_run(const char *command, const char *db, const char *name, store **st,
+                 store_run *out);
+
 /** Finds run `name`; exit status 2 with a message when there is none. */
 int cli_store_find(store *st, const char *db, const char *name, store_run *out);
 
