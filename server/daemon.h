@@ -31,6 +31,8 @@
 #define DAEMON_MAX_PENDING (64u << 20)
 /** Deltas kept per run for clients that resubscribe with "since". */
 #define DAEMON_DELTA_HISTORY 64
+/** Most bytes of deltas kept per run for resubscribers (older ones are dropped). */
+#define DAEMON_HISTORY_BYTES (64u << 20)
 /** Most origins given with --allow-origin. */
 #define DAEMON_MAX_ORIGINS 16
 

@@ -150,6 +150,18 @@ static void after_cb(uv_work_t *req, int status) {
   msgbuf **slot = &r->history[r->seq % DAEMON_DELTA_HISTORY];
   msgbuf_unref(*slot);
   *slot = m;
+  /* keep the newest deltas up to a byte budget: a resubscriber further behind
+   * gets a snapshot instead */
+  size_t kept = 0;
+  for (int64_t k = 0; k < DAEMON_DELTA_HISTORY && k < r->seq; k++) {
+    msgbuf **h = &r->history[(r->seq - k) % DAEMON_DELTA_HISTORY];
+    if (!*h) continue;
+    kept += (*h)->len;
+    if (k > 0 && kept > DAEMON_HISTORY_BYTES) {
+      msgbuf_unref(*h);
+      *h = NULL;
+    }
+  }
   for (client *c = d->clients; c; c = c->next) {
     subscription *s = client_subscription(c, r->id);
     if (!s) continue;
