@@ -23,7 +23,7 @@ static void usage(FILE *f) {
         "  runs --db FILE          list the stored runs\n"
         "  export --db FILE --name NAME --format F -o OUT\n"
         "                          a stored iteration as skeleton, obj, ply or csv\n"
-        "  serve                   the daemon: runs, WebSocket protocol, the viewer\n"
+        "  serve                   the daemon: grows runs, streams them over WebSockets\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
