@@ -33,6 +33,8 @@
 #define DAEMON_DELTA_HISTORY 64
 /** Most bytes of deltas kept per run for resubscribers (older ones are dropped). */
 #define DAEMON_HISTORY_BYTES (64u << 20)
+/** Most cells of a light slice (its message is about 1.34 bytes a cell). */
+#define DAEMON_MAX_SLICE (16ll << 20)
 /** Most origins given with --allow-origin. */
 #define DAEMON_MAX_ORIGINS 16
 

@@ -156,12 +156,20 @@ void handle_message(client *c, const char *text, size_t len) {
   case SYLVA_MSG_SUBSCRIBE: run_subscribe(r, c, m.has_since, m.since, m.ref); break;
   case SYLVA_MSG_UNSUBSCRIBE: client_unsubscribe(c, r->id); break;
   case SYLVA_MSG_CONTROL: handle_control(c, r, &m); break;
-  case SYLVA_MSG_LIGHT:
-    if (r->busy)
+  case SYLVA_MSG_LIGHT: {
+    int dims[3];
+    sylva_world_dims(r->w, dims);
+    if ((int64_t)dims[0] * dims[1] > DAEMON_MAX_SLICE) {
+      snprintf(err, sizeof err, "/z: the slice would have %lld cells; at most %lld are sent",
+               (long long)dims[0] * dims[1], (long long)DAEMON_MAX_SLICE);
+      reply_error(c, "too_large", err, m.ref);
+    } else if (r->busy) {
       reply_error(c, "busy", "an iteration is in flight; ask again", m.ref);
-    else
+    } else {
       client_send_text(c, sylva_msg_light_slice(r->id, r->w, m.z, m.ref));
+    }
     break;
+  }
   case SYLVA_MSG_EDIT:
     if (strcmp(r->status, "failed") == 0)
       reply_error(c, "bad_request", "/run: the run has failed", m.ref);

@@ -260,3 +260,27 @@ test('static files: MIME types, index, and no path escapes', async () => {
 function tempDirFor() {
   return mkdtempSync(join(tmpdir(), 'sylva-web-'));
 }
+
+test('light: a slice of the light field, and too_large for a huge site', async () => {
+  const d = await startDaemon();
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'create', name: 'wall', scenario: scenario('wall.json') });
+    const { run } = await c.type('created');
+    c.send({ type: 'light', run, z: 1.0, id: 'l' });
+    const slice = await c.type('light_slice');
+    assert.equal(slice.ref, 'l');
+    const bytes = Buffer.from(slice.values, 'base64');
+    assert.equal(bytes.length, slice.nx * slice.ny);
+    assert.ok(bytes.includes(0), 'the wall is dark');
+    assert.ok(bytes.includes(255), 'open ground is lit');
+    const huge = scenario('wall.json', { world: { min: [-500, -500, 0], max: [500, 500, 12], voxel: 0.06 } });
+    c.send({ type: 'create', name: 'huge', scenario: huge });
+    const big = (await c.type('created')).run;
+    c.send({ type: 'light', run: big, z: 1.0 });
+    assert.equal((await c.type('error')).code, 'too_large');
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
