@@ -6,22 +6,23 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "read_file.h"
 #include "sylva/scenario.h"
 
 static sylva_scenario *scenario_file(const char *dir, const char *name) {
   char path[1024];
   snprintf(path, sizeof path, "%s/%s", dir, name);
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    fprintf(stderr, "cannot open %s\n", path);
+  size_t n;
+  char *buf = read_file(path, &n);
+  if (!buf) {
+    fprintf(stderr, "cannot read %s\n", path);
     exit(1);
   }
-  static char buf[1 << 20];
-  size_t n = fread(buf, 1, sizeof buf, f);
-  fclose(f);
   sylva_scenario *s = NULL;
   char err[512];
-  if (sylva_scenario_parse(buf, n, &s, err, sizeof err) < 0) {
+  int rc = sylva_scenario_parse(buf, n, &s, err, sizeof err);
+  free(buf);
+  if (rc < 0) {
     fprintf(stderr, "%s: %s\n", path, err);
     exit(1);
   }

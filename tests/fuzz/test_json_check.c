@@ -1,5 +1,6 @@
 /* sylva_json_check against JSONTestSuite (y_* accepted, n_* rejected, i_* pinned)
  * and against hand-written cases for each leniency of cJSON 1.7.15. */
+#include "../read_file.h"
 #include <dirent.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -40,35 +41,6 @@ static int cmp_names(const void *a, const void *b) {
   return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-static char *read_file(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  size_t cap = 4096, n = 0;
-  char *data = malloc(cap);
-  while (data) {
-    size_t got = fread(data + n, 1, cap - n, f);
-    n += got;
-    if (got == 0) break;
-    if (n == cap) {
-      char *bigger = realloc(data, cap * 2);
-      if (!bigger) {
-        free(data);
-        data = NULL;
-        break;
-      }
-      data = bigger;
-      cap *= 2;
-    }
-  }
-  bool bad = ferror(f);
-  fclose(f);
-  if (bad) {
-    free(data);
-    return NULL;
-  }
-  *len = n;
-  return data;
-}
 
 static void run_suite(const char *dir) {
   DIR *d = opendir(dir);

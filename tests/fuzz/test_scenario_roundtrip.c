@@ -1,6 +1,7 @@
 /* Replays the shipped scenarios through parse -> canonical JSON -> parse, and
  * checks that both forms build the same world and grow it identically; then a
  * few fixed cases of the scenario rules and of the encoders. */
+#include "../read_file.h"
 #include <dirent.h>
 #include <math.h>
 #include <stdbool.h>
@@ -26,27 +27,6 @@ static int passed, failed;
     }                                                                       \
   } while (0)
 
-static char *read_file(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  size_t cap = 1 << 16, n = 0;
-  char *data = malloc(cap);
-  while (data) {
-    n += fread(data + n, 1, cap - n, f);
-    if (n < cap) break;
-    char *bigger = realloc(data, cap * 2);
-    if (!bigger) {
-      free(data);
-      data = NULL;
-      break;
-    }
-    data = bigger;
-    cap *= 2;
-  }
-  fclose(f);
-  *len = n;
-  return data;
-}
 
 static sylva_scenario *parse_ok(const char *what, const char *text, size_t len) {
   sylva_scenario *s = NULL;

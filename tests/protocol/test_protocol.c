@@ -4,6 +4,7 @@
  * light slice.
  *
  * argv[1]: the JSONTestSuite test_parsing directory. */
+#include "../read_file.h"
 #include <cjson/cJSON.h>
 #include <dirent.h>
 #include <math.h>
@@ -101,30 +102,6 @@ static double num_of(const cJSON *obj, const char *key) {
   return cJSON_IsNumber(item) ? item->valuedouble : NAN;
 }
 
-static char *read_file(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  size_t cap = 4096, n = 0;
-  char *data = malloc(cap);
-  while (data) {
-    size_t got = fread(data + n, 1, cap - n, f);
-    n += got;
-    if (got == 0) break;
-    if (n == cap) {
-      char *bigger = realloc(data, cap * 2);
-      if (!bigger) {
-        free(data);
-        data = NULL;
-        break;
-      }
-      data = bigger;
-      cap *= 2;
-    }
-  }
-  fclose(f);
-  if (data) *len = n;
-  return data;
-}
 
 /* ---- valid messages ---- */
 
