@@ -1,0 +1,371 @@
+// The 3D view: branches as instanced cylinders drawn straight from the skeleton's
+// typed arrays (a vertex shader places each unit cylinder between a node and its
+// parent, scaled by the node's radius), obstacles as translucent boxes, the
+// ground with a 1 m grid and labelled scales, a light-slice heat map, and
+// orbit/front/side/top cameras. z is up, as in the model.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+// One colour per plant (by its index in the snapshot), shared with the plots.
+export const PALETTE = ['#2e8b3a', '#c46a1b', '#2f6fb3', '#b8326e', '#7d5bb5', '#1a9a8f', '#a08a12',
+  '#d04a3a', '#4f7d1f', '#8a4b2a', '#3d8fd1', '#c27bb0'];
+export const plantColor = (i) => PALETTE[i % PALETTE.length];
+
+const VERTEX = `
+attribute vec3 aStart;
+attribute vec3 aEnd;
+attribute float aRadius;
+attribute float aPlant;
+uniform vec3 uPalette[${PALETTE.length}];
+uniform float uPixelPersp;   // world size of a pixel per unit of distance (perspective)
+uniform float uPixelOrtho;   // world size of a pixel (orthographic)
+uniform float uMinPixels;    // thinnest drawn radius, pixels
+varying vec3 vNormal;
+varying vec3 vColor;
+void main() {
+  vec3 axis = aEnd - aStart;
+  float len = length(axis);
+  vec3 dir = len > 1e-9 ? axis / len : vec3(0.0, 0.0, 1.0);
+  vec3 helper = abs(dir.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
+  vec3 u = normalize(cross(helper, dir));
+  vec3 v = cross(dir, u);
+  vec3 mid = 0.5 * (aStart + aEnd);
+  float dist = length((modelViewMatrix * vec4(mid, 1.0)).xyz);
+  float r = max(aRadius, uMinPixels * (uPixelPersp * dist + uPixelOrtho));
+  r = len > 1e-9 ? r : 0.0;   // a root has no branch of its own
+  vec3 p = aStart + axis * (position.y + 0.5) + (u * position.x + v * position.z) * r;
+  vNormal = normalize(normalMatrix * (u * normal.x + v * normal.z));
+  int k = int(aPlant + 0.5) - ${PALETTE.length} * (int(aPlant + 0.5) / ${PALETTE.length});
+  vColor = uPalette[k];
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(p, 1.0);
+}`;
+
+const FRAGMENT = `
+varying vec3 vNormal;
+varying vec3 vColor;
+void main() {
+  vec3 n = normalize(vNormal);
+  float light = 0.55 + 0.45 * max(dot(n, normalize(vec3(0.4, 0.5, 0.8))), 0.0);
+  gl_FragColor = vec4(vColor * light, 1.0);
+  #include <colorspace_fragment>
+}`;
+
+// Branches of one skeleton: the GPU buffers follow the skeleton's arrays.
+class Branches {
+  constructor(scene, material) {
+    this.scene = scene;
+    this.material = material;
+    this.version = -1;
+    this.mesh = null;
+  }
+
+  rebuild(sk) {
+    if (this.mesh) {
+      this.scene.remove(this.mesh);
+      this.mesh.geometry.dispose();
+    }
+    const base = new THREE.CylinderGeometry(1, 1, 1, 6, 1, true);
+    const g = new THREE.InstancedBufferGeometry();
+    g.index = base.index;
+    g.setAttribute('position', base.getAttribute('position'));
+    g.setAttribute('normal', base.getAttribute('normal'));
+    this.start = new THREE.InstancedBufferAttribute(sk.start, 3);
+    this.end = new THREE.InstancedBufferAttribute(sk.end, 3);
+    this.radius = new THREE.InstancedBufferAttribute(sk.radius, 1);
+    this.plant = new THREE.InstancedBufferAttribute(sk.plant, 1);
+    for (const a of [this.start, this.end, this.radius, this.plant]) a.setUsage(THREE.DynamicDrawUsage);
+    g.setAttribute('aStart', this.start);
+    g.setAttribute('aEnd', this.end);
+    g.setAttribute('aRadius', this.radius);
+    g.setAttribute('aPlant', this.plant);
+    g.instanceCount = sk.count;
+    this.mesh = new THREE.Mesh(g, this.material);
+    this.mesh.frustumCulled = false;
+    this.scene.add(this.mesh);
+    this.version = sk.version;
+    this.sk = sk;
+  }
+
+  // Uploads what changed since the last sync: the moved and added slots, and the
+  // radii (changed radii are spread over the skeleton, so all of them go up).
+  sync(sk) {
+    if (this.sk !== sk || this.version !== sk.version) {
+      this.rebuild(sk);
+      sk.takeChanges();
+      return;
+    }
+    const from = sk.takeChanges();
+    const n = sk.count;
+    for (const [attr, size] of [[this.start, 3], [this.end, 3], [this.plant, 1]]) {
+      attr.clearUpdateRanges();
+      if (from < n) {
+        attr.addUpdateRange(from * size, (n - from) * size);
+        attr.needsUpdate = true;
+      }
+    }
+    this.radius.clearUpdateRanges();
+    this.radius.addUpdateRange(0, n);
+    this.radius.needsUpdate = true;
+    this.mesh.geometry.instanceCount = n;
+  }
+
+  set visible(v) { if (this.mesh) this.mesh.visible = v; }
+}
+
+function label(text, size = 0.35) {
+  const c = document.createElement('canvas');
+  c.width = 128;
+  c.height = 64;
+  const g = c.getContext('2d');
+  g.font = '36px system-ui, sans-serif';
+  g.fillStyle = '#333';
+  g.textAlign = 'center';
+  g.textBaseline = 'middle';
+  g.fillText(text, 64, 32);
+  const s = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(c), depthTest: false }));
+  s.scale.set(size * 2, size, 1);
+  return s;
+}
+
+// Colour map for light 0..1: deep blue shade through green to yellow sun.
+export function lightColor(v) {
+  const stops = [[0, [20, 30, 90]], [0.35, [40, 110, 160]], [0.65, [90, 180, 90]], [1, [250, 230, 80]]];
+  for (let i = 1; i < stops.length; i++) {
+    if (v <= stops[i][0]) {
+      const [a, ca] = stops[i - 1], [b, cb] = stops[i];
+      const t = (v - a) / (b - a);
+      return ca.map((x, k) => Math.round(x + (cb[k] - x) * t));
+    }
+  }
+  return stops[stops.length - 1][1];
+}
+
+export class View {
+  constructor(container) {
+    this.container = container;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    this.renderer.setClearColor(0xeef3f7);
+    container.appendChild(this.renderer.domElement);
+    this.scene = new THREE.Scene();
+    this.material = new THREE.ShaderMaterial({
+      vertexShader: VERTEX, fragmentShader: FRAGMENT,
+      uniforms: {
+        uPalette: { value: PALETTE.map((c) => new THREE.Color(c)) },
+        uPixelPersp: { value: 0 }, uPixelOrtho: { value: 0 }, uMinPixels: { value: 0.6 },
+      },
+    });
+    this.branches = new Branches(this.scene, this.material);
+    this.worldGroup = new THREE.Group();     // ground, grid, scales
+    this.obstacleGroup = new THREE.Group();
+    this.scene.add(this.worldGroup, this.obstacleGroup);
+    this.persp = new THREE.PerspectiveCamera(40, 1, 0.05, 500);
+    this.persp.up.set(0, 0, 1);
+    this.ortho = new THREE.OrthographicCamera(-1, 1, 1, -1, -500, 500);
+    this.ortho.up.set(0, 0, 1);
+    this.camera = this.persp;
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.addEventListener('change', () => this.invalidate());
+    this.worldKey = '';
+    this.obstacleKey = '';
+    this.slice = null;
+    this.dirty = true;
+    this.frames = 0;
+    new ResizeObserver(() => this.resize()).observe(container);
+    this.resize();
+    const loop = () => {
+      requestAnimationFrame(loop);
+      if (this.dirty) this.render();
+    };
+    requestAnimationFrame(loop);
+  }
+
+  invalidate() { this.dirty = true; }
+
+  resize() {
+    const w = Math.max(1, this.container.clientWidth), h = Math.max(1, this.container.clientHeight);
+    this.renderer.setSize(w, h);
+    this.persp.aspect = w / h;
+    this.persp.updateProjectionMatrix();
+    this.fitOrtho();
+    this.invalidate();
+  }
+
+  fitOrtho() {
+    const w = Math.max(1, this.container.clientWidth), h = Math.max(1, this.container.clientHeight);
+    const half = this.orthoHalf || 6;
+    this.ortho.left = -half * w / h;
+    this.ortho.right = half * w / h;
+    this.ortho.top = half;
+    this.ortho.bottom = -half;
+    this.ortho.updateProjectionMatrix();
+  }
+
+  render() {
+    this.dirty = false;
+    const h = Math.max(1, this.container.clientHeight);
+    const u = this.material.uniforms;
+    if (this.camera === this.persp) {
+      u.uPixelPersp.value = 2 * Math.tan(THREE.MathUtils.degToRad(this.persp.fov) / 2) / h;
+      u.uPixelOrtho.value = 0;
+    } else {
+      u.uPixelPersp.value = 0;
+      u.uPixelOrtho.value = (this.ortho.top - this.ortho.bottom) / this.ortho.zoom / h;
+    }
+    this.renderer.render(this.scene, this.camera);
+    this.frames++;
+  }
+
+  // Shows a skeleton (the live one or a stored iteration's).
+  show(sk) {
+    this.setWorld(sk.world);
+    this.setObstacles(sk.obstacles);
+    this.branches.sync(sk);
+    this.invalidate();
+  }
+
+  setWorld(world) {
+    if (!world) return;
+    const key = JSON.stringify(world);
+    if (key === this.worldKey) return;
+    const first = this.worldKey === '';
+    this.worldKey = key;
+    this.world = world;
+    this.worldGroup.clear();
+    const [x0, y0] = world.min, [x1, y1, z1] = world.max;
+    const ground = new THREE.Mesh(new THREE.PlaneGeometry(x1 - x0, y1 - y0),
+      new THREE.MeshBasicMaterial({ color: 0xd9d2bf, side: THREE.DoubleSide }));
+    ground.position.set((x0 + x1) / 2, (y0 + y1) / 2, -0.002);
+    ground.name = 'ground';
+    this.ground = ground;
+    this.worldGroup.add(ground);
+    // a 1 m grid over the ground
+    const pts = [];
+    for (let x = Math.ceil(x0); x <= x1; x++) pts.push(x, y0, 0, x, y1, 0);
+    for (let y = Math.ceil(y0); y <= y1; y++) pts.push(x0, y, 0, x1, y, 0);
+    const grid = new THREE.BufferGeometry();
+    grid.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
+    this.worldGroup.add(new THREE.LineSegments(grid, new THREE.LineBasicMaterial({ color: 0xb3aa94 })));
+    // scales in metres: along x at the front edge and a vertical ruler at a corner
+    const step = Math.max(1, Math.round((x1 - x0) / 10));
+    for (let x = Math.ceil(x0); x <= x1; x += step) {
+      const s = label(`${x}`);
+      s.position.set(x, y0 - 0.4, 0);
+      this.worldGroup.add(s);
+    }
+    const ruler = [];
+    for (let z = 0; z <= z1; z++) {
+      ruler.push(x0, y0, z, x0 + 0.25, y0, z);
+      const s = label(`${z} m`);
+      s.position.set(x0 - 0.5, y0, z);
+      this.worldGroup.add(s);
+    }
+    ruler.push(x0, y0, 0, x0, y0, Math.floor(z1));
+    const rg = new THREE.BufferGeometry();
+    rg.setAttribute('position', new THREE.Float32BufferAttribute(ruler, 3));
+    this.worldGroup.add(new THREE.LineSegments(rg, new THREE.LineBasicMaterial({ color: 0x555555 })));
+    if (first) this.setView('persp');
+  }
+
+  setObstacles(obstacles) {
+    const key = JSON.stringify(obstacles);
+    if (key === this.obstacleKey) return;
+    this.obstacleKey = key;
+    for (const m of this.obstacleGroup.children) m.geometry?.dispose();
+    this.obstacleGroup.clear();
+    for (const o of obstacles) {
+      const size = [0, 1, 2].map((i) => Math.max(o.max[i] - o.min[i], 1e-3));
+      const geo = new THREE.BoxGeometry(...size);
+      const box = new THREE.Mesh(geo, new THREE.MeshBasicMaterial({
+        color: 0x8c7b6b, transparent: true, opacity: 0.35, depthWrite: false }));
+      box.position.set(...[0, 1, 2].map((i) => (o.min[i] + o.max[i]) / 2));
+      box.name = `obstacle:${o.id}`;
+      const edges = new THREE.LineSegments(new THREE.EdgesGeometry(geo),
+        new THREE.LineBasicMaterial({ color: 0x5a4a3a }));
+      edges.position.copy(box.position);
+      this.obstacleGroup.add(box, edges);
+    }
+    this.invalidate();
+  }
+
+  // Cameras: 'persp' orbits; 'front' (looking along +y), 'side' (along -x) and
+  // 'top' are orthographic, like the paper's figures.
+  setView(name) {
+    const w = this.world || { min: [-5, -5, 0], max: [5, 5, 10] };
+    const c = [(w.min[0] + w.max[0]) / 2, (w.min[1] + w.max[1]) / 2, 0];
+    const span = Math.max(w.max[0] - w.min[0], w.max[1] - w.min[1], w.max[2] - w.min[2]);
+    const target = new THREE.Vector3(c[0], c[1], name === 'top' ? 0 : Math.min(w.max[2], span) * 0.35);
+    this.controls.dispose();
+    if (name === 'persp') {
+      this.camera = this.persp;
+      this.persp.position.set(c[0] + span * 0.9, c[1] - span * 1.3, span * 0.7);
+    } else {
+      this.camera = this.ortho;
+      this.orthoHalf = span * 0.6;
+      this.ortho.zoom = 1;
+      this.fitOrtho();
+      const d = span * 2;
+      if (name === 'front') this.ortho.position.set(target.x, target.y - d, target.z);
+      else if (name === 'side') this.ortho.position.set(target.x + d, target.y, target.z);
+      else this.ortho.position.set(target.x, target.y - 1e-4, d);
+    }
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.target.copy(target);
+    this.controls.enableRotate = name === 'persp';
+    this.controls.screenSpacePanning = true;
+    this.controls.addEventListener('change', () => this.invalidate());
+    this.controls.update();
+    this.viewName = name;
+    this.invalidate();
+  }
+
+  // The ground point (z = 0) under a pixel of the canvas, or null.
+  groundAt(clientX, clientY) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    const p = new THREE.Vector3();
+    if (!ray.ray.intersectPlane(new THREE.Plane(new THREE.Vector3(0, 0, 1), 0), p)) return null;
+    if (this.world && (p.x < this.world.min[0] || p.x > this.world.max[0] ||
+        p.y < this.world.min[1] || p.y > this.world.max[1])) return null;
+    return [p.x, p.y];
+  }
+
+  // Canvas pixel (CSS px from the canvas's top left) of a world point.
+  project(x, y, z) {
+    const v = new THREE.Vector3(x, y, z).project(this.camera);
+    const el = this.renderer.domElement;
+    return [(v.x + 1) / 2 * el.clientWidth, (1 - v.y) / 2 * el.clientHeight];
+  }
+
+  // A light slice as a heat map plane at its height; null hides it.
+  setSlice(msg) {
+    if (this.slice) {
+      this.scene.remove(this.slice);
+      this.slice.geometry.dispose();
+      this.slice.material.map.dispose();
+      this.slice.material.dispose();
+      this.slice = null;
+    }
+    if (msg) {
+      const bytes = Uint8Array.from(atob(msg.values), (ch) => ch.charCodeAt(0));
+      const rgba = new Uint8Array(msg.nx * msg.ny * 4);
+      for (let i = 0; i < bytes.length; i++) {
+        const [r, g, b] = lightColor(bytes[i] / 255);
+        rgba.set([r, g, b, 200], i * 4);
+      }
+      const tex = new THREE.DataTexture(rgba, msg.nx, msg.ny, THREE.RGBAFormat);
+      tex.colorSpace = THREE.SRGBColorSpace;
+      tex.magFilter = THREE.NearestFilter;
+      tex.needsUpdate = true;
+      const w = msg.nx * msg.voxel, h = msg.ny * msg.voxel;
+      const plane = new THREE.Mesh(new THREE.PlaneGeometry(w, h), new THREE.MeshBasicMaterial({
+        map: tex, transparent: true, opacity: 0.8, side: THREE.DoubleSide, depthWrite: false }));
+      plane.position.set(msg.origin[0] + w / 2, msg.origin[1] + h / 2, msg.z);
+      this.slice = plane;
+      this.scene.add(plane);
+    }
+    this.invalidate();
+  }
+}
