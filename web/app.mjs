@@ -167,6 +167,9 @@ async function loadStats() {
 // ---- messages from the daemon ------------------------------------------------------
 
 const handlers = {
+  welcome(msg) {
+    app.auth = msg.auth;
+  },
   snapshot(msg) {
     if (msg.run !== app.run?.run) return;
     app.live.loadSnapshot(msg);
@@ -534,11 +537,13 @@ window.sylva = {
     species: app.live.species.slice(),
     slice: app.slice || null,
     drawnInstances: view.branches.mesh?.geometry.instanceCount ?? 0,
+    drawnObstacles: view.obstacleGroup.children.filter((m) => m.name).map((m) => m.name.slice('obstacle:'.length)),
     frames: view.frames,
     auth: app.auth,
     authed: app.authed,
   }),
-  timings: () => ({ applyMs: app.applyMs.slice(), parseMs: app.parseMs.slice(), bytes: app.bytes.slice() }),
+  timings: () => ({ applyMs: app.applyMs.slice(), parseMs: app.parseMs.slice(), bytes: app.bytes.slice(),
+    renderMs: view.renderMs.slice() }),
   memory: () => ({ skeletonBytes: app.live.bytes() + (app.history ? app.history.bytes() : 0) }),
   plots: () => plots.points(),
   skeleton: () => shown().toExport(),

@@ -1,84 +1,64 @@
-// The WebSocket to the daemon (/ws, subprotocol sylva.v1): requests with ids and
-// their replies, server pushes, and reconnection with backoff. The state
-// (connecting, open, closed) is reported to onState; onOpen runs after each
+// The page's side of the connection to the daemon: the socket itself lives in a
+// worker (socket_worker.mjs) that reconnects by itself and parses off this
+// thread. Here: requests with ids and their replies, server pushes to onMessage,
+// and the state (connecting, open, closed) to onState; onOpen runs after each
 // (re)connection so the page can say hello and resubscribe.
 
 export class Connection {
   constructor(url, { onMessage, onState, onOpen }) {
-    this.url = url;
     this.onMessage = onMessage;
     this.onState = onState;
     this.onOpen = onOpen;
     this.nextId = 1;
     this.pending = new Map();   // id -> {resolve, reject}
-    this.delay = 250;
     this.state = 'connecting';
-    this.retryAt = 0;
-    this.connect();
+    this.worker = new Worker(new URL('./socket_worker.mjs', import.meta.url), { type: 'module' });
+    this.worker.onmessage = (ev) => this.receive(ev.data);
+    this.worker.postMessage({ connect: url });
   }
 
-  setState(state, detail = '') {
-    this.state = state;
-    this.onState(state, detail);
-  }
-
-  connect() {
-    this.setState('connecting');
-    let ws;
-    try {
-      ws = new WebSocket(this.url, 'sylva.v1');
-    } catch (e) {
-      this.retry(String(e));
+  receive(m) {
+    if (m.state) {
+      this.state = m.state;
+      if (m.state === 'closed') this.failPending('connection lost');
+      this.onState(m.state, m.detail);
+      if (m.state === 'open') this.onOpen();
       return;
     }
-    this.ws = ws;
-    ws.onopen = () => {
-      this.delay = 250;
-      this.setState('open');
-      this.onOpen();
-    };
-    ws.onmessage = (ev) => {
-      let msg;
-      const t0 = performance.now();
-      try {
-        msg = JSON.parse(ev.data);
-        msg.parseMs = performance.now() - t0;
-        msg.bytes = ev.data.length;
-      } catch (e) {
-        console.warn('sylva: a message that is not JSON', e);
-        return;
+    if (m.unsent) {
+      const id = m.unsent.id;
+      if (id !== undefined && this.pending.has(id)) {
+        this.pending.get(id).reject(Object.assign(new Error('not connected'), { code: 'closed' }));
+        this.pending.delete(id);
       }
-      if (msg.ref !== undefined && this.pending.has(msg.ref)) {
-        const p = this.pending.get(msg.ref);
-        this.pending.delete(msg.ref);
-        if (msg.type === 'error') p.reject(Object.assign(new Error(msg.message), { code: msg.code, msg }));
-        else p.resolve(msg);
-        return;
-      }
-      this.onMessage(msg);
-    };
-    ws.onclose = (ev) => {
-      if (this.ws !== ws) return;
-      for (const p of this.pending.values()) p.reject(Object.assign(new Error('connection lost'), { code: 'closed' }));
-      this.pending.clear();
-      this.retry(ev.code ? `closed (${ev.code}${ev.reason ? ': ' + ev.reason : ''})` : 'closed');
-    };
+      return;
+    }
+    if (m.warning) {
+      console.warn(`sylva: ${m.warning}`);
+      return;
+    }
+    const msg = m.message;
+    msg.parseMs = m.parseMs + m.convertMs;
+    msg.bytes = m.bytes;
+    if (msg.ref !== undefined && this.pending.has(msg.ref)) {
+      const p = this.pending.get(msg.ref);
+      this.pending.delete(msg.ref);
+      if (msg.type === 'error') p.reject(Object.assign(new Error(msg.message), { code: msg.code, msg }));
+      else p.resolve(msg);
+      return;
+    }
+    this.onMessage(msg);
   }
 
-  retry(detail) {
-    this.ws = null;
-    const wait = this.delay;
-    this.delay = Math.min(this.delay * 2, 4000);
-    this.retryAt = Date.now() + wait;
-    this.setState('closed', detail);
-    clearTimeout(this.timer);
-    this.timer = setTimeout(() => this.connect(), wait);
+  failPending(why) {
+    for (const p of this.pending.values()) p.reject(Object.assign(new Error(why), { code: 'closed' }));
+    this.pending.clear();
   }
 
-  // Sends a message without waiting for a reply.
+  // Sends a message without waiting for a reply; false when not connected.
   send(msg) {
-    if (!this.ws || this.ws.readyState !== WebSocket.OPEN) return false;
-    this.ws.send(JSON.stringify(msg));
+    if (this.state !== 'open') return false;
+    this.worker.postMessage({ send: msg });
     return true;
   }
 

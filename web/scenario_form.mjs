@@ -112,6 +112,8 @@ export class ScenarioForm {
     note.setAttribute('role', 'alert');
     note.textContent = message;
     el.classList.add('invalid');
+    // the one number of a vector that is wrong
+    this.container.querySelector(`input[data-pointer="${CSS.escape(pointer)}"]`)?.classList.add('invalid');
     if (el.tagName === 'FIELDSET') el.insertBefore(note, el.children[1] || null);
     else el.appendChild(note);
     note.scrollIntoView({ block: 'nearest' });

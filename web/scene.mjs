@@ -171,6 +171,7 @@ export class View {
     this.slice = null;
     this.dirty = true;
     this.frames = 0;
+    this.renderMs = [];
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
     const loop = () => {
@@ -212,7 +213,10 @@ export class View {
       u.uPixelPersp.value = 0;
       u.uPixelOrtho.value = (this.ortho.top - this.ortho.bottom) / this.ortho.zoom / h;
     }
+    const t0 = performance.now();
     this.renderer.render(this.scene, this.camera);
+    this.renderMs.push(performance.now() - t0);
+    if (this.renderMs.length > 200) this.renderMs.shift();
     this.frames++;
   }
 

@@ -6,7 +6,7 @@
 // shed slot on, and the arrays can be handed to the GPU as they are (one instance
 // per slot). Nothing here knows about three.js or the DOM.
 
-const GROW = 1.5;
+const GROW = 2;
 
 export class Skeleton {
   constructor(capacity = 1024) {
@@ -66,45 +66,56 @@ export class Skeleton {
     this.idSlot[id] = slot;
   }
 
-  // Appends one node; its parent (when it has one) must be held already.
-  push(id, parentId, plant, stem, x, y, z, radius, birth) {
-    const k = this.count++;
-    this.id[k] = id;
-    const p = parentId >= 0 ? this.slotOf(parentId) : -1;
-    if (parentId >= 0 && p < 0) throw new Error(`node ${id}: parent ${parentId} is not held`);
-    this.parent[k] = p;
-    this.plant[k] = plant;
-    this.stem[k] = stem;
-    this.birth[k] = birth;
-    this.radius[k] = radius;
-    const e = this.end, s = this.start, k3 = k * 3;
-    e[k3] = x; e[k3 + 1] = y; e[k3 + 2] = z;
-    if (p >= 0) {
-      const p3 = p * 3;
-      s[k3] = e[p3]; s[k3 + 1] = e[p3 + 1]; s[k3 + 2] = e[p3 + 2];
-    } else {
-      s[k3] = x; s[k3 + 1] = y; s[k3 + 2] = z;
+  // Appends nodes i0..i1-1 of typed node arrays (wire.mjs) whose parents are held
+  // already or come earlier in the same arrays. birth is an array or one number.
+  append(src, i0, i1, birth) {
+    this.reserve(this.count + (i1 - i0));
+    let maxId = -1;
+    for (let i = i0; i < i1; i++) if (src.id[i] > maxId) maxId = src.id[i];
+    if (maxId >= this.idSlot.length) this.mapId(maxId, -1);
+    const { id, parent, plant, stem, radius, start, end, idSlot } = this;
+    const births = this.birth, xyzr = src.xyzr, sid = src.id, spar = src.parent;
+    const splant = src.plant, sstem = src.stem, slots = idSlot.length;
+    const one = typeof birth === 'number', each = one ? null : birth;
+    let k = this.count;
+    for (let i = i0; i < i1; i++, k++) {
+      const pid = spar[i];
+      const p = pid >= 0 && pid < slots ? idSlot[pid] : -1;
+      if (pid >= 0 && p < 0) {
+        this.count = k;
+        throw new Error(`node ${sid[i]}: parent ${pid} is not held`);
+      }
+      const nid = sid[i];
+      id[k] = nid;
+      parent[k] = p;
+      plant[k] = splant[i];
+      stem[k] = sstem[i];
+      births[k] = one ? birth : each[i];
+      const k3 = k * 3, i4 = i * 4;
+      end[k3] = xyzr[i4];
+      end[k3 + 1] = xyzr[i4 + 1];
+      end[k3 + 2] = xyzr[i4 + 2];
+      radius[k] = xyzr[i4 + 3];
+      const q = p >= 0 ? p * 3 : k3;
+      start[k3] = end[q];
+      start[k3 + 1] = end[q + 1];
+      start[k3 + 2] = end[q + 2];
+      idSlot[nid] = k;
     }
-    this.mapId(id, k);
+    this.count = k;
   }
 
-  // Replaces everything with a snapshot message (or a skeleton export).
+  // Replaces everything with a snapshot (wire.mjs's snapshotArrays form).
   loadSnapshot(msg) {
     this.idSlot.fill(-1);
     this.count = 0;
-    let total = 0;
-    for (const p of msg.plants) for (const s of p.stems) total += s.nodes.length;
+    const total = msg.nodes.n;
     if (total > this.capacity || this.capacity > 4 * total + 4096) {
-      this.count = 0;
       this.allocate(Math.max(1024, Math.ceil(total * GROW)));
     }
-    msg.plants.forEach((plant, pi) => {
-      plant.stems.forEach((stem, si) => {
-        // a stem's nodes come in id order, parents first
-        for (const n of stem.nodes) this.push(n[0], n[1], pi, si, n[2], n[3], n[4], n[5], n[6]);
-      });
-    });
-    this.plants = msg.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root })) }));
+    // a stem's nodes come in id order, parents first
+    this.append(msg.nodes, 0, total, msg.nodes.birth);
+    this.plants = msg.plants;
     this.species = msg.species || [];
     this.obstacles = msg.obstacles || [];
     this.world = msg.world;
@@ -116,29 +127,23 @@ export class Skeleton {
     this.version++;
   }
 
-  // Applies a delta message in place; returns the slots it touched as
-  // {from, radii} so a renderer can upload only what changed.
+  // Applies a delta (wire.mjs's deltaArrays form) in place; returns the first slot
+  // that changed (radii aside) so a renderer can upload only what changed.
   applyDelta(msg) {
     let from = this.count;
     if (msg.shed.length) from = Math.min(from, this.removeSubtrees(msg.shed));
-    const added = msg.added;
-    this.reserve(this.count + added.length);
-    const firstNew = this.count;
-    for (let i = 0; i < added.length; i++) {
-      const a = added[i];
-      this.push(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], msg.iteration);
-    }
-    from = Math.min(from, firstNew);
-    const radii = msg.radii;
-    for (let i = 0; i < radii.length; i++) {
-      const k = this.slotOf(radii[i][0]);
-      if (k >= 0) this.radius[k] = radii[i][1];
+    from = Math.min(from, this.count);
+    this.append(msg.added, 0, msg.added.n, msg.iteration);
+    const { idSlot, radius } = this, ids = msg.radii.id, r = msg.radii.r;
+    for (let i = 0, n = msg.radii.n; i < n; i++) {
+      const k = ids[i] < idSlot.length ? idSlot[ids[i]] : -1;
+      if (k >= 0) radius[k] = r[i];
     }
     this.iteration = msg.iteration;
     this.seq = msg.seq;
     this.stats = msg.stats;
     this.changedFrom = Math.min(this.changedFrom, from);
-    return { from, radii: radii.length };
+    return from;
   }
 
   // Removes the subtrees under these ids; returns the first slot that moved.
@@ -146,34 +151,42 @@ export class Skeleton {
     let first = this.count;
     if (this.scratch.length < this.count) this.scratch = new Int32Array(this.capacity);
     const map = this.scratch;  // old slot -> new slot, or -1 when removed
-    for (const id of roots) {
-      const k = this.slotOf(id);
-      if (k < 0) continue;
-      if (k < first) first = k;
-      map[k] = -2;  // a marked root; only slots >= first are read below
+    const { id, parent, plant, stem, birth, radius, start, end, idSlot } = this;
+    for (let i = 0; i < roots.length; i++) {
+      const k = this.slotOf(roots[i]);
+      if (k >= 0 && k < first) first = k;
     }
     if (first === this.count) return first;
-    for (let i = first; i < this.count; i++) if (map[i] !== -2) map[i] = 0;
-    const { id, parent, plant, stem, birth, radius, start, end, idSlot } = this;
+    map.fill(0, first, this.count);
+    for (let i = 0; i < roots.length; i++) {
+      const k = this.slotOf(roots[i]);
+      if (k >= 0) map[k] = -1;
+    }
     let w = first;
-    for (let i = first; i < this.count; i++) {
+    for (let i = first, n = this.count; i < n; i++) {
       const p = parent[i];
-      if (map[i] === -2 || (p >= first && map[p] < 0)) {
+      if (map[i] < 0 || (p >= first && map[p] < 0)) {
         map[i] = -1;
         idSlot[id[i]] = -1;
         continue;
       }
       map[i] = w;
       if (w !== i) {
-        id[w] = id[i];
+        const nid = id[i];
+        id[w] = nid;
         parent[w] = p >= first ? map[p] : p;
         plant[w] = plant[i];
         stem[w] = stem[i];
         birth[w] = birth[i];
         radius[w] = radius[i];
-        start.copyWithin(w * 3, i * 3, i * 3 + 3);
-        end.copyWithin(w * 3, i * 3, i * 3 + 3);
-        idSlot[id[w]] = w;
+        const w3 = w * 3, i3 = i * 3;
+        start[w3] = start[i3];
+        start[w3 + 1] = start[i3 + 1];
+        start[w3 + 2] = start[i3 + 2];
+        end[w3] = end[i3];
+        end[w3 + 1] = end[i3 + 1];
+        end[w3 + 2] = end[i3 + 2];
+        idSlot[nid] = w;
       }
       w++;
     }

@@ -22,6 +22,7 @@ import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { stand100 } from './stand100.mjs';
 
 const require = createRequire(new URL('../server/package.json', import.meta.url));
 const WebSocket = require('ws');
@@ -113,18 +114,6 @@ const headType = (x) => (x.data.toString('latin1', 0, 40).match(/^\{"type":"(\w+
 function quantile(sorted, q) {
   if (!sorted.length) return NaN;
   return sorted[Math.min(sorted.length - 1, Math.floor(q * sorted.length))];
-}
-
-function stand100() {
-  const plants = [];
-  for (let i = 0; i < 10; i++) {
-    for (let j = 0; j < 10; j++) {
-      plants.push({ id: `t${plants.length + 1}`, species: 'tree', roots: [[-9 + 2 * i, -9 + 2 * j, 0]] });
-    }
-  }
-  return { format: 'sylva.scenario/1', name: '100-tree stand', seed: 17, iterations: 24,
-    world: { min: [-13, -13, 0], max: [13, 13, 14] },
-    species: { tree: { preset: 'igm-fig17b', tropism: [0, 0, 1] } }, plants };
 }
 
 async function bench(label, scenario, opts) {

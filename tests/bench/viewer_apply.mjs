@@ -1,0 +1,71 @@
+// Benchmark (not a test): how long the viewer takes to apply each delta of the
+// 100-tree stand in headless Chromium, against a real daemon.
+//
+//   node tests/bench/viewer_apply.mjs [--exe build/server/sylva] [--iterations 24]
+//
+// For every delta the page reports its size, the time JSON.parse took, and the
+// time to apply it: the skeleton's typed arrays changed in place plus the GPU
+// attributes marked for upload (web/app.mjs, handlers.delta). Also the time of the
+// frames drawn meanwhile; Chromium draws with SwiftShader here (WebGL on the CPU),
+// so frame times say little about a real GPU. Use a release build.
+import { spawn } from 'node:child_process';
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, resolve, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { createRequire } from 'node:module';
+import { stand100 } from './stand100.mjs';
+
+const root = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
+const require = createRequire(join(root, 'tests/web/package.json'));
+const { chromium } = require('playwright-core');
+const WebSocket = require('ws');
+const arg = (name, def) => {
+  const i = process.argv.indexOf(`--${name}`);
+  return i > 0 ? process.argv[i + 1] : def;
+};
+const exe = resolve(arg('exe', join(root, 'build/server/sylva')));
+const iterations = Number(arg('iterations', '24'));
+const port = 18000 + Math.floor(Math.random() * 2000);
+const dir = mkdtempSync(join(tmpdir(), 'sylva-bench-'));
+
+const daemon = spawn(exe, ['serve', '--db', join(dir, 'b.db'), '--listen', `127.0.0.1:${port}`,
+  '--web', join(root, 'web')], { stdio: ['ignore', 'ignore', 'pipe'] });
+await new Promise((ok) => daemon.stderr.on('data', (d) => { if (String(d).includes('listening')) ok(); }));
+
+const browser = await chromium.launch({ executablePath: '/usr/bin/chromium', args: ['--headless',
+  '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+  '--disable-component-update', '--disable-sync', '--enable-unsafe-swiftshader'] });
+const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+page.on('pageerror', (e) => console.error('page error:', e.message));
+await page.goto(`http://127.0.0.1:${port}/`);
+await page.waitForFunction(() => window.sylva?.state().connection === 'open');
+
+const ws = new WebSocket(`ws://127.0.0.1:${port}/ws`, 'sylva.v1');
+await new Promise((ok) => ws.on('open', ok));
+ws.send(JSON.stringify({ type: 'create', id: 'c', scenario: { ...stand100(), iterations }, name: 'stand100', start: false }));
+const run = await new Promise((ok) => ws.on('message', (m) => {
+  const msg = JSON.parse(m);
+  if (msg.type === 'created') ok(msg.run);
+}));
+await page.click(`#runs tr[data-run="${run}"]`, { timeout: 10000 });
+await page.waitForFunction((r) => window.sylva.state().run === r && window.sylva.state().seq >= 0, run);
+ws.send(JSON.stringify({ type: 'control', run, action: 'start' }));
+const t0 = Date.now();
+await page.waitForFunction(() => window.sylva.state().status === 'finished', null, { timeout: 30 * 60000, polling: 1000 });
+await page.waitForFunction((n) => window.sylva.state().iteration === n, iterations, { timeout: 60000 });
+const s = await page.evaluate(() => window.sylva.state());
+const t = await page.evaluate(() => window.sylva.timings());
+console.log(`100-tree stand, ${iterations} iterations in ${((Date.now() - t0) / 1e3).toFixed(1)} s; ` +
+  `the page holds ${s.nodes.toLocaleString('en')} internodes (${(await page.evaluate(() => window.sylva.memory().skeletonBytes) / 1e6).toFixed(0)} MB of arrays)`);
+console.log('delta  bytes        parse ms  apply ms');
+t.applyMs.forEach((a, i) => console.log(`${String(i + 1).padStart(5)}  ${String(t.bytes[i]).padStart(11)}  ${t.parseMs[i].toFixed(1).padStart(8)}  ${a.toFixed(1).padStart(8)}`));
+const sorted = t.applyMs.slice().sort((a, b) => a - b);
+console.log(`apply: median ${sorted[sorted.length >> 1].toFixed(1)} ms, max ${sorted[sorted.length - 1].toFixed(1)} ms; ` +
+  `parse max ${Math.max(...t.parseMs).toFixed(1)} ms; frames drawn ${s.frames}, ` +
+  `frame median ${(t.renderMs.slice().sort((a, b) => a - b)[t.renderMs.length >> 1] || 0).toFixed(0)} ms (SwiftShader)`);
+ws.close();
+await browser.close();
+daemon.kill('SIGTERM');
+await new Promise((ok) => daemon.on('exit', ok));
+rmSync(dir, { recursive: true, force: true });

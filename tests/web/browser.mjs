@@ -1,0 +1,60 @@
+// Headless Chromium (Debian's /usr/bin/chromium) driven by playwright-core, for
+// the viewer's tests. Every console error and page error is collected.
+import { chromium } from 'playwright-core';
+
+const CHROMIUM = process.env.SYLVA_CHROMIUM || '/usr/bin/chromium';
+
+export async function launch() {
+  return chromium.launch({
+    executablePath: CHROMIUM,
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+      '--disable-background-networking', '--disable-component-update', '--disable-sync',
+      '--enable-unsafe-swiftshader'],
+  });
+}
+
+// Opens the viewer of a daemon; resolves when it is connected.
+export async function openViewer(browser, http, { width = 1280, height = 860 } = {}) {
+  const page = await browser.newPage({ viewport: { width, height } });
+  const errors = [];
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
+  page.on('pageerror', (e) => errors.push(`page: ${e.message}`));
+  page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()} ${r.failure()?.errorText}`));
+  await page.goto(`${http}/`);
+  await page.waitForFunction(() => window.sylva?.state().connection === 'open');
+  return { page, errors };
+}
+
+export const state = (page) => page.evaluate(() => window.sylva.state());
+
+// Waits until the page's state satisfies pred (a function of the state, run in node).
+export async function until(page, pred, what, ms = 60000) {
+  const end = Date.now() + ms;
+  let s;
+  for (;;) {
+    s = await state(page);
+    if (pred(s)) return s;
+    if (Date.now() > end) throw new Error(`timed out waiting for ${what}; state ${JSON.stringify(s)}`);
+    await new Promise((r) => setTimeout(r, 100));
+  }
+}
+
+// Counts the tree-coloured pixels (plant 0's green, lit or shaded) inside a
+// rectangle [x0, y0, x1, y1] of a PNG screenshot, decoding it in the page.
+export async function treePixels(page, png, rect) {
+  return page.evaluate(async ([src, [x0, y0, x1, y1]]) => {
+    const img = new Image();
+    img.src = `data:image/png;base64,${src}`;
+    await img.decode();
+    const c = document.createElement('canvas');
+    c.width = img.width;
+    c.height = img.height;
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, 0);
+    const w = Math.max(1, Math.round(x1 - x0)), h = Math.max(1, Math.round(y1 - y0));
+    const d = g.getImageData(Math.round(x0), Math.round(y0), w, h).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i + 1] > d[i] + 25 && d[i + 1] > d[i + 2] + 15) n++;
+    return n;
+  }, [png.toString('base64'), rect]);
+}

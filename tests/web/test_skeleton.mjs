@@ -1,0 +1,93 @@
+// The viewer's skeleton (web/skeleton.mjs, web/wire.mjs) in node: hand-made shedding cases, and
+// a real daemon's snapshot and deltas applied to it equal `sylva export` at every
+// iteration.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { Skeleton as Base } from '../../web/skeleton.mjs';
+import { deltaArrays, snapshotArrays } from '../../web/wire.mjs';
+
+// The skeleton fed as the page feeds it: messages converted by wire.mjs.
+class Skeleton extends Base {
+  loadSnapshot(msg) { super.loadSnapshot(snapshotArrays(msg)); }
+  applyDelta(msg) { return super.applyDelta(deltaArrays(msg)); }
+}
+import { SLOW, startDaemon, stopDaemon, connect, scenario, exportSkeleton, plantsJSON, cleanup } from '../server/harness.mjs';
+
+const f32 = (sk) => JSON.parse(plantsJSON(sk), (k, v) => (typeof v === 'number' ? Math.fround(v) : v));
+
+// Two stems of one plant, nodes interleaved by id across stems.
+function twoStems() {
+  const sk = new Skeleton(4);
+  sk.loadSnapshot({
+    iteration: 1, seq: 1, world: { min: [0, 0, 0], max: [1, 1, 1] }, voxel: 0.05, obstacles: [], stats: [],
+    plants: [{ id: 'p', stems: [
+      { root: [0, 0, 0], nodes: [[0, -1, 0, 0, 0, 0.01, 0], [2, 0, 0, 0, 1, 0.01, 0], [4, 2, 1, 0, 1, 0.01, 1]] },
+      { root: [5, 0, 0], nodes: [[1, -1, 5, 0, 0, 0.01, 0], [3, 1, 5, 0, 1, 0.01, 0]] }] }],
+  });
+  return sk;
+}
+
+const ids = (sk) => Array.from(sk.id.subarray(0, sk.count));
+
+test('a shed subtree goes, with its descendants only, and slots stay in parent order', () => {
+  const sk = twoStems();
+  sk.applyDelta({ seq: 2, iteration: 2, added: [[5, 4, 0, 0, 2, 0, 2, 0.003], [6, 3, 0, 1, 5, 0, 2, 0.003],
+    [7, 5, 0, 0, 3, 0, 3, 0.003]], radii: [[0, 0.02]], shed: [], stats: [] });
+  assert.deepEqual(ids(sk), [0, 2, 4, 1, 3, 5, 6, 7]);
+  assert.equal(sk.radius[sk.slotOf(0)], Math.fround(0.02));
+  // the start of a branch is its parent's end
+  const k = sk.slotOf(7), p = sk.slotOf(5);
+  assert.deepEqual(Array.from(sk.start.subarray(k * 3, k * 3 + 3)), Array.from(sk.end.subarray(p * 3, p * 3 + 3)));
+  sk.applyDelta({ seq: 3, iteration: 3, added: [[8, 6, 0, 1, 5, 1, 3, 0.003]], radii: [[7, 0.004]], shed: [4], stats: [] });
+  assert.deepEqual(ids(sk), [0, 2, 1, 3, 6, 8]);
+  for (const gone of [4, 5, 7]) assert.equal(sk.slotOf(gone), -1);
+  for (let i = 0; i < sk.count; i++) {
+    const p = sk.parent[i];
+    assert.ok(p < i, 'a parent sits before its child');
+    if (p >= 0) {
+      const want = { 2: 0, 3: 1, 6: 3, 8: 6 }[sk.id[i]];
+      assert.equal(sk.id[p], want, `parent of ${sk.id[i]}`);
+    }
+  }
+  const ex = sk.toExport();
+  assert.deepEqual(ex.plants[0].stems[1].nodes.map((n) => n[0]), [1, 3, 6, 8]);
+  assert.deepEqual(ex.plants[0].stems[1].nodes[3], [8, 6, 5, 1, 3, Math.fround(0.003), 3]);
+});
+
+test('growing past the capacity keeps every node', () => {
+  const sk = twoStems();
+  const added = [];
+  for (let i = 0; i < 5000; i++) added.push([5 + i, i === 0 ? 4 : 4 + i, 0, 0, 0, 0, i * 0.001, 0.003]);
+  sk.applyDelta({ seq: 2, iteration: 2, added, radii: [], shed: [], stats: [] });
+  assert.equal(sk.count, 5005);
+  sk.applyDelta({ seq: 3, iteration: 3, added: [], radii: [], shed: [2], stats: [] });
+  assert.deepEqual(ids(sk), [0, 1, 3]);
+  assert.throws(() => sk.applyDelta({ seq: 4, iteration: 4, added: [[9000, 8999, 0, 0, 0, 0, 0, 0.003]],
+    radii: [], shed: [], stats: [] }), /parent 8999 is not held/);
+});
+
+test('snapshot plus deltas from a real daemon equal the export at every iteration', async () => {
+  const d = await startDaemon({});
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'create', scenario: scenario('wall.json', { iterations: 14 }), name: 'w', start: false, id: 'c' });
+    const { run } = await c.type('created');
+    c.send({ type: 'subscribe', run });
+    const sk = new Skeleton();
+    sk.loadSnapshot(await c.type('snapshot'));
+    c.send({ type: 'control', run, action: 'start' });
+    let shed = 0;
+    for (let it = 1; it <= 14; it++) {
+      const delta = await c.next((m) => m.type === 'delta', 60000);
+      shed += delta.shed.length;
+      sk.applyDelta(delta);
+      assert.equal(sk.iteration, it);
+      assert.deepEqual(f32(sk.toExport()), f32(exportSkeleton(d.db, 'w', it)), `iteration ${it}`);
+    }
+    assert.ok(shed > 0, 'the run shed branches');
+    c.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});

@@ -1,0 +1,316 @@
+// The viewer in headless Chromium against a real daemon (`sylva serve --web web`).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { join } from 'node:path';
+import {
+  SYLVA, ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, exportSkeleton, plantsJSON, cleanup, tempDir,
+} from '../server/harness.mjs';
+import { launch, openViewer, state, until, treePixels } from './browser.mjs';
+
+const WEB = ['--web', join(ROOT, 'web')];
+let browser;
+before(async () => { browser = await launch(); });
+after(async () => { await browser?.close(); });
+
+// The page's skeleton rounded as its Float32Arrays hold it, against the store's.
+const f32 = (sk) => JSON.parse(plantsJSON(sk), (k, v) => (typeof v === 'number' ? Math.fround(v) : v));
+
+async function serverRun(http, name) {
+  const runs = await (await fetch(`${http}/api/runs`)).json();
+  return (runs.runs || runs).find((r) => r.name === name);
+}
+
+async function createFromReady(page, ready, { start }) {
+  await page.selectOption('#scenario-select', ready);
+  await page.waitForSelector('#scenario-form [data-pointer="/name"]');
+  await page.setChecked('#create-start', start);
+  await page.click('#create-button');
+  return until(page, (s) => s.run !== null && s.seq >= 0, 'the new run');
+}
+
+async function heapUsed(page) {
+  const cdp = await page.context().newCDPSession(page);
+  await cdp.send('HeapProfiler.collectGarbage');
+  const { usedSize } = await cdp.send('Runtime.getHeapUsage');
+  await cdp.detach();
+  return usedSize;
+}
+
+test('the wall scenario grows in the page: internodes, pixels, plots, memory', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    const s0 = await createFromReady(page, 'wall', { start: false });
+    assert.equal(s0.iteration, 0);
+    const name = s0.name;
+    // one iteration at a time: the page holds what the server holds
+    for (let k = 1; k <= 4; k++) {
+      await page.click('#step');
+      const s = await until(page, (x) => x.iteration === k, `iteration ${k}`);
+      const server = await serverRun(d.http, name);
+      await until(page, () => true, 'settle', 1);
+      assert.equal(s.nodes, server.nodes, `internodes at iteration ${k}`);
+      const sk = await page.evaluate(() => window.sylva.skeleton());
+      assert.deepEqual(f32(sk), f32(exportSkeleton(d.db, name, k)), `skeleton at iteration ${k}`);
+    }
+    const heapBefore = await heapUsed(page);
+    await page.click('#start');
+    const end = await until(page, (x) => x.status === 'finished', 'the run to finish', 240000 * SLOW);
+    const server = await serverRun(d.http, name);
+    assert.equal(end.iteration, server.iteration);
+    assert.equal(end.nodes, server.nodes);
+    assert.ok(end.nodes > 1000, `a grown tree (${end.nodes} internodes)`);
+    assert.deepEqual(f32(await page.evaluate(() => window.sylva.skeleton())), f32(exportSkeleton(d.db, name)));
+    assert.equal(end.drawnInstances, end.nodes);
+
+    // plots: one point per iteration for every stem, equal to the stored stats
+    const stats = (await (await fetch(`${d.http}/api/runs/${encodeURIComponent(name)}/stats.csv`)).text()).trim().split('\n');
+    const head = stats.shift().split(',');
+    const rows = stats.map((l) => Object.fromEntries(l.split(',').map((c, i) => [head[i], c])));
+    const plots = await page.evaluate(() => window.sylva.plots());
+    const its = [...Array(end.iteration).keys()].map((i) => i + 1);
+    for (const key of ['height', 'dbh', 'crown_width', 'nodes', 'cap']) {
+      assert.deepEqual(plots[key].iterations, its, `${key}: one point per iteration`);
+      const want = rows.map((r) => (r[key] === '' ? null : Number(r[key])));
+      assert.deepEqual(plots[key].stems['tree/0'], want, `${key} of tree/0`);
+    }
+
+    // the page keeps the skeleton, not the deltas it was sent
+    const heapAfter = await heapUsed(page);
+    const t = await page.evaluate(() => window.sylva.timings());
+    const received = t.bytes.reduce((a, b) => a + b, 0);
+    console.log(`# heap ${(heapBefore / 1e6).toFixed(1)} -> ${(heapAfter / 1e6).toFixed(1)} MB over ` +
+      `${t.bytes.length} deltas of ${(received / 1e6).toFixed(1)} MB; apply max ${Math.max(...t.applyMs).toFixed(1)} ms`);
+    assert.ok(heapAfter - heapBefore < Math.max(4e6, received / 4),
+      `JS heap grew ${heapAfter - heapBefore} bytes over ${received} bytes of deltas`);
+
+    // a screenshot from the front has tree-coloured pixels where the tree is, and
+    // none in the empty sky
+    await page.evaluate(() => window.sylva.setView('front'));
+    const png = await page.locator('#view canvas').screenshot();
+    const [tx, ty] = await page.evaluate(() => window.sylva.project(0, 0, 0.6));
+    const [sx, sy] = await page.evaluate(() => window.sylva.project(-4.5, 0, 9));
+    const trunk = await treePixels(page, png, [tx - 20, ty - 20, tx + 20, ty + 20]);
+    const sky = await treePixels(page, png, [sx - 20, sy - 20, sx + 20, sy + 20]);
+    assert.ok(trunk > 100, `tree-coloured pixels at the tree: ${trunk}`);
+    assert.equal(sky, 0, 'no tree colour in the empty sky');
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+// Creates a run over the protocol and selects it in the page.
+async function runInPage(d, page, file, { name, start, overrides = {} }) {
+  const c = await connect(d.url);
+  c.send({ type: 'create', scenario: scenario(file, overrides), name, start, id: 'c' });
+  const { run } = await c.type('created');
+  c.close();
+  await page.waitForSelector(`#runs tr[data-run="${run}"]`, { timeout: 10000 * SLOW });
+  await page.click(`#runs tr[data-run="${run}"]`);
+  await until(page, (s) => s.run === run && s.seq >= 0, 'the selected run');
+  return run;
+}
+
+async function serverSnapshot(d, run) {
+  const c = await connect(d.url);
+  c.send({ type: 'subscribe', run });
+  const snap = await c.type('snapshot');
+  c.close();
+  return snap;
+}
+
+test('controls, a wall and a tree between iterations, the timeline, light and exports', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    const run = await runInPage(d, page, 'wall.json', { name: 'site', start: true, overrides: { iterations: 40 } });
+    await until(page, (s) => s.iteration >= 2, 'a few iterations');
+
+    // pause: the run stops where it is
+    await page.click('#pause');
+    let s = await until(page, (x) => x.status === 'paused', 'paused');
+    await new Promise((r) => setTimeout(r, 1500 * SLOW));
+    const paused = await serverRun(d.http, 'site');
+    assert.equal(paused.status, 'paused');
+    await new Promise((r) => setTimeout(r, 1000 * SLOW));
+    assert.equal((await serverRun(d.http, 'site')).iteration, paused.iteration, 'no growth while paused');
+    s = await until(page, (x) => x.iteration === paused.iteration, 'the page at the paused iteration');
+
+    // step 2: exactly two iterations, then paused again
+    await page.fill('#step-count', '2');
+    await page.click('#step');
+    s = await until(page, (x) => x.iteration === paused.iteration + 2, 'two steps');
+    await new Promise((r) => setTimeout(r, 1000 * SLOW));
+    const stepped = await serverRun(d.http, 'site');
+    assert.equal(stepped.iteration, paused.iteration + 2);
+    assert.equal(stepped.status, 'paused');
+    assert.equal((await state(page)).nodes, stepped.nodes);
+
+    // a wall by two ground corners: the page shows it and the server has it
+    await page.selectOption('#obstacle-kind', 'wall');
+    await page.fill('#corner-a', '-2, -1.5');
+    await page.fill('#corner-b', '-2, 1.5');
+    await page.fill('#obstacle-z', '3');
+    await page.click('#add-obstacle');
+    s = await until(page, (x) => x.obstacles.includes('wall1'), 'the new wall in the page');
+    assert.ok(s.drawnObstacles.includes('wall1'), 'the wall is drawn');
+    let snap = await serverSnapshot(d, run);
+    const wall = snap.obstacles.find((o) => o.id === 'wall1');
+    assert.deepEqual([wall.min, wall.max], [[-2.1, -1.5, 0], [-1.9, 1.5, 3]]);
+
+    // a tree at a clicked ground point
+    await page.evaluate(() => window.sylva.setView('top'));
+    const [px, py] = await page.evaluate(() => window.sylva.project(3, 2, 0));
+    const box = await page.locator('#view canvas').boundingBox();
+    await page.click('#add-tree');
+    await page.mouse.click(box.x + px, box.y + py);
+    s = await until(page, (x) => x.plants.includes('tree1'), 'the new tree in the page');
+    snap = await serverSnapshot(d, run);
+    const added = snap.plants.find((p) => p.id === 'tree1');
+    assert.ok(added, 'the server has the tree');
+    const [rx, ry, rz] = added.stems[0].root;
+    assert.ok(Math.abs(rx - 3) < 0.1 && Math.abs(ry - 2) < 0.1 && rz === 0, `root at ${added.stems[0].root}`);
+
+    // start again: it grows on, with the wall and the tree
+    await page.click('#start');
+    s = await until(page, (x) => x.iteration >= stepped.iteration + 2, 'growth after start', 120000 * SLOW);
+    assert.equal(s.status, 'running');
+    await page.click('#pause');
+    s = await until(page, (x) => x.status === 'paused', 'paused again');
+    await new Promise((r) => setTimeout(r, 1500 * SLOW));
+    s = await state(page);
+    const server = await serverRun(d.http, 'site');
+    await until(page, (x) => x.iteration === server.iteration, 'caught up');
+    assert.equal((await state(page)).nodes, server.nodes);
+
+    // the timeline shows an earlier, smaller iteration, then goes back to live
+    const liveNodes = (await state(page)).nodes;
+    await page.evaluate(() => {
+      const t = document.getElementById('timeline');
+      t.value = '2';
+      t.dispatchEvent(new Event('input'));
+    });
+    s = await until(page, (x) => !x.live && x.iteration === 2, 'iteration 2 from the store');
+    assert.ok(s.nodes < liveNodes, `fewer internodes at iteration 2 (${s.nodes} < ${liveNodes})`);
+    assert.equal(s.nodes, exportSkeleton(d.db, 'site', 2).plants.flatMap((p) => p.stems).reduce((a, x) => a + x.nodes.length, 0));
+    assert.equal(s.drawnInstances, s.nodes);
+    // the export links name the shown iteration
+    const href = await page.getAttribute('#export-skeleton', 'href');
+    assert.match(href, /format=skeleton&iteration=2$/);
+    await page.click('#live');
+    s = await until(page, (x) => x.live && x.nodes === liveNodes, 'live again');
+
+    // the light slice at 1 m
+    await page.fill('#light-z', '1');
+    await page.click('#light-show');
+    s = await until(page, (x) => x.slice !== null, 'a light slice');
+    assert.equal(s.slice.nx * s.slice.ny, 200 * 200);
+    assert.ok(await page.isVisible('#legend'));
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('killed and restarted, the daemon is caught up with by itself', async () => {
+  const d = await startDaemon({ args: WEB });
+  let d2;
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    await runInPage(d, page, 'wall.json', { name: 'long', start: true, overrides: { iterations: 16 } });
+    await until(page, (s) => s.iteration >= 3, 'a few iterations');
+    d.proc.kill('SIGKILL');
+    await until(page, (s) => s.connection === 'closed', 'the page to see the daemon gone', 20000);
+    d2 = await startDaemon({ dir: d.dir, port: d.port, args: WEB });
+    const end = await until(page, (s) => s.connection === 'open' && s.status === 'finished' && s.iteration === 16,
+      'the page to catch up to the finished run', 240000 * SLOW);
+    const server = await serverRun(d2.http, 'long');
+    assert.equal(end.nodes, server.nodes);
+    assert.equal(end.seq, server.iteration);
+    assert.deepEqual(f32(await page.evaluate(() => window.sylva.skeleton())), f32(exportSkeleton(d.db, 'long')));
+    // the only errors are the page's failed attempts while the daemon was down
+    assert.deepEqual(errors.filter((e) => !/WebSocket|ERR_CONNECTION_REFUSED/.test(e)), []);
+  } finally {
+    if (d2) await stopDaemon(d2);
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('an invalid scenario shows the daemon\'s message next to the field it names', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    await page.click('#paste summary');
+    await page.fill('#scenario-text', '{"format": "sylva.scenario/1",');
+    await page.click('#scenario-load');
+    assert.match(await page.textContent('#scenario-text-error'), /not a scenario/);
+    const bad = scenario('wall.json');
+    bad.plants[0].roots = [[0, 0]];
+    await page.fill('#scenario-text', JSON.stringify(bad, null, 1));
+    await page.click('#scenario-load');
+    assert.ok(await page.isHidden('#scenario-text-error'));
+    await page.click('#create-button');
+    const note = page.locator('#scenario-form .field-error');
+    await note.waitFor();
+    const text = await note.textContent();
+    assert.match(text, /^\/scenario\/plants\/0\/roots\/0: /);
+    const where = await note.evaluate((el) => el.closest('[data-pointer]').dataset.pointer);
+    assert.equal(where, '/plants/0/roots/0');
+    // a three-number root with a word in it: named deeper in the form
+    bad.plants[0].roots = [[0, 0, 0]];
+    await page.fill('#scenario-text', JSON.stringify(bad));
+    await page.click('#scenario-load');
+    await page.fill('#scenario-form input[data-pointer="/plants/0/roots/0/1"]', 'north');
+    await page.click('#create-button');
+    const deeper = await page.locator('#scenario-form .field-error').textContent();
+    const pointer = /^\/scenario(\S*):/.exec(deeper)[1];
+    assert.ok(pointer.startsWith('/plants/0/roots/0'), deeper);
+    // next to the vector it is in, and that number marked
+    const row = await page.locator('#scenario-form .field-error').evaluate((el) => el.closest('[data-pointer]').dataset.pointer);
+    assert.equal(row, '/plants/0/roots/0');
+    if (pointer !== row) assert.ok(await page.locator(`#scenario-form input.invalid[data-pointer="${pointer}"]`).count() === 1);
+    assert.equal(await page.locator('#scenario-form .field-error').count(), 1, 'one message at a time');
+    // fixed in the form, the scenario creates a run
+    await page.fill('#scenario-form input[data-pointer="/plants/0/roots/0/1"]', '0.5');
+    await page.click('#create-button');
+    const s = await until(page, (x) => x.run !== null && x.seq >= 0, 'the corrected run');
+    assert.equal(await page.locator('#scenario-form .field-error').count(), 0);
+    assert.equal(s.name, bad.name);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('a daemon with a token: a changing action asks for it', async () => {
+  const d = await startDaemon({ args: [...WEB, '--token', 's3cret'] });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    const c = await connect(d.url);
+    c.send({ type: 'hello', token: 's3cret' });
+    await c.type('welcome');
+    c.send({ type: 'create', scenario: scenario('wall.json'), name: 'guarded', start: false, id: 'c' });
+    const { run } = await c.type('created');
+    c.close();
+    await page.click(`#runs tr[data-run="${run}"]`);
+    await until(page, (s) => s.run === run && s.seq >= 0, 'the run');
+    assert.equal((await state(page)).auth, true);
+    page.click('#step');
+    await page.waitForSelector('#token-dialog[open]');
+    await page.fill('#token-input', 'wrong');
+    await page.click('#token-ok');
+    await page.waitForSelector('#token-dialog[open] #token-error:not([hidden])');
+    await page.fill('#token-input', 's3cret');
+    await page.click('#token-ok');
+    await until(page, (s) => s.iteration === 1 && s.authed, 'one step with the token');
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
