@@ -1,5 +1,6 @@
 // Headless Chromium (Debian's /usr/bin/chromium) driven by playwright-core, for
 // the viewer's tests. Every console error and page error is collected.
+import http from 'node:http';
 import { chromium } from 'playwright-core';
 
 const CHROMIUM = process.env.SYLVA_CHROMIUM || '/usr/bin/chromium';
@@ -57,4 +58,17 @@ export async function treePixels(page, png, rect) {
     for (let i = 0; i < d.length; i += 4) if (d[i + 1] > d[i] + 25 && d[i + 1] > d[i + 2] + 15) n++;
     return n;
   }, [png.toString('base64'), rect]);
+}
+
+// GET over a fresh connection (no keep-alive pool: the daemon may close idle
+// connections between a test's steps). Resolves with {status, headers, body}.
+export function httpGet(url) {
+  return new Promise((resolve, reject) => {
+    http.get(url, { agent: false }, (res) => {
+      const chunks = [];
+      res.on('data', (c) => chunks.push(c));
+      res.on('end', () => resolve({ status: res.statusCode, headers: res.headers, body: Buffer.concat(chunks) }));
+      res.on('error', reject);
+    }).on('error', reject);
+  });
 }

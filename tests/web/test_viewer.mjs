@@ -2,10 +2,11 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
+import { spawnSync } from 'node:child_process';
 import {
   SYLVA, ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, exportSkeleton, plantsJSON, cleanup, tempDir,
 } from '../server/harness.mjs';
-import { launch, openViewer, state, until, treePixels } from './browser.mjs';
+import { launch, openViewer, state, until, treePixels, httpGet } from './browser.mjs';
 
 const WEB = ['--web', join(ROOT, 'web')];
 let browser;
@@ -16,8 +17,8 @@ after(async () => { await browser?.close(); });
 const f32 = (sk) => JSON.parse(plantsJSON(sk), (k, v) => (typeof v === 'number' ? Math.fround(v) : v));
 
 async function serverRun(http, name) {
-  const runs = await (await fetch(`${http}/api/runs`)).json();
-  return (runs.runs || runs).find((r) => r.name === name);
+  const runs = JSON.parse((await httpGet(`${http}/api/runs`)).body);
+  return runs.find((r) => r.name === name);
 }
 
 async function createFromReady(page, ready, { start }) {
@@ -64,7 +65,7 @@ test('the wall scenario grows in the page: internodes, pixels, plots, memory', a
     assert.equal(end.drawnInstances, end.nodes);
 
     // plots: one point per iteration for every stem, equal to the stored stats
-    const stats = (await (await fetch(`${d.http}/api/runs/${encodeURIComponent(name)}/stats.csv`)).text()).trim().split('\n');
+    const stats = (await httpGet(`${d.http}/api/runs/${encodeURIComponent(name)}/stats.csv`)).body.toString().trim().split('\n');
     const head = stats.shift().split(',');
     const rows = stats.map((l) => Object.fromEntries(l.split(',').map((c, i) => [head[i], c])));
     const plots = await page.evaluate(() => window.sylva.plots());
@@ -125,28 +126,30 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
   const d = await startDaemon({ args: WEB });
   try {
     const { page, errors } = await openViewer(browser, d.http);
-    const run = await runInPage(d, page, 'wall.json', { name: 'site', start: true, overrides: { iterations: 40 } });
-    await until(page, (s) => s.iteration >= 2, 'a few iterations');
+    const run = await runInPage(d, page, 'wall.json', { name: 'site', start: false, overrides: { iterations: 40 } });
 
-    // pause: the run stops where it is
+    // step 2: exactly two iterations, then paused again
+    await page.fill('#step-count', '2');
+    await page.click('#step');
+    let s = await until(page, (x) => x.iteration === 2, 'two steps');
+    await new Promise((r) => setTimeout(r, 1000 * SLOW));
+    let server = await serverRun(d.http, 'site');
+    assert.equal(server.iteration, 2);
+    assert.equal(server.status, 'paused');
+    assert.equal((await state(page)).nodes, server.nodes);
+
+    // start, then pause: the run stops where it is
+    await page.click('#start');
+    await until(page, (x) => x.status === 'running' && x.iteration >= 3, 'growth after start');
     await page.click('#pause');
-    let s = await until(page, (x) => x.status === 'paused', 'paused');
-    await new Promise((r) => setTimeout(r, 1500 * SLOW));
+    s = await until(page, (x) => x.status === 'paused', 'paused');
+    await new Promise((r) => setTimeout(r, 1000 * SLOW));
     const paused = await serverRun(d.http, 'site');
     assert.equal(paused.status, 'paused');
     await new Promise((r) => setTimeout(r, 1000 * SLOW));
     assert.equal((await serverRun(d.http, 'site')).iteration, paused.iteration, 'no growth while paused');
     s = await until(page, (x) => x.iteration === paused.iteration, 'the page at the paused iteration');
-
-    // step 2: exactly two iterations, then paused again
-    await page.fill('#step-count', '2');
-    await page.click('#step');
-    s = await until(page, (x) => x.iteration === paused.iteration + 2, 'two steps');
-    await new Promise((r) => setTimeout(r, 1000 * SLOW));
-    const stepped = await serverRun(d.http, 'site');
-    assert.equal(stepped.iteration, paused.iteration + 2);
-    assert.equal(stepped.status, 'paused');
-    assert.equal((await state(page)).nodes, stepped.nodes);
+    assert.equal(s.nodes, paused.nodes);
 
     // a wall by two ground corners: the page shows it and the server has it
     await page.selectOption('#obstacle-kind', 'wall');
@@ -173,17 +176,15 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     const [rx, ry, rz] = added.stems[0].root;
     assert.ok(Math.abs(rx - 3) < 0.1 && Math.abs(ry - 2) < 0.1 && rz === 0, `root at ${added.stems[0].root}`);
 
-    // start again: it grows on, with the wall and the tree
-    await page.click('#start');
-    s = await until(page, (x) => x.iteration >= stepped.iteration + 2, 'growth after start', 120000 * SLOW);
-    assert.equal(s.status, 'running');
-    await page.click('#pause');
-    s = await until(page, (x) => x.status === 'paused', 'paused again');
-    await new Promise((r) => setTimeout(r, 1500 * SLOW));
-    s = await state(page);
-    const server = await serverRun(d.http, 'site');
-    await until(page, (x) => x.iteration === server.iteration, 'caught up');
+    // one more step grows with the wall and the tree
+    await page.fill('#step-count', '1');
+    await page.click('#step');
+    s = await until(page, (x) => x.iteration === paused.iteration + 1, 'a step after the edits');
+    await new Promise((r) => setTimeout(r, 500 * SLOW));
+    server = await serverRun(d.http, 'site');
+    assert.equal(server.iteration, paused.iteration + 1);
     assert.equal((await state(page)).nodes, server.nodes);
+    assert.ok((await state(page)).plants.includes('tree1'));
 
     // the timeline shows an earlier, smaller iteration, then goes back to live
     const liveNodes = (await state(page)).nodes;
@@ -199,6 +200,10 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     // the export links name the shown iteration
     const href = await page.getAttribute('#export-skeleton', 'href');
     assert.match(href, /format=skeleton&iteration=2$/);
+    const obj = await httpGet(`${d.http}/${await page.getAttribute('#export-obj', 'href')}`);
+    const cli = spawnSync(SYLVA, ['export', '--db', d.db, '--name', 'site', '--iteration', '2', '--format', 'obj', '-o', '-']);
+    assert.equal(obj.status, 200);
+    assert.ok(obj.body.equals(cli.stdout), 'the OBJ download is the CLI export');
     await page.click('#live');
     s = await until(page, (x) => x.live && x.nodes === liveNodes, 'live again');
 
