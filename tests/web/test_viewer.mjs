@@ -138,14 +138,15 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     assert.equal(server.status, 'paused');
     assert.equal((await state(page)).nodes, server.nodes);
 
-    // start, then pause: the run stops where it is
+    // start, then pause at once: the run stops where it is
     await page.click('#start');
-    await until(page, (x) => x.status === 'running' && x.iteration >= 3, 'growth after start');
+    await until(page, (x) => x.status === 'running', 'running');
     await page.click('#pause');
     s = await until(page, (x) => x.status === 'paused', 'paused');
     await new Promise((r) => setTimeout(r, 1000 * SLOW));
     const paused = await serverRun(d.http, 'site');
     assert.equal(paused.status, 'paused');
+    assert.ok(paused.iteration >= 2 && paused.iteration < 20, `paused at ${paused.iteration}`);
     await new Promise((r) => setTimeout(r, 1000 * SLOW));
     assert.equal((await serverRun(d.http, 'site')).iteration, paused.iteration, 'no growth while paused');
     s = await until(page, (x) => x.iteration === paused.iteration, 'the page at the paused iteration');
@@ -207,12 +208,38 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     await page.click('#live');
     s = await until(page, (x) => x.live && x.nodes === liveNodes, 'live again');
 
+    // fork at a shown past iteration: the page moves to the new run, paused there
+    await page.evaluate(() => {
+      const t = document.getElementById('timeline');
+      t.value = '3';
+      t.dispatchEvent(new Event('input'));
+    });
+    const at3 = await until(page, (x) => !x.live && x.iteration === 3, 'iteration 3 from the store');
+    await page.fill('#fork-name', 'site-3');
+    await page.click('#fork');
+    s = await until(page, (x) => x.name === 'site-3' && x.live && x.seq >= 0, 'the fork');
+    assert.equal(s.iteration, 3);
+    assert.equal(s.nodes, at3.nodes);
+    assert.equal(s.status, 'paused');
+    assert.equal((await serverRun(d.http, 'site-3')).iteration, 3);
+
     // the light slice at 1 m
     await page.fill('#light-z', '1');
     await page.click('#light-show');
     s = await until(page, (x) => x.slice !== null, 'a light slice');
     assert.equal(s.slice.nx * s.slice.ny, 200 * 200);
     assert.ok(await page.isVisible('#legend'));
+
+    // start grows the fork on; stop ends it
+    await page.click('#start');
+    await until(page, (x) => x.iteration >= 4, 'the fork growing', 120000 * SLOW);
+    await page.click('#stop');
+    s = await until(page, (x) => x.status === 'finished', 'stopped');
+    await new Promise((r) => setTimeout(r, 1000 * SLOW));
+    server = await serverRun(d.http, 'site-3');
+    assert.equal(server.status, 'finished');
+    s = await until(page, (x) => x.iteration === server.iteration, 'the page at the last iteration');
+    assert.equal(s.nodes, server.nodes);
     assert.deepEqual(errors, []);
   } finally {
     await stopDaemon(d);
