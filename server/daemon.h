@@ -94,6 +94,7 @@ struct run {
   double work_ms;
   msgbuf *history[DAEMON_DELTA_HISTORY]; /**< the last deltas, by seq % size */
   struct pending_edit *edits; /**< edits waiting for the iteration in flight */
+  struct pending_light *lights; /**< light requests waiting for the iteration in flight */
   msgbuf *snapshot;          /**< the snapshot of seq `snapshot_seq`, shared by subscribers */
   int64_t snapshot_seq;
   run *next;

@@ -163,10 +163,8 @@ void handle_message(client *c, const char *text, size_t len) {
       snprintf(err, sizeof err, "/z: the slice would have %lld cells; at most %lld are sent",
                (long long)dims[0] * dims[1], (long long)DAEMON_MAX_SLICE);
       reply_error(c, "too_large", err, m.ref);
-    } else if (r->busy) {
-      reply_error(c, "busy", "an iteration is in flight; ask again", m.ref);
     } else {
-      client_send_text(c, sylva_msg_light_slice(r->id, r->w, m.z, m.ref));
+      run_light(r, c, m.z, m.ref);
     }
     break;
   }

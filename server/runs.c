@@ -17,7 +17,16 @@ typedef struct pending_edit {
   struct pending_edit *next;
 } pending_edit;
 
+/** A light request waiting for the iteration in flight. */
+typedef struct pending_light {
+  uint64_t client;
+  double z;
+  char *ref;
+  struct pending_light *next;
+} pending_light;
+
 static void apply_pending_edits(run *r);
+static void answer_lights(run *r);
 
 run *run_find(server *d, int64_t id) {
   for (run *r = d->runs; r; r = r->next)
@@ -133,6 +142,7 @@ static void after_cb(uv_work_t *req, int status) {
   server *d = r->d;
   r->busy = false;
   (void)status;
+  answer_lights(r);
   if (r->work_status != SYLVA_OK) {
     server_log(r->name, "failed: %s", r->work_error);
     snprintf(r->status, sizeof r->status, "failed");
@@ -286,6 +296,12 @@ void runs_free(server *d) {
       free(e->json);
       free(e);
     }
+    while (r->lights) {
+      pending_light *l = r->lights;
+      r->lights = l->next;
+      free(l->ref);
+      free(l);
+    }
     for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
     msgbuf_unref(r->snapshot);
     free(r->work_delta);
@@ -420,6 +436,35 @@ void run_edit(run *r, client *c, sylva_msg *m, const char *json, size_t len) {
   pending_edit **tail = &r->edits;
   while (*tail) tail = &(*tail)->next;
   *tail = e;
+}
+
+static void answer_lights(run *r) {
+  while (r->lights) {
+    pending_light *l = r->lights;
+    r->lights = l->next;
+    client *c = client_find(r->d, l->client);
+    if (c) client_send_text(c, sylva_msg_light_slice(r->id, r->w, l->z, l->ref));
+    free(l->ref);
+    free(l);
+  }
+}
+
+void run_light(run *r, client *c, double z, const char *ref) {
+  if (!r->busy) {
+    client_send_text(c, sylva_msg_light_slice(r->id, r->w, z, ref));
+    return;
+  }
+  pending_light *l = calloc(1, sizeof *l);
+  if (!l || (ref && !(l->ref = strdup(ref)))) {
+    free(l);
+    client_send_text(c, sylva_msg_error("internal", "out of memory", ref));
+    return;
+  }
+  l->client = c->serial;
+  l->z = z;
+  pending_light **tail = &r->lights;
+  while (*tail) tail = &(*tail)->next;
+  *tail = l;
 }
 
 /* A fork or a history snapshot, computed off the loop. */

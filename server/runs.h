@@ -34,6 +34,9 @@ void run_edit(run *r, client *c, sylva_msg *m, const char *json, size_t len);
 /** Forks run r at its stored iteration into a new paused run named `name`, off the
  *  loop; the client gets `created` (or an error). */
 void run_fork(run *r, client *c, int iteration, const char *name, const char *ref);
+/** Sends the client the light slice at height z of the run's world: now, or when
+ *  the iteration in flight is done. */
+void run_light(run *r, client *c, double z, const char *ref);
 /** Sends the client a snapshot of stored iteration `iteration`, off the loop. */
 void run_get(run *r, client *c, int iteration, const char *ref);
 /** The run's current summary for `list` and /api/runs. */

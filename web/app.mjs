@@ -402,7 +402,7 @@ async function showIteration(it) {
 
 // ---- light -----------------------------------------------------------------------
 
-async function showLight(tries = 0) {
+async function showLight() {
   const z = Number($('light-z').value);
   if (!Number.isFinite(z)) { message('the light height must be a number of metres', true); return; }
   try {
@@ -412,8 +412,7 @@ async function showLight(tries = 0) {
     $('legend').hidden = false;
     message(`light at ${s.z} m after iteration ${s.iteration}`);
   } catch (e) {
-    if (e.code === 'busy' && tries < 20) setTimeout(() => showLight(tries + 1), 250);
-    else message(e.message, true);
+    message(e.message, true);
   }
 }
 $('light-show').onclick = () => showLight();

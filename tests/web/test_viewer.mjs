@@ -233,6 +233,10 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     // start grows the fork on; stop ends it
     await page.click('#start');
     await until(page, (x) => x.iteration >= 4, 'the fork growing', 120000 * SLOW);
+    // light while it grows: answered after the iteration in flight
+    await page.fill('#light-z', '0.5');
+    await page.click('#light-show');
+    s = await until(page, (x) => x.slice?.z === 0.525 || x.slice?.z === 0.475, 'a light slice while running');
     await page.click('#stop');
     s = await until(page, (x) => x.status === 'finished', 'stopped');
     await new Promise((r) => setTimeout(r, 1000 * SLOW));
