@@ -526,6 +526,12 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const c
     if (s) sylva__strbuf_putc(&b, ',');
     sylva__put_stem_stats(&b, w, &st, true);
   }
+  sylva__strbuf_puts(&b, "],\"species\":[");
+  int species = sylva_world_species_count(w);
+  for (int k = 0; k < species; k++) {
+    if (k) sylva__strbuf_putc(&b, ',');
+    put_string(&b, sylva_world_species_label(w, k));
+  }
   sylva__strbuf_putc(&b, ']');
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);

@@ -1026,6 +1026,8 @@ static void test_snapshot_deltas(void) {
   sp.tropism[0] = 0, sp.tropism[1] = 0, sp.tropism[2] = 1;
   int species = sylva_world_add_species(w, &sp, "oak");
   CHECK(species >= 0);
+  /* a species no plant uses yet is still offered; its label needs escaping */
+  CHECK_INT(sylva_world_add_species(w, &sp, "big \"leaf\""), species + 1);
   sylva_obstacle_def wall = {.label = "wall", .min = {1.0, -5, 0}, .max = {1.2, 5, 4}};
   CHECK(sylva_world_add_obstacle(w, &wall) >= 0);
   const double tree_roots[][3] = {{0, 0, 0}};
@@ -1049,6 +1051,12 @@ static void test_snapshot_deltas(void) {
     CHECK_INT(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(sj, "plants")), 2);
     CHECK_STR(str_of(cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(sj, "stats"), 2), "plant"),
               "s\"1");
+    /* the species' labels in id order, after the stats (the skeleton part is unchanged) */
+    const cJSON *labels = cJSON_GetObjectItemCaseSensitive(sj, "species");
+    CHECK_INT(cJSON_GetArraySize(labels), 2);
+    CHECK_STR(cJSON_GetStringValue(cJSON_GetArrayItem(labels, 0)), "oak");
+    CHECK_STR(cJSON_GetStringValue(cJSON_GetArrayItem(labels, 1)), "big \"leaf\"");
+    CHECK(snap && strstr(snap, "],\"species\":[\"oak\",\"big \\\"leaf\\\"\"],\"ref\":\"sub\"}"));
     model_load(&m, sj);
   }
   check_snapshot_matches_skeleton(snap, w);

@@ -157,9 +157,11 @@ char *sylva_msg_runs(const sylva_run_summary *runs, size_t n, const char *ref);
 char *sylva_runs_json(const sylva_run_summary *runs, size_t n);
 
 /** {"type":"snapshot","run":..,"seq":..,"iteration":..,"voxel":..,"world":{"min":[..],
- *  "max":[..]},"obstacles":[..],"plants":[..],"stats":[..],"ref":..}: world,
- *  obstacles and plants byte for byte as in sylva_encode_skeleton(); stats per
- *  global stem as in the stats line (compact), the stems' current measures. */
+ *  "max":[..]},"obstacles":[..],"plants":[..],"stats":[..],"species":[..],"ref":..}:
+ *  world, obstacles and plants byte for byte as in sylva_encode_skeleton(); stats
+ *  per global stem as in the stats line (compact), the stems' current measures;
+ *  species: the labels of the world's species in id order (what an edit's
+ *  add_plants may name). */
 char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const char *ref);
 
 /** {"type":"delta","run":..,"seq":..,"iteration":..,"added":[[id,parent,plant,stem,x,
