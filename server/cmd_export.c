@@ -6,13 +6,10 @@
 #include <string.h>
 
 #include "commands.h"
-#include "csv.h"
-#include "mesh.h"
+#include "export.h"
 #include "options.h"
 #include "stored.h"
-#include "sylva/encode.h"
 #include "sylva/scenario.h"
-#include "sylva/status.h"
 
 enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_FORMAT, OPT_OUT, OPT_SIDES, OPT_OBSTACLES, OPT_HELP,
        OPT_COUNT };
@@ -45,15 +42,14 @@ static void export_usage(FILE *f) {
   cli_print_options(f, export_options, OPT_COUNT);
 }
 
-enum { FMT_SKELETON, FMT_OBJ, FMT_PLY, FMT_CSV };
-
 int cmd_export(int argc, char **argv) {
   cli_parser p;
   cli_parser_init(&p, "export", export_options, OPT_COUNT, argc, argv);
   const char *db = NULL, *name = NULL, *out = NULL, *arg;
   uint64_t iteration = 0, sides = 8;
-  bool has_iteration = false, obstacles = false;
-  int format = -1, first = argc, opt;
+  bool has_iteration = false, has_format = false;
+  export_spec spec = {0};
+  int first = argc, opt;
   while ((opt = cli_next(&p, &arg, &first)) >= 0) {
     switch (opt) {
     case OPT_DB: db = arg; break;
@@ -64,17 +60,15 @@ int cmd_export(int argc, char **argv) {
       has_iteration = true;
       break;
     case OPT_FORMAT:
-      if (strcmp(arg, "skeleton") == 0) format = FMT_SKELETON;
-      else if (strcmp(arg, "obj") == 0) format = FMT_OBJ;
-      else if (strcmp(arg, "ply") == 0) format = FMT_PLY;
-      else if (strcmp(arg, "csv") == 0) format = FMT_CSV;
-      else return cli_usage_error("export", "--format: '%s' is not skeleton, obj, ply or csv", arg);
+      if (!export_format_parse(arg, &spec.format))
+        return cli_usage_error("export", "--format: '%s' is not " EXPORT_FORMAT_NAMES, arg);
+      has_format = true;
       break;
     case OPT_OUT: out = arg; break;
     case OPT_SIDES:
       if (cli_parse_u64("export", "sides", arg, 3, 64, &sides)) return CLI_EXIT_USAGE;
       break;
-    case OPT_OBSTACLES: obstacles = true; break;
+    case OPT_OBSTACLES: spec.obstacles = true; break;
     default:
       export_usage(stdout);
       return CLI_EXIT_OK;
@@ -82,7 +76,7 @@ int cmd_export(int argc, char **argv) {
   }
   if (opt == -2) return CLI_EXIT_USAGE;
   if (first != argc) return cli_usage_error("export", "unexpected argument '%s'", argv[first]);
-  if (format < 0) return cli_usage_error("export", "--format is required");
+  if (!has_format) return cli_usage_error("export", "--format is required");
   if (!out || !out[0]) return cli_usage_error("export", "-o OUT is required");
 
   store *st;
@@ -97,6 +91,10 @@ int cmd_export(int argc, char **argv) {
     store_close(st);
     return CLI_EXIT_USAGE;
   }
+  spec.run = r.id;
+  spec.name = r.name;
+  spec.iteration = at;
+  spec.sides = (int)sides;
 
   /* write to OUT.tmp and rename, so that OUT is never half written */
   bool to_stdout = strcmp(out, "-") == 0;
@@ -115,34 +113,13 @@ int cmd_export(int argc, char **argv) {
       return CLI_EXIT_USAGE;
     }
   }
-  if (format == FMT_CSV) {
-    if (csv_write_stats(f, st, r.id, at)) {
-      fprintf(stderr, "sylva: %s\n", ferror(f) ? strerror(errno) : store_error(st));
-      rc = CLI_EXIT_FAILURE;
-    }
-  } else {
-    sylva_world *w = NULL;
-    rc = cli_store_world_at(st, &r, at, &w);
-    if (rc == CLI_EXIT_OK && format == FMT_SKELETON) {
-      char *text = sylva_encode_skeleton(w);
-      if (!text || fputs(text, f) == EOF) {
-        fprintf(stderr, "sylva: %s\n", text ? strerror(errno) : "out of memory");
-        rc = CLI_EXIT_FAILURE;
-      }
-      free(text);
-    } else if (rc == CLI_EXIT_OK) {
-      sylva_mesh_options mo = sylva_mesh_default_options();
-      mo.sides = (int)sides;
-      mo.obstacles = obstacles;
-      int m = sylva_mesh_write(f, w, format == FMT_OBJ ? SYLVA_MESH_OBJ : SYLVA_MESH_PLY, &mo);
-      if (m) {
-        fprintf(stderr, "sylva: %s: %s\n", out,
-                m == SYLVA_MESH_EWRITE ? strerror(errno) : sylva_strerror(m));
-        rc = CLI_EXIT_FAILURE;
-      }
-    }
-    sylva_world_destroy(w);
-  }
+  char err[512];
+  int failed = export_write(f, st, NULL, &spec, cli_store_warn, err, sizeof err);
+  if (failed == EXPORT_EWRITE)
+    fprintf(stderr, "sylva: %s: %s\n", out, err);
+  else if (failed)
+    fprintf(stderr, "sylva: %s\n", err);
+  if (failed) rc = CLI_EXIT_FAILURE;
   if (fflush(f) != 0 && rc == CLI_EXIT_OK) {
     fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
     rc = CLI_EXIT_FAILURE;

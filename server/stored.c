@@ -6,7 +6,7 @@
 #include "edit.h"
 #include "options.h"
 
-static void warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
+void cli_store_warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
 
 int cli_store_open(const char *path, bool create, store **out) {
   int rc = store_open(path, create, out);
@@ -66,7 +66,7 @@ int cli_open_run(const char *command, const char *db, const char *name, store **
 }
 
 int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
-  if (store_world_at(st, r->id, at, warn, edit_replay, out)) {
+  if (store_world_at(st, r->id, at, cli_store_warn, edit_replay, out)) {
     fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));
     return CLI_EXIT_FAILURE;
   }

@@ -10,6 +10,9 @@
 #include "store.h"
 #include "sylva/scenario.h"
 
+/** Prints a store's warning (a damaged snapshot passed over) on stderr. */
+void cli_store_warn(const char *msg);
+
 /** Opens a store (create: a new file may be made). */
 int cli_store_open(const char *path, bool create, store **out);
 

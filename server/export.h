@@ -1,0 +1,51 @@
+/* sylva server: a stored iteration of a run written as a skeleton (JSON), a mesh
+ * of its branches (OBJ, PLY), or the per-stem stats of every iteration up to it
+ * (CSV). `sylva export` and the daemon's GET /api/runs/NAME/export both write
+ * with export_write, so they give the same bytes. */
+#ifndef SYLVA_SERVER_EXPORT_H
+#define SYLVA_SERVER_EXPORT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <uv.h>
+
+#include "store.h"
+
+/** The formats. */
+typedef enum export_format { EXPORT_SKELETON, EXPORT_OBJ, EXPORT_PLY, EXPORT_CSV } export_format;
+
+/** The format names, for messages. */
+#define EXPORT_FORMAT_NAMES "skeleton, obj, ply or csv"
+
+/** The format called `name` ("skeleton", "obj", "ply" or "csv"); false for none. */
+bool export_format_parse(const char *name, export_format *out);
+
+/** The extension of its files, without the dot ("json", "obj", "ply", "csv"). */
+const char *export_format_extension(export_format format);
+
+/** What to write. */
+typedef struct export_spec {
+  int64_t run;          /**< the store's run id */
+  const char *name;     /**< the run's name, for messages */
+  int iteration;        /**< a stored iteration, 0 to the run's last */
+  export_format format;
+  int sides;            /**< obj, ply: vertices per branch ring (mesh.h) */
+  bool obstacles;       /**< obj, ply: also the obstacle boxes */
+} export_spec;
+
+/** Returned by export_write when writing to the stream failed. */
+#define EXPORT_EWRITE (-2)
+
+/** Writes spec to f (flushed, not closed). When lock is not NULL it is held while
+ *  st is used: while the world is restored (the newest good snapshot at or before
+ *  the iteration, regrown to it: seconds for a large run) and, for the CSV, for
+ *  the whole write, which streams from the store. warn (may be NULL) hears of
+ *  damaged snapshots passed over. Returns 0; -1 when the store failed or memory
+ *  ran out, EXPORT_EWRITE when writing to f failed; err then says why in one
+ *  line. */
+int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,
+                 void (*warn)(const char *msg), char *err, size_t errlen);
+
+#endif
