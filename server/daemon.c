@@ -1,4 +1,4 @@
-/* The daemon: the loop, libwebsockets on it, HTTP routes, WebSocket sessions,
+/* The daemon: the loop, libwebsockets on it (HTTP routes: http.c), WebSocket sessions,
  * signals and an orderly shutdown. */
 #include "daemon.h"
 
@@ -10,8 +10,8 @@
 #include <time.h>
 
 #include "client.h"
-#include "csv.h"
 #include "handlers.h"
+#include "http.h"
 #include "input.h"
 #include "runs.h"
 #include "sylva/protocol.h"
@@ -34,152 +34,6 @@ static void on_closer(uv_timer_t *t) { clients_close_pending(t->data); }
 
 void server_schedule_closes(server *d) {
   if (!uv_is_closing((uv_handle_t *)&d->closer)) uv_timer_start(&d->closer, on_closer, 0, 0);
-}
-
-/* ---- HTTP routes ------------------------------------------------------------- */
-
-typedef struct http_pss {
-  char *body;
-  size_t len, off;
-} http_pss;
-
-static char *metrics_text(server *d) {
-  int64_t runs = 0, running = 0;
-  for (run *r = d->runs; r; r = r->next) {
-    runs++;
-    running += strcmp(r->status, "running") == 0;
-  }
-  char *text = NULL;
-  size_t size = 0;
-  FILE *f = open_memstream(&text, &size);
-  if (!f) return NULL;
-  fprintf(f,
-          "# HELP sylva_runs Runs held by the daemon.\n# TYPE sylva_runs gauge\nsylva_runs %lld\n"
-          "# HELP sylva_runs_running Runs growing now.\n# TYPE sylva_runs_running gauge\n"
-          "sylva_runs_running %lld\n"
-          "# HELP sylva_clients Connected WebSocket clients.\n# TYPE sylva_clients gauge\n"
-          "sylva_clients %lld\n"
-          "# HELP sylva_iterations_total Iterations grown since start.\n"
-          "# TYPE sylva_iterations_total counter\nsylva_iterations_total %lld\n"
-          "# HELP sylva_iteration_seconds_total Time spent growing iterations.\n"
-          "# TYPE sylva_iteration_seconds_total counter\nsylva_iteration_seconds_total %.6f\n"
-          "# HELP sylva_messages_received_total Client messages received.\n"
-          "# TYPE sylva_messages_received_total counter\nsylva_messages_received_total %lld\n"
-          "# HELP sylva_bytes_sent_total WebSocket payload bytes sent.\n"
-          "# TYPE sylva_bytes_sent_total counter\nsylva_bytes_sent_total %lld\n",
-          (long long)runs, (long long)running, (long long)d->clients_now,
-          (long long)d->iterations_total, d->iteration_ms_total / 1e3,
-          (long long)d->messages_received, (long long)d->bytes_sent);
-  if (fclose(f) != 0) {
-    free(text);
-    return NULL;
-  }
-  return text;
-}
-
-/* The body and type of a route, or status 404. */
-static int route(server *d, const char *uri, char **body, const char **type) {
-  *type = "application/json";
-  if (strcmp(uri, "/healthz") == 0) {
-    int64_t runs = 0;
-    for (run *r = d->runs; r; r = r->next) runs++;
-    char buf[160];
-    snprintf(buf, sizeof buf, "{\"ok\": true, \"runs\": %lld, \"clients\": %lld}\n",
-             (long long)runs, (long long)d->clients_now);
-    *body = strdup(buf);
-    return *body ? 200 : 500;
-  }
-  if (strcmp(uri, "/metrics") == 0) {
-    *type = "text/plain; version=0.0.4";
-    *body = metrics_text(d);
-    return *body ? 200 : 500;
-  }
-  if (strcmp(uri, "/api/runs") == 0) {
-    *body = handlers_runs_json(d, false, NULL);
-    return *body ? 200 : 500;
-  }
-  const char *prefix = "/api/runs/", *suffix = "/stats.csv";
-  size_t lp = strlen(prefix), ls = strlen(suffix), lu = strlen(uri);
-  if (lu > lp + ls && strncmp(uri, prefix, lp) == 0 && strcmp(uri + lu - ls, suffix) == 0) {
-    char name[512];
-    size_t n = lu - lp - ls;
-    if (n >= sizeof name) return 404;
-    memcpy(name, uri + lp, n);
-    name[n] = 0;
-    lws_urldecode(name, name, (int)n + 1);
-    for (run *r = d->runs; r; r = r->next) {
-      if (strcmp(r->name, name) != 0) continue;
-      *type = "text/csv";
-      size_t size = 0;
-      FILE *f = open_memstream(body, &size);
-      if (!f) return 500;
-      uv_mutex_lock(&d->store_lock);
-      int failed = csv_write_stats(f, d->st, r->id, r->iteration);
-      uv_mutex_unlock(&d->store_lock);
-      if (fclose(f) != 0 || failed) {
-        free(*body);
-        *body = NULL;
-        return 500;
-      }
-      return 200;
-    }
-  }
-  return 404;
-}
-
-static int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
-                         size_t len) {
-  http_pss *pss = user;
-  server *d = lws_context_user(lws_get_context(wsi));
-  uint8_t buf[LWS_PRE + 16384], *start = &buf[LWS_PRE], *p = start, *end = &buf[sizeof buf - 1];
-  switch (reason) {
-  case LWS_CALLBACK_HTTP: {
-    char uri[1024];
-    if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) < 0) return -1;
-    char *body = NULL;
-    const char *type;
-    int status = route(d, uri, &body, &type);
-    if (status != 200) {
-      free(body);
-      return lws_return_http_status(wsi, (unsigned)status, NULL) ? -1
-             : lws_http_transaction_completed(wsi) ? -1 : 0;
-    }
-    pss->body = body;
-    pss->len = strlen(body);
-    pss->off = 0;
-    if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, type, pss->len, &p, end) ||
-        lws_finalize_write_http_header(wsi, start, &p, end))
-      return 1;
-    lws_callback_on_writable(wsi);
-    return 0;
-  }
-  case LWS_CALLBACK_HTTP_WRITEABLE: {
-    if (!pss || !pss->body) break;
-    size_t n = pss->len - pss->off;
-    if (n > sizeof buf - LWS_PRE - 1) n = sizeof buf - LWS_PRE - 1;
-    memcpy(start, pss->body + pss->off, n);
-    bool last = pss->off + n == pss->len;
-    if (lws_write(wsi, start, n, last ? LWS_WRITE_HTTP_FINAL : LWS_WRITE_HTTP) != (int)n) return 1;
-    pss->off += n;
-    if (last) {
-      free(pss->body);
-      pss->body = NULL;
-      if (lws_http_transaction_completed(wsi)) return -1;
-    } else {
-      lws_callback_on_writable(wsi);
-    }
-    return 0;
-  }
-  case LWS_CALLBACK_HTTP_DROP_PROTOCOL:
-  case LWS_CALLBACK_CLOSED_HTTP:
-    if (pss) {
-      free(pss->body);
-      pss->body = NULL;
-    }
-    break;
-  default: break;
-  }
-  return lws_callback_http_dummy(wsi, reason, user, in, len);
 }
 
 /* ---- WebSocket sessions --------------------------------------------------------- */
@@ -360,7 +214,9 @@ static void on_shutdown_tick(uv_timer_t *t) {
   for (run *r = d->runs; r; r = r->next) busy |= r->busy;
   uint64_t since = uv_now(&d->loop) - d->stop_at;
   /* wait for the iterations in flight, and give the close frames time to leave
-   * (up to two seconds for clients that do not answer) */
+   * (up to two seconds for clients that do not answer). An export in flight is not
+   * waited for: its connection closes with the context, and the loop, drained
+   * below, finishes the job and frees its result. */
   if (!d->stopping || busy || since < 100 || (d->clients && since < 2000)) return;
   uv_timer_stop(t);
   uv_close((uv_handle_t *)t, NULL);
@@ -409,7 +265,7 @@ int server_main(const server_options *opt) {
   info.foreign_loops = foreign;
   info.pcontext = &d->ctx;
   info.user = d;
-  info.timeout_secs = 30;
+  info.timeout_secs = HTTP_TIMEOUT_SECS;
   d->ctx = lws_create_context(&info);
   int rc = 0;
   if (!d->ctx || !lws_get_vhost_by_name(d->ctx, "default")) {

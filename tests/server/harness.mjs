@@ -3,7 +3,7 @@
 // not write).
 import { spawn, spawnSync } from 'node:child_process';
 import { mkdtempSync, rmSync, readFileSync } from 'node:fs';
-import { createServer } from 'node:net';
+import { createServer, connect as tcpConnect } from 'node:net';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import WebSocket from 'ws';
@@ -51,6 +51,26 @@ export async function startDaemon({ dir, port, args = [], wrapper = [] } = {}) {
   proc.removeAllListeners('exit');
   return { proc, port, dir, db, url: `ws://127.0.0.1:${port}/ws`, http: `http://127.0.0.1:${port}`,
     stderr: () => err };
+}
+
+// Runs fn(daemon) on a daemon of its own (options as for startDaemon), then stops
+// it with SIGTERM, which must end it with status 0 (so a sanitizer's report at exit
+// fails the test), and removes its directory.
+export async function withDaemon(options, fn) {
+  const d = await startDaemon(options);
+  let result;
+  try {
+    result = await fn(d);
+  } catch (e) {
+    await stopDaemon(d);
+    cleanup(d.dir);
+    throw e;
+  }
+  const exit = await stopDaemon(d);
+  cleanup(d.dir);
+  if (exit.code !== 0)
+    throw new Error(`the daemon ended with ${JSON.stringify(exit)}: ${d.stderr().slice(-3000)}`);
+  return result;
 }
 
 export function stopDaemon(d, signal = 'SIGTERM') {
@@ -192,16 +212,49 @@ export class Model {
   }
 }
 
-export function exportSkeleton(db, name, iteration) {
-  const args = ['export', '--db', db, '--name', name, '--format', 'skeleton', '-o', '-'];
+// The bytes `sylva export --format FORMAT -o -` writes (iteration undefined: the
+// last; extra: more options, e.g. ['--obstacles']).
+export function exportBytes(db, name, format, iteration, extra = []) {
+  const args = ['export', '--db', db, '--name', name, '--format', format, '-o', '-', ...extra];
   if (iteration !== undefined) args.push('--iteration', String(iteration));
-  const r = spawnSync(SYLVA, args, { encoding: 'utf8', maxBuffer: 1 << 30 });
+  const r = spawnSync(SYLVA, args, { maxBuffer: 1 << 30 });
   if (r.status !== 0) throw new Error(`export failed: ${r.stderr}`);
-  return JSON.parse(r.stdout);
+  return r.stdout;
+}
+
+export function exportSkeleton(db, name, iteration) {
+  return JSON.parse(exportBytes(db, name, 'skeleton', iteration).toString('utf8'));
+}
+
+// GET with the path sent as it is (fetch would resolve "..", also "%2e%2e"), over a
+// connection of its own; resolves with the whole reply as text.
+export function rawGet(port, path) {
+  return new Promise((resolve) => {
+    const s = tcpConnect(port, '127.0.0.1', () => s.write(
+      `GET ${path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n`));
+    let buf = '';
+    s.on('data', (x) => { buf += x; });
+    s.on('close', () => resolve(buf));
+    s.on('error', () => resolve(buf));
+  });
 }
 
 export function plantsJSON(skeleton) {
   return JSON.stringify(skeleton.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: s.nodes })) })));
+}
+
+// Sends GET path on a connection of its own and reads nothing; resolves once the
+// request is written. leave: the client then closes the connection at once.
+export function askOnly(port, path, { leave = false } = {}) {
+  return new Promise((resolve) => {
+    const s = tcpConnect(port, '127.0.0.1', () => {
+      s.write(`GET ${path} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n`, () => {
+        if (leave) s.destroy();
+        resolve();
+      });
+    });
+    s.on('error', resolve);
+  });
 }
 
 export function cleanup(dir) { rmSync(dir, { recursive: true, force: true }); }

@@ -5,7 +5,7 @@ import { readdirSync, readFileSync, mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { startDaemon, stopDaemon, connect, Client, scenario, Model, exportSkeleton, plantsJSON,
-  cleanup, ROOT } from './harness.mjs';
+  cleanup, rawGet, ROOT } from './harness.mjs';
 
 test('HTTP: /healthz, /metrics, /api/runs, and 404', async () => {
   const d = await startDaemon();
@@ -224,7 +224,6 @@ test('SIGTERM: clients closed with 1001, exit 0', async () => {
 
 test('static files: MIME types, index, and no path escapes', async () => {
   const { mkdirSync, writeFileSync } = await import('node:fs');
-  const { connect: tcp } = await import('node:net');
   const web = join(tempDirFor(), 'web');
   mkdirSync(web, { recursive: true });
   writeFileSync(join(web, 'index.html'), '<!doctype html><title>v</title>');
@@ -241,13 +240,7 @@ test('static files: MIME types, index, and no path escapes', async () => {
     assert.match((await fetch(`${d.http}/style.css`)).headers.get('content-type'), /text\/css/);
     assert.equal((await fetch(`${d.http}/missing.js`)).status, 404);
     for (const path of ['/../../../../etc/passwd', '/%2e%2e/%2e%2e/etc/passwd', '/..%2f..%2fetc/passwd']) {
-      const reply = await new Promise((resolve) => {
-        const s = tcp(d.port, '127.0.0.1', () => s.write(`GET ${path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n`));
-        let buf = '';
-        s.on('data', (x) => { buf += x; });
-        s.on('close', () => resolve(buf));
-        s.on('error', () => resolve(buf));
-      });
+      const reply = await rawGet(d.port, path);
       assert.doesNotMatch(reply, /root:x:0:0/, path);
       assert.doesNotMatch(reply.split('\r\n')[0] || '', / 200 /, path);
     }

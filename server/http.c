@@ -1,0 +1,519 @@
+/* The daemon's HTTP routes; see http.h. */
+#include "http.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+
+#include "daemon.h"
+#include "export.h"
+#include "handlers.h"
+#include "input.h"
+#include "mesh.h"
+
+/* Bytes of a reply's body per lws_write. */
+#define HTTP_CHUNK 65536
+/* How often a connection waiting for its export is checked for the client leaving. */
+#define HTTP_WATCH_USECS 500000
+
+/* An export written off the loop thread into a tmpfile. */
+struct http_job {
+  uv_work_t work;
+  server *d;
+  struct lws *wsi; /* with pss: NULL once the transaction is gone */
+  http_pss *pss;
+  char *name;      /* the run's name (spec.name) */
+  export_spec spec;
+  FILE *file;      /* the result, rewound */
+  size_t size;
+  int failed;
+  char err[512];
+};
+
+static const char *const export_types[] = {
+    [EXPORT_SKELETON] = "application/json", [EXPORT_OBJ] = "text/plain; charset=utf-8",
+    [EXPORT_PLY] = "application/octet-stream", [EXPORT_CSV] = "text/csv"};
+
+/* ---- replies ------------------------------------------------------------------ */
+
+/* Frees what the transaction holds. */
+static void release(http_pss *pss) {
+  free(pss->body);
+  pss->body = NULL;
+  if (pss->file) fclose(pss->file);
+  pss->file = NULL;
+}
+
+/* The reply: body (malloc'd; owned from here) of len bytes. */
+static void reply(http_pss *pss, unsigned status, const char *type, char *body, size_t len) {
+  release(pss);
+  pss->status = status;
+  pss->type = type;
+  pss->body = body;
+  pss->len = body ? len : 0;
+  pss->off = 0;
+}
+
+/* A text/plain reply of one line. */
+static void reply_text(http_pss *pss, unsigned status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static void reply_text(http_pss *pss, unsigned status, const char *fmt, ...) {
+  char line[768];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(line, sizeof line - 1, fmt, ap);
+  va_end(ap);
+  strcat(line, "\n");
+  pss->disposition[0] = '\0';
+  reply(pss, status, "text/plain; charset=utf-8", strdup(line), strlen(line));
+}
+
+/* Text from the client (or a name) fit to quote in a one-line message: at most 64
+ * bytes, control characters as '?'. */
+static const char *shown(char *buf, size_t size, const char *s) {
+  size_t n = 0;
+  for (; *s && n + 1 < size && n < 64; s++)
+    buf[n++] = (unsigned char)*s < 0x20 || *s == 0x7F ? '?' : *s;
+  buf[n] = '\0';
+  return buf;
+}
+
+/* ---- /healthz, /metrics --------------------------------------------------------- */
+
+static char *healthz_text(server *d) {
+  int64_t runs = 0;
+  for (run *r = d->runs; r; r = r->next) runs++;
+  char buf[160];
+  snprintf(buf, sizeof buf, "{\"ok\": true, \"runs\": %lld, \"clients\": %lld}\n",
+           (long long)runs, (long long)d->clients_now);
+  return strdup(buf);
+}
+
+static char *metrics_text(server *d) {
+  int64_t runs = 0, running = 0;
+  for (run *r = d->runs; r; r = r->next) {
+    runs++;
+    running += strcmp(r->status, "running") == 0;
+  }
+  char *text = NULL;
+  size_t size = 0;
+  FILE *f = open_memstream(&text, &size);
+  if (!f) return NULL;
+  fprintf(f,
+          "# HELP sylva_runs Runs held by the daemon.\n# TYPE sylva_runs gauge\nsylva_runs %lld\n"
+          "# HELP sylva_runs_running Runs growing now.\n# TYPE sylva_runs_running gauge\n"
+          "sylva_runs_running %lld\n"
+          "# HELP sylva_clients Connected WebSocket clients.\n# TYPE sylva_clients gauge\n"
+          "sylva_clients %lld\n"
+          "# HELP sylva_iterations_total Iterations grown since start.\n"
+          "# TYPE sylva_iterations_total counter\nsylva_iterations_total %lld\n"
+          "# HELP sylva_iteration_seconds_total Time spent growing iterations.\n"
+          "# TYPE sylva_iteration_seconds_total counter\nsylva_iteration_seconds_total %.6f\n"
+          "# HELP sylva_messages_received_total Client messages received.\n"
+          "# TYPE sylva_messages_received_total counter\nsylva_messages_received_total %lld\n"
+          "# HELP sylva_bytes_sent_total WebSocket payload bytes sent.\n"
+          "# TYPE sylva_bytes_sent_total counter\nsylva_bytes_sent_total %lld\n",
+          (long long)runs, (long long)running, (long long)d->clients_now,
+          (long long)d->iterations_total, d->iteration_ms_total / 1e3,
+          (long long)d->messages_received, (long long)d->bytes_sent);
+  if (fclose(f) != 0) {
+    free(text);
+    return NULL;
+  }
+  return text;
+}
+
+/* A reply built in memory: 200, or 500 when memory ran out. */
+static void reply_built(http_pss *pss, const char *type, char *body) {
+  if (body)
+    reply(pss, 200, type, body, strlen(body));
+  else
+    reply_text(pss, 500, "out of memory");
+}
+
+/* ---- /api/scenarios/NAME -------------------------------------------------------- */
+
+/* NAME: [A-Za-z0-9_-][A-Za-z0-9._-]*, at most HTTP_MAX_SCENARIO_NAME bytes. */
+static bool scenario_name_ok(const char *name) {
+  size_t n = strlen(name);
+  if (n == 0 || n > HTTP_MAX_SCENARIO_NAME || name[0] == '.') return false;
+  for (const char *c = name; *c; c++)
+    if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') ||
+          *c == '_' || *c == '-' || *c == '.'))
+      return false;
+  return true;
+}
+
+/* The ready scenario file <--scenarios>/NAME.json, byte for byte. */
+static void scenario_file(server *d, http_pss *pss, const char *name) {
+  char path[PATH_MAX], q[80];
+  struct stat sb;
+  if (!d->opt.scenarios || !scenario_name_ok(name) ||
+      snprintf(path, sizeof path, "%s/%s.json", d->opt.scenarios, name) >= (int)sizeof path ||
+      stat(path, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+    reply_text(pss, 404, "no scenario \"%s\"", shown(q, sizeof q, name));
+    return;
+  }
+  char *data = NULL;
+  size_t len = 0;
+  int e = sb.st_size > (off_t)HTTP_MAX_SCENARIO_FILE
+              ? EFBIG
+              : cli_read_file(path, HTTP_MAX_SCENARIO_FILE, &data, &len);
+  if (e) {
+    if (e == EFBIG)
+      server_log(NULL, "%s: larger than %u bytes; not served", path, HTTP_MAX_SCENARIO_FILE);
+    else
+      server_log(NULL, "%s: %s", path, strerror(e));
+    reply_text(pss, 404, "no scenario \"%s\"", shown(q, sizeof q, name));
+    return;
+  }
+  reply(pss, 200, "application/json", data, len);
+}
+
+/* ---- exports -------------------------------------------------------------------- */
+
+static void log_warning(const char *msg) { server_log(NULL, "export: %s", msg); }
+
+/* Worker thread: the export into a tmpfile, the store locked while it is used. */
+static void job_work(uv_work_t *req) {
+  http_job *j = req->data;
+  j->file = tmpfile();
+  if (!j->file) {
+    j->failed = -1;
+    snprintf(j->err, sizeof j->err, "cannot create a temporary file: %s", strerror(errno));
+    return;
+  }
+  j->failed = export_write(j->file, j->d->st, &j->d->store_lock, &j->spec, log_warning, j->err,
+                           sizeof j->err);
+  if (j->failed) return;
+  off_t size = ftello(j->file);
+  if (size < 0 || fseeko(j->file, 0, SEEK_SET) != 0) {
+    j->failed = -1;
+    snprintf(j->err, sizeof j->err, "temporary file: %s", strerror(errno));
+    return;
+  }
+  j->size = (size_t)size;
+}
+
+/* Loop thread: the reply, when the transaction is still there; frees the job. */
+static void job_done(uv_work_t *req, int status) {
+  (void)status;
+  http_job *j = req->data;
+  if (j->failed) server_log(j->name, "export failed: %s", j->err);
+  http_pss *pss = j->pss;
+  if (!pss) {
+    server_log(j->name, "export: the client left before it was written");
+  } else {
+    pss->job = NULL;
+    if (j->failed) {
+      reply_text(pss, 500, "%s", j->err);
+    } else {
+      pss->status = 200;
+      pss->file = j->file;
+      pss->len = j->size;
+      pss->off = 0;
+      j->file = NULL;
+    }
+    /* the reply has HTTP_TIMEOUT_SECS between chunks again (see http_callback);
+     * the watch timer stops by itself now that there is no job (4.1.6 cannot
+     * cancel it: LWS_SET_TIMER_USEC_CANCEL schedules it at once) */
+    lws_set_timeout(j->wsi, PENDING_TIMEOUT_HTTP_CONTENT, HTTP_TIMEOUT_SECS);
+    lws_callback_on_writable(j->wsi);
+  }
+  if (j->file) fclose(j->file);
+  free(j->name);
+  free(j);
+}
+
+/* Starts writing spec off the loop; the reply follows when it is done. */
+static void start_export(server *d, struct lws *wsi, http_pss *pss, const run *r,
+                         const export_spec *spec) {
+  if (d->stopping) {
+    reply_text(pss, 503, "the daemon is stopping");
+    return;
+  }
+  http_job *j = calloc(1, sizeof *j);
+  if (!j || !(j->name = strdup(r->name))) {
+    free(j);
+    reply_text(pss, 500, "out of memory");
+    return;
+  }
+  j->d = d;
+  j->spec = *spec;
+  j->spec.run = r->id;
+  j->spec.name = j->name;
+  j->work.data = j;
+  if (uv_queue_work(&d->loop, &j->work, job_work, job_done) != 0) {
+    free(j->name);
+    free(j);
+    reply_text(pss, 500, "cannot queue the export");
+    return;
+  }
+  j->wsi = wsi;
+  j->pss = pss;
+  pss->job = j;
+  pss->type = export_types[spec->format];
+}
+
+/* An iteration given in a query: decimal digits only, 0 to INT_MAX. */
+static bool parse_iteration(const char *text, int *out) {
+  size_t n = strlen(text);
+  if (n == 0 || n > 10) return false;
+  long long v = 0;
+  for (const char *c = text; *c; c++) {
+    if (*c < '0' || *c > '9') return false;
+    v = v * 10 + (*c - '0');
+  }
+  if (v > INT_MAX) return false;
+  *out = (int)v;
+  return true;
+}
+
+enum { ARG_FORMAT, ARG_ITERATION, ARG_OBSTACLES, ARG_COUNT };
+static const char *const arg_names[ARG_COUNT] = {"format", "iteration", "obstacles"};
+
+/* Reads one parameter "key=value" of an export's query into spec; false with a 400
+ * reply when it is bad. */
+static bool export_arg(http_pss *pss, const run *r, char *arg, bool seen[ARG_COUNT],
+                       export_spec *spec) {
+  char q[80], q2[80];
+  char *value = strchr(arg, '=');
+  if (value) *value++ = '\0';
+  int k = 0;
+  while (k < ARG_COUNT && strcmp(arg, arg_names[k]) != 0) k++;
+  if (k == ARG_COUNT) {
+    reply_text(pss, 400, "%s: unknown parameter (known: format, iteration, obstacles)",
+               shown(q, sizeof q, arg));
+    return false;
+  }
+  if (seen[k]) {
+    reply_text(pss, 400, "%s: given more than once", arg_names[k]);
+    return false;
+  }
+  seen[k] = true;
+  if (!value) value = "";
+  switch (k) {
+  case ARG_FORMAT:
+    if (export_format_parse(value, &spec->format)) return true;
+    reply_text(pss, 400, "format: \"%s\" is not " EXPORT_FORMAT_NAMES, shown(q, sizeof q, value));
+    return false;
+  case ARG_ITERATION:
+    if (!parse_iteration(value, &spec->iteration)) {
+      reply_text(pss, 400, "iteration: expected an integer from 0 to %d, got \"%s\"", r->iteration,
+                 shown(q, sizeof q, value));
+      return false;
+    }
+    if (spec->iteration <= r->iteration) return true;
+    reply_text(pss, 400, "iteration: run \"%s\" has iterations 0 to %d",
+               shown(q2, sizeof q2, r->name), r->iteration);
+    return false;
+  default:
+    if (strcmp(value, "1") == 0 || strcmp(value, "0") == 0) {
+      spec->obstacles = value[0] == '1';
+      return true;
+    }
+    reply_text(pss, 400, "obstacles: expected 1 or 0, got \"%s\"", shown(q, sizeof q, value));
+    return false;
+  }
+}
+
+/* The query of an export (lws has split it at '&' and URL-decoded each part) into
+ * spec; false with a 400 reply when it is bad. */
+static bool export_query(struct lws *wsi, http_pss *pss, const run *r, export_spec *spec) {
+  char arg[512];
+  if (lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_URI_ARGS) >= (int)sizeof arg) {
+    reply_text(pss, 400, "query: longer than %zu bytes", sizeof arg - 1);
+    return false;
+  }
+  bool seen[ARG_COUNT] = {false};
+  /* every part fits, so a failed copy is the end of the parts; an empty part
+   * ("a=1&&b=2", or a trailing '&' or '?', which lws 4.1.6 gives as "/") is skipped */
+  for (int i = 0; lws_hdr_copy_fragment(wsi, arg, sizeof arg, WSI_TOKEN_HTTP_URI_ARGS, i) >= 0;
+       i++)
+    if (arg[0] && strcmp(arg, "/") != 0 && !export_arg(pss, r, arg, seen, spec)) return false;
+  if (!seen[ARG_FORMAT]) {
+    reply_text(pss, 400, "format: required (" EXPORT_FORMAT_NAMES ")");
+    return false;
+  }
+  if (!seen[ARG_ITERATION]) spec->iteration = r->iteration;
+  return true;
+}
+
+/* Content-Disposition of an export: NAME-iT.ext, NAME's bytes outside
+ * [A-Za-z0-9._-] (and a leading dot) as '_'. */
+static void export_disposition(http_pss *pss, const run *r, const export_spec *spec) {
+  char name[201];
+  size_t n = 0;
+  for (const char *c = r->name; *c && n + 1 < sizeof name; c++) {
+    bool keep = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
+                (*c >= '0' && *c <= '9') || *c == '-' || *c == '_' || (*c == '.' && n > 0);
+    name[n++] = keep ? *c : '_';
+  }
+  name[n] = '\0';
+  snprintf(pss->disposition, sizeof pss->disposition, "attachment; filename=\"%s-i%d.%s\"", name,
+           spec->iteration, export_format_extension(spec->format));
+}
+
+/* The run /api/runs/NAME/<suffix> names (uri: what follows "/api/runs/"), or NULL
+ * after a 404 reply (a URI not of this shape: no reply, NULL, *shaped false). */
+static run *run_of_uri(server *d, http_pss *pss, const char *uri, const char *suffix,
+                       bool *shaped) {
+  size_t lu = strlen(uri), ls = strlen(suffix);
+  *shaped = lu > ls && strcmp(uri + lu - ls, suffix) == 0;
+  if (!*shaped) return NULL;
+  /* lws has URL-decoded the path already */
+  for (run *r = d->runs; r; r = r->next)
+    if (strlen(r->name) == lu - ls && strncmp(r->name, uri, lu - ls) == 0) return r;
+  char name[512], q[80];
+  snprintf(name, sizeof name, "%.*s", (int)(lu - ls), uri);
+  reply_text(pss, 404, "no run \"%s\"", shown(q, sizeof q, name));
+  return NULL;
+}
+
+/* ---- the routes ----------------------------------------------------------------- */
+
+static bool starts(const char *s, const char *prefix) {
+  return strncmp(s, prefix, strlen(prefix)) == 0;
+}
+
+/* Sets the reply of uri, or starts the job that will. */
+static void route(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
+  bool shaped = false;
+  run *r;
+  if (strcmp(uri, "/healthz") == 0) {
+    reply_built(pss, "application/json", healthz_text(d));
+  } else if (strcmp(uri, "/metrics") == 0) {
+    reply_built(pss, "text/plain; version=0.0.4", metrics_text(d));
+  } else if (strcmp(uri, "/api/runs") == 0) {
+    reply_built(pss, "application/json", handlers_runs_json(d, false, NULL));
+  } else if (starts(uri, "/api/scenarios/")) {
+    scenario_file(d, pss, uri + strlen("/api/scenarios/"));
+  } else if (starts(uri, "/api/runs/")) {
+    const char *tail = uri + strlen("/api/runs/");
+    export_spec spec = {.format = EXPORT_CSV, .sides = sylva_mesh_default_options().sides};
+    if ((r = run_of_uri(d, pss, tail, "/stats.csv", &shaped))) {
+      spec.iteration = r->iteration;
+      start_export(d, wsi, pss, r, &spec);
+    } else if (!shaped && (r = run_of_uri(d, pss, tail, "/export", &shaped))) {
+      if (export_query(wsi, pss, r, &spec)) {
+        export_disposition(pss, r, &spec);
+        start_export(d, wsi, pss, r, &spec);
+      }
+    }
+  }
+  if (!pss->status && !pss->job) reply_text(pss, 404, "not found");
+}
+
+static int send_headers(struct lws *wsi, http_pss *pss) {
+  uint8_t buf[LWS_PRE + 2048], *start = &buf[LWS_PRE], *p = start, *end = &buf[sizeof buf - 1];
+  if (lws_add_http_common_headers(wsi, pss->status, pss->type, pss->len, &p, end)) return -1;
+  if (pss->disposition[0] &&
+      lws_add_http_header_by_name(wsi, (const unsigned char *)"content-disposition:",
+                                  (const unsigned char *)pss->disposition,
+                                  (int)strlen(pss->disposition), &p, end))
+    return -1;
+  return lws_finalize_write_http_header(wsi, start, &p, end) ? -1 : 0;
+}
+
+/* The reply is out: ready for the next request on the connection (lws frees pss). */
+static int finish(struct lws *wsi, http_pss *pss) {
+  release(pss);
+  return lws_http_transaction_completed(wsi) ? -1 : 0;
+}
+
+/* Whether the client closed the connection (or it broke), looking without taking
+ * anything. A client that only shut down its sending side counts as gone, as it
+ * does for lws when it reads. */
+static bool client_left(struct lws *wsi) {
+  char c;
+  ssize_t n = recv(lws_get_socket_fd(wsi), &c, 1, MSG_PEEK | MSG_DONTWAIT);
+  return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+}
+
+/* One step of the reply: the headers, or the next chunk of the body. */
+static int write_reply(struct lws *wsi, http_pss *pss) {
+  /* a client that stops reading is closed after HTTP_TIMEOUT_SECS */
+  lws_set_timeout(wsi, PENDING_TIMEOUT_HTTP_CONTENT, HTTP_TIMEOUT_SECS);
+  if (!pss->headers_sent) {
+    if (send_headers(wsi, pss)) return -1;
+    pss->headers_sent = true;
+    if (pss->len == 0) return finish(wsi, pss);
+    lws_callback_on_writable(wsi);
+    return 0;
+  }
+  unsigned char buf[LWS_PRE + HTTP_CHUNK], *start = &buf[LWS_PRE];
+  size_t n = pss->len - pss->off;
+  if (n > HTTP_CHUNK) n = HTTP_CHUNK;
+  if (pss->file) {
+    if (fread(start, 1, n, pss->file) != n) {
+      server_log(NULL, "export: reading the temporary file: %s",
+                 ferror(pss->file) ? strerror(errno) : "it got shorter");
+      return -1;
+    }
+  } else {
+    memcpy(start, pss->body + pss->off, n);
+  }
+  bool last = pss->off + n == pss->len;
+  if (lws_write(wsi, start, n, last ? LWS_WRITE_HTTP_FINAL : LWS_WRITE_HTTP) != (int)n) return -1;
+  pss->off += n;
+  if (last) return finish(wsi, pss);
+  lws_callback_on_writable(wsi);
+  return 0;
+}
+
+int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
+                  size_t len) {
+  http_pss *pss = user;
+  server *d = lws_context_user(lws_get_context(wsi));
+  switch (reason) {
+  case LWS_CALLBACK_HTTP: {
+    char uri[1024];
+    if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) < 0) uri[0] = '\0';
+    route(d, wsi, pss, uri);
+    if (pss->job) {
+      /* lws allows timeout_secs for the whole transaction; the export may take
+       * longer. lws does not read the socket until the reply is out, so it would
+       * not notice the client leaving (and the loop would wake for its unread end
+       * of file on every turn): a timer looks, and closes the connection, which
+       * detaches the job. (lws_rx_flow_control, which would stop the polling,
+       * stops the daemon from accepting connections in 4.1.6 on libuv.) */
+      lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
+      lws_set_timer_usecs(wsi, HTTP_WATCH_USECS);
+    } else {
+      lws_callback_on_writable(wsi);
+    }
+    return 0;
+  }
+  case LWS_CALLBACK_TIMER:
+    if (!pss || !pss->job) break;
+    if (client_left(wsi))
+      lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+    else
+      lws_set_timer_usecs(wsi, HTTP_WATCH_USECS);
+    return 0;
+  case LWS_CALLBACK_HTTP_WRITEABLE:
+    if (!pss || !pss->status || pss->job) break; /* no reply yet */
+    return write_reply(wsi, pss);
+  case LWS_CALLBACK_HTTP_DROP_PROTOCOL:
+  case LWS_CALLBACK_CLOSED_HTTP:
+    if (!pss) break;
+    if (pss->job) {
+      /* the job goes on; its result is freed when it is done */
+      pss->job->pss = NULL;
+      pss->job->wsi = NULL;
+      pss->job = NULL;
+    }
+    release(pss);
+    break;
+  default: break;
+  }
+  return lws_callback_http_dummy(wsi, reason, user, in, len);
+}
