@@ -100,7 +100,7 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
     if (d->clients) d->clients->prev = c;
     d->clients = c;
     d->clients_now++;
-    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL));
+    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL, NULL));
     break;
   }
   case LWS_CALLBACK_CLOSED:

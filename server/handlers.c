@@ -139,7 +139,7 @@ void handle_message(client *c, const char *text, size_t len) {
       break;
     }
     c->authed = true;
-    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL));
+    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL, m.ref));
     break;
   case SYLVA_MSG_LIST: client_send_text(c, handlers_runs_json(d, true, m.ref)); break;
   case SYLVA_MSG_SCENARIOS: handle_scenarios(c, &m); break;

@@ -710,13 +710,17 @@ static void test_suite(const char *dir) {
 /* ---- encoders ---- */
 
 static void test_encoders(void) {
-  char *text = sylva_msg_welcome("0.1.0", true);
+  char *text = sylva_msg_welcome("0.1.0", true, NULL);
   CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
                   "\"0.1.0\"},\"auth\":true}");
+  free(text);
+  text = sylva_msg_welcome("0.1.0", false, "\"h1\"");
+  CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
+                  "\"0.1.0\"},\"auth\":false,\"ref\":\"h1\"}");
   cJSON *j = VALID_JSON(text);
   cJSON_Delete(j);
   free(text);
-  text = sylva_msg_welcome(NULL, false);
+  text = sylva_msg_welcome(NULL, false, NULL);
   j = VALID_JSON(text);
   if (j) {
     CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(j, "auth")));

@@ -170,9 +170,10 @@ test('token: changing messages need a hello with the token', async () => {
     assert.equal((await c.type('error')).code, 'unauthorized');
     c.send({ type: 'list' });
     await c.type('runs'); // reading needs no token
-    c.send({ type: 'hello', token: 's3cret' });
+    c.send({ type: 'hello', token: 's3cret', id: 7 });
     const w = await c.type('welcome');
     assert.equal(w.auth, true);
+    assert.equal(w.ref, 7, 'the reply to hello echoes its id');
     c.send({ type: 'create', scenario: scenario('shrub.json') });
     await c.type('created');
   } finally {

@@ -124,8 +124,10 @@ void sylva_msg_free(sylva_msg *m);
 const char *sylva_msg_type_name(sylva_msg_type type);
 
 /** {"type":"welcome","protocol":1,"server":{"name":"sylva","version":"..."},"auth":true}
- *  auth: whether the daemon wants a token before changing messages. */
-char *sylva_msg_welcome(const char *server_version, bool auth);
+ *  auth: whether the daemon wants a token before changing messages; ref (a JSON
+ *  value as the client sent it, or NULL for the greeting on connect) is echoed
+ *  as "ref" in reply to a hello. */
+char *sylva_msg_welcome(const char *server_version, bool auth, const char *ref);
 
 /** {"type":"error","code":"...","message":"...","ref":...}. code is one of
  *  bad_request, unknown_run, unauthorized, too_large, busy, internal; message
