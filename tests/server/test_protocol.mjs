@@ -268,6 +268,13 @@ test('light: a slice of the light field, and too_large for a huge site', async (
     assert.equal(bytes.length, slice.nx * slice.ny);
     assert.ok(bytes.includes(0), 'the wall is dark');
     assert.ok(bytes.includes(255), 'open ground is lit');
+    // asked while an iteration is in flight: answered when it is done
+    c.send({ type: 'create', name: 'growing', scenario: scenario('stand.json'), start: true, id: 'g' });
+    const growing = (await c.type('created')).run;
+    c.send({ type: 'light', run: growing, z: 0.5, id: 'busy' });
+    const late = await c.next((m) => m.ref === 'busy', 60000);
+    assert.equal(late.type, 'light_slice', JSON.stringify(late).slice(0, 200));
+    assert.ok(late.iteration >= 1, 'the slice of the world after the iteration in flight');
     const huge = scenario('wall.json', { world: { min: [-500, -500, 0], max: [500, 500, 12], voxel: 0.06 } });
     c.send({ type: 'create', name: 'huge', scenario: huge });
     const big = (await c.type('created')).run;

@@ -139,9 +139,18 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     assert.equal((await state(page)).nodes, server.nodes);
 
     // start, then pause at once: the run stops where it is
-    await page.click('#start');
-    await until(page, (x) => x.status === 'running', 'running');
-    await page.click('#pause');
+    // (clicked from inside the page: a run this small grows faster than the
+    // page, drawing with SwiftShader, would let an outside click through)
+    await page.evaluate(() => new Promise((resolve) => {
+      const pause = document.getElementById('pause');
+      new MutationObserver((_, o) => {
+        if (pause.disabled) return;
+        o.disconnect();
+        pause.click();
+        resolve();
+      }).observe(pause, { attributes: true });
+      document.getElementById('start').click();
+    }));
     s = await until(page, (x) => x.status === 'paused', 'paused');
     await new Promise((r) => setTimeout(r, 1000 * SLOW));
     const paused = await serverRun(d.http, 'site');
@@ -230,14 +239,22 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     assert.equal(s.slice.nx * s.slice.ny, 200 * 200);
     assert.ok(await page.isVisible('#legend'));
 
-    // start grows the fork on; stop ends it
-    await page.click('#start');
-    await until(page, (x) => x.iteration >= 4, 'the fork growing', 120000 * SLOW);
-    // light while it grows: answered after the iteration in flight
-    await page.fill('#light-z', '0.5');
-    await page.click('#light-show');
-    s = await until(page, (x) => x.slice?.z === 0.525 || x.slice?.z === 0.475, 'a light slice while running');
-    await page.click('#stop');
+    // remove the scenario's wall from the fork with its chip
+    await page.click('#obstacles button[title="remove obstacle wall"]');
+    s = await until(page, (x) => !x.obstacles.includes('wall') && !x.drawnObstacles.includes('wall'), 'the wall gone');
+    assert.ok(!(await serverSnapshot(d, s.run)).obstacles.some((o) => o.id === 'wall'), 'gone on the server');
+
+    // start grows the fork on; stop ends it (clicked from inside the page as
+    // soon as it has grown, before the young tree finishes by itself)
+    await page.evaluate(() => new Promise((resolve) => {
+      const timer = setInterval(() => {
+        if (window.sylva.state().iteration < 4) return;
+        clearInterval(timer);
+        document.getElementById('stop').click();
+        resolve();
+      }, 5);
+      document.getElementById('start').click();
+    }));
     s = await until(page, (x) => x.status === 'finished', 'stopped');
     await new Promise((r) => setTimeout(r, 1000 * SLOW));
     server = await serverRun(d.http, 'site-3');
