@@ -22,6 +22,7 @@ const app = {
   applyMs: [],
   parseMs: [],
   bytes: [],
+  held: [],           // [iteration, internodes held] after each delta
   mode: null,         // 'tree' | 'corners' while waiting for ground clicks
   getSerial: 0,
 };
@@ -137,6 +138,7 @@ function select(runId) {
   app.run = { ...r };
   app.live = new Skeleton();
   app.history = null;
+  app.held = [];
   app.statsLoaded = false;
   plots.reset();
   view.setSlice(null);
@@ -200,7 +202,8 @@ const handlers = {
     app.applyMs.push(t1 - t0 + (t2 - t1));
     app.parseMs.push(msg.parseMs || 0);
     app.bytes.push(msg.bytes || 0);
-    for (const a of [app.applyMs, app.parseMs, app.bytes]) if (a.length > TIMINGS) a.shift();
+    app.held.push([msg.iteration, app.live.count]);
+    for (const a of [app.applyMs, app.parseMs, app.bytes, app.held]) if (a.length > TIMINGS) a.shift();
     app.run.iteration = msg.iteration;
     plots.add(msg.iteration, msg.stats);
     liveChanged();
@@ -542,7 +545,7 @@ window.sylva = {
     authed: app.authed,
   }),
   timings: () => ({ applyMs: app.applyMs.slice(), parseMs: app.parseMs.slice(), bytes: app.bytes.slice(),
-    renderMs: view.renderMs.slice() }),
+    renderMs: view.renderMs.slice(), held: app.held.slice() }),
   memory: () => ({ skeletonBytes: app.live.bytes() + (app.history ? app.history.bytes() : 0) }),
   plots: () => plots.points(),
   skeleton: () => shown().toExport(),

@@ -68,8 +68,15 @@ test('the wall scenario grows in the page: internodes, pixels, plots, memory', a
     const stats = (await httpGet(`${d.http}/api/runs/${encodeURIComponent(name)}/stats.csv`)).body.toString().trim().split('\n');
     const head = stats.shift().split(',');
     const rows = stats.map((l) => Object.fromEntries(l.split(',').map((c, i) => [head[i], c])));
-    const plots = await page.evaluate(() => window.sylva.plots());
     const its = [...Array(end.iteration).keys()].map((i) => i + 1);
+    // after every delta the page held the internodes the stems had on the server
+    const held = (await page.evaluate(() => window.sylva.timings())).held;
+    assert.deepEqual(held.map(([it]) => it), its, 'one delta per iteration');
+    for (const [it, count] of held) {
+      const want = rows.filter((r) => Number(r.iteration) === it).reduce((a, r) => a + Number(r.nodes), 0);
+      assert.equal(count, want, `internodes held after iteration ${it}`);
+    }
+    const plots = await page.evaluate(() => window.sylva.plots());
     for (const key of ['height', 'dbh', 'crown_width', 'nodes', 'cap']) {
       assert.deepEqual(plots[key].iterations, its, `${key}: one point per iteration`);
       const want = rows.map((r) => (r[key] === '' ? null : Number(r[key])));
