@@ -411,6 +411,8 @@ async function showLight() {
   try {
     const s = await conn.request({ type: 'light', run: app.run.run, z });
     view.setSlice(s);
+    // seen edge-on from the front or the side, a horizontal slice would vanish
+    if (view.viewName === 'front' || view.viewName === 'side') view.setView('top');
     app.slice = { z: s.z, iteration: s.iteration, nx: s.nx, ny: s.ny };
     $('legend').hidden = false;
     message(`light at ${s.z} m after iteration ${s.iteration}`);
