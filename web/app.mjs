@@ -184,6 +184,7 @@ const handlers = {
       loadStats();
     }
     speciesOptions();
+    if (!app.history) view.show(app.live);
     liveChanged();
   },
   delta(msg) {
@@ -196,10 +197,8 @@ const handlers = {
     }
     const t0 = performance.now();
     app.live.applyDelta(msg);
-    const t1 = performance.now();
     if (!app.history) view.show(app.live);
-    const t2 = performance.now();
-    app.applyMs.push(t1 - t0 + (t2 - t1));
+    app.applyMs.push(performance.now() - t0);
     app.parseMs.push(msg.parseMs || 0);
     app.bytes.push(msg.bytes || 0);
     app.held.push([msg.iteration, app.live.count]);
@@ -219,13 +218,12 @@ const handlers = {
   },
 };
 
-// After the live skeleton changed: timeline, labels, and the view when live.
+// After the live skeleton changed (and the view, when live, was synced): the
+// timeline and the labels.
 function liveChanged() {
   const tl = $('timeline');
-  const atEnd = !app.history;
   tl.max = String(app.live.iteration);
-  if (atEnd) tl.value = String(app.live.iteration);
-  if (!app.history) view.show(app.live);
+  if (!app.history) tl.value = String(app.live.iteration);
   renderShown();
   renderStatus();
 }

@@ -108,8 +108,6 @@ class Branches {
     this.radius.needsUpdate = true;
     this.mesh.geometry.instanceCount = n;
   }
-
-  set visible(v) { if (this.mesh) this.mesh.visible = v; }
 }
 
 function label(text, size = 0.35) {
