@@ -23,6 +23,7 @@ const app = {
   parseMs: [],
   bytes: [],
   held: [],           // [iteration, internodes held] after each delta
+  tidyMs: [],
   mode: null,         // 'tree' | 'corners' while waiting for ground clicks
   getSerial: 0,
 };
@@ -199,9 +200,10 @@ const handlers = {
     app.live.applyDelta(msg);
     if (!app.history) view.show(app.live);
     app.applyMs.push(performance.now() - t0);
+    tidyLater(app.live);
     app.parseMs.push(msg.parseMs || 0);
     app.bytes.push(msg.bytes || 0);
-    app.held.push([msg.iteration, app.live.count]);
+    app.held.push([msg.iteration, app.live.live]);
     for (const a of [app.applyMs, app.parseMs, app.bytes, app.held]) if (a.length > TIMINGS) a.shift();
     app.run.iteration = msg.iteration;
     plots.add(msg.iteration, msg.stats);
@@ -218,6 +220,21 @@ const handlers = {
   },
 };
 
+// Squeezing out shed slots and growing the arrays ahead of need run in a task of
+// their own after a delta, so that no single task holds the page for long.
+function tidyLater(sk) {
+  if (sk.tidying) return;
+  sk.tidying = true;
+  setTimeout(() => {
+    sk.tidying = false;
+    const t0 = performance.now();
+    const moved = sk.compact(), grew = sk.growAhead();
+    if ((moved || grew) && shown() === sk) view.show(sk);
+    app.tidyMs.push(performance.now() - t0);
+    if (app.tidyMs.length > TIMINGS) app.tidyMs.shift();
+  }, 0);
+}
+
 // After the live skeleton changed (and the view, when live, was synced): the
 // timeline and the labels.
 function liveChanged() {
@@ -232,7 +249,7 @@ function renderShown() {
   const s = shown();
   $('timeline-label').textContent = app.history ? `iteration ${s.iteration} (stored)` : `iteration ${s.iteration} (live)`;
   $('live').disabled = !app.history;
-  $('view-info').textContent = `iteration ${s.iteration} · ${s.count.toLocaleString('en')} internodes`;
+  $('view-info').textContent = `iteration ${s.iteration} · ${s.live.toLocaleString('en')} internodes`;
   const name = app.run ? encodeURIComponent(app.run.name) : '';
   for (const [id, format] of [['export-skeleton', 'skeleton'], ['export-obj', 'obj'], ['export-csv', 'csv']]) {
     $(id).href = app.run ? `api/runs/${name}/export?format=${format}&iteration=${s.iteration}` : '';
@@ -530,22 +547,22 @@ window.sylva = {
     status: app.run?.status ?? null,
     live: !app.history,
     iteration: shown().iteration,
-    nodes: shown().count,
+    nodes: shown().live,
     liveIteration: app.live.iteration,
-    liveNodes: app.live.count,
+    liveNodes: app.live.live,
     seq: app.live.seq,
     obstacles: shown().obstacles.map((o) => o.id),
     plants: shown().plants.map((p) => p.id),
     species: app.live.species.slice(),
     slice: app.slice || null,
-    drawnInstances: view.branches.mesh?.geometry.instanceCount ?? 0,
+    drawnInstances: (view.branches.mesh?.geometry.instanceCount ?? 0) - (view.branches.sk?.deadCount ?? 0),
     drawnObstacles: view.obstacleGroup.children.filter((m) => m.name).map((m) => m.name.slice('obstacle:'.length)),
     frames: view.frames,
     auth: app.auth,
     authed: app.authed,
   }),
   timings: () => ({ applyMs: app.applyMs.slice(), parseMs: app.parseMs.slice(), bytes: app.bytes.slice(),
-    renderMs: view.renderMs.slice(), held: app.held.slice() }),
+    renderMs: view.renderMs.slice(), held: app.held.slice(), tidyMs: app.tidyMs.slice() }),
   memory: () => ({ skeletonBytes: app.live.bytes() + (app.history ? app.history.bytes() : 0) }),
   plots: () => plots.points(),
   skeleton: () => shown().toExport(),

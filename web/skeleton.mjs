@@ -2,15 +2,20 @@
 // built from a `snapshot` and changed in place by each `delta` (protocol.md).
 //
 // Slots are kept in id order, which is birth order, so a parent always sits before
-// its children: removing shed subtrees is one stable compaction pass from the first
-// shed slot on, and the arrays can be handed to the GPU as they are (one instance
-// per slot). Nothing here knows about three.js or the DOM.
+// its children, and the arrays can be handed to the GPU as they are (one instance
+// per slot). A delta's shed subtrees are found in one pass from the first shed
+// slot and marked dead (zero length, so they draw nothing); compact() squeezes
+// them out later, in a task of its own, so that applying a delta stays short.
+// Nothing here knows about three.js or the DOM.
 
 const GROW = 2;
+const NONE = 2 ** 31;
 
 export class Skeleton {
   constructor(capacity = 1024) {
-    this.count = 0;
+    this.count = 0;          // slots in use, dead ones included
+    this.deadCount = 0;      // dead slots waiting for compact()
+    this.firstDead = NONE;   // no dead slot before this one
     this.version = 0;        // bumps when the arrays are reallocated
     this.changedFrom = 0;    // lowest slot whose data changed since the last take
     this.iteration = 0;
@@ -31,6 +36,7 @@ export class Skeleton {
     const id = new Int32Array(capacity), parent = new Int32Array(capacity);
     const plant = new Uint16Array(capacity), stem = new Uint16Array(capacity);
     const birth = new Int32Array(capacity), radius = new Float32Array(capacity);
+    const dead = new Uint8Array(capacity);
     const start = new Float32Array(capacity * 3), end = new Float32Array(capacity * 3);
     if (old) {
       id.set(this.id.subarray(0, this.count));
@@ -38,18 +44,30 @@ export class Skeleton {
       plant.set(this.plant.subarray(0, this.count));
       stem.set(this.stem.subarray(0, this.count));
       birth.set(this.birth.subarray(0, this.count));
+      dead.set(this.dead.subarray(0, this.count));
       radius.set(this.radius.subarray(0, this.count));
       start.set(this.start.subarray(0, this.count * 3));
       end.set(this.end.subarray(0, this.count * 3));
     }
-    Object.assign(this, { id, parent, plant, stem, birth, radius, start, end });
+    Object.assign(this, { id, parent, plant, stem, birth, radius, start, end, dead });
     this.capacity = capacity;
     this.version++;
+  }
+
+  // Doubles the arrays ahead of need (in a quiet moment rather than while a delta
+  // is applied); returns whether it did.
+  growAhead() {
+    if (this.count * 1.3 <= this.capacity) return false;
+    this.allocate(this.capacity * GROW);
+    return true;
   }
 
   reserve(n) {
     if (n > this.capacity) this.allocate(Math.max(n, Math.ceil(this.capacity * GROW)));
   }
+
+  // Internodes held (dead slots aside).
+  get live() { return this.count - this.deadCount; }
 
   slotOf(id) {
     return id >= 0 && id < this.idSlot.length ? this.idSlot[id] : -1;
@@ -108,7 +126,10 @@ export class Skeleton {
   // Replaces everything with a snapshot (wire.mjs's snapshotArrays form).
   loadSnapshot(msg) {
     this.idSlot.fill(-1);
+    this.dead.fill(0, 0, this.count);
     this.count = 0;
+    this.deadCount = 0;
+    this.firstDead = NONE;
     const total = msg.nodes.n;
     if (total > this.capacity || this.capacity > 4 * total + 4096) {
       this.allocate(Math.max(1024, Math.ceil(total * GROW)));
@@ -131,8 +152,7 @@ export class Skeleton {
   // that changed (radii aside) so a renderer can upload only what changed.
   applyDelta(msg) {
     let from = this.count;
-    if (msg.shed.length) from = Math.min(from, this.removeSubtrees(msg.shed));
-    from = Math.min(from, this.count);
+    if (msg.shed.length) from = Math.min(from, this.markShed(msg.shed));
     this.append(msg.added, 0, msg.added.n, msg.iteration);
     const { idSlot, radius } = this, ids = msg.radii.id, r = msg.radii.r;
     for (let i = 0, n = msg.radii.n; i < n; i++) {
@@ -146,33 +166,49 @@ export class Skeleton {
     return from;
   }
 
-  // Removes the subtrees under these ids; returns the first slot that moved.
-  removeSubtrees(roots) {
+  // Marks the subtrees under these ids dead: unmapped, zero length and radius.
+  // Returns the first slot it changed.
+  markShed(roots) {
+    const { id, parent, dead, radius, start, end, idSlot } = this;
     let first = this.count;
+    const kill = (k) => {
+      dead[k] = 1;
+      idSlot[id[k]] = -1;
+      radius[k] = 0;
+      const k3 = k * 3;
+      end[k3] = start[k3];
+      end[k3 + 1] = start[k3 + 1];
+      end[k3 + 2] = start[k3 + 2];
+      this.deadCount++;
+    };
+    for (let i = 0; i < roots.length; i++) {
+      const k = this.slotOf(roots[i]);
+      if (k < 0) continue;
+      kill(k);
+      if (k < first) first = k;
+    }
+    for (let i = first + 1, n = this.count; i < n; i++) {
+      const p = parent[i];
+      if (p >= first && dead[p] && !dead[i]) kill(i);
+    }
+    if (first < this.firstDead) this.firstDead = first;
+    return first;
+  }
+
+  // Squeezes the dead slots out (one stable pass from the first dead slot);
+  // returns whether anything moved.
+  compact() {
+    if (this.deadCount === 0) return false;
+    const first = this.firstDead;
     if (this.scratch.length < this.count) this.scratch = new Int32Array(this.capacity);
-    const map = this.scratch;  // old slot -> new slot, or -1 when removed
-    const { id, parent, plant, stem, birth, radius, start, end, idSlot } = this;
-    for (let i = 0; i < roots.length; i++) {
-      const k = this.slotOf(roots[i]);
-      if (k >= 0 && k < first) first = k;
-    }
-    if (first === this.count) return first;
-    map.fill(0, first, this.count);
-    for (let i = 0; i < roots.length; i++) {
-      const k = this.slotOf(roots[i]);
-      if (k >= 0) map[k] = -1;
-    }
+    const map = this.scratch;  // old slot -> new slot
+    const { id, parent, plant, stem, birth, radius, start, end, dead, idSlot } = this;
     let w = first;
     for (let i = first, n = this.count; i < n; i++) {
-      const p = parent[i];
-      if (map[i] < 0 || (p >= first && map[p] < 0)) {
-        map[i] = -1;
-        idSlot[id[i]] = -1;
-        continue;
-      }
+      if (dead[i]) continue;
       map[i] = w;
       if (w !== i) {
-        const nid = id[i];
+        const nid = id[i], p = parent[i];
         id[w] = nid;
         parent[w] = p >= first ? map[p] : p;
         plant[w] = plant[i];
@@ -190,8 +226,12 @@ export class Skeleton {
       }
       w++;
     }
+    dead.fill(0, first, this.count);
     this.count = w;
-    return first;
+    this.deadCount = 0;
+    this.firstDead = NONE;
+    this.changedFrom = Math.min(this.changedFrom, first);
+    return true;
   }
 
   // The lowest slot changed since the last call (for partial uploads).
@@ -206,6 +246,7 @@ export class Skeleton {
   toExport() {
     const stems = this.plants.map((p) => p.stems.map(() => []));
     for (let k = 0; k < this.count; k++) {
+      if (this.dead[k]) continue;
       const p = this.parent[k];
       stems[this.plant[k]][this.stem[k]].push([this.id[k], p >= 0 ? this.id[p] : -1,
         this.end[k * 3], this.end[k * 3 + 1], this.end[k * 3 + 2], this.radius[k], this.birth[k]]);
@@ -220,6 +261,6 @@ export class Skeleton {
 
   // Bytes held by the arrays (the page's memory is the skeleton plus this).
   bytes() {
-    return this.capacity * (4 * 4 + 2 * 2 + 4 * 6) + this.idSlot.byteLength + this.scratch.byteLength;
+    return this.capacity * (4 * 4 + 2 * 2 + 1 + 4 * 6) + this.idSlot.byteLength + this.scratch.byteLength;
   }
 }

@@ -39,6 +39,17 @@ test('a shed subtree goes, with its descendants only, and slots stay in parent o
   const k = sk.slotOf(7), p = sk.slotOf(5);
   assert.deepEqual(Array.from(sk.start.subarray(k * 3, k * 3 + 3)), Array.from(sk.end.subarray(p * 3, p * 3 + 3)));
   sk.applyDelta({ seq: 3, iteration: 3, added: [[8, 6, 0, 1, 5, 1, 3, 0.003]], radii: [[7, 0.004]], shed: [4], stats: [] });
+  // shed slots are dead (unmapped, drawn as nothing) until compact()
+  for (const gone of [4, 5, 7]) assert.equal(sk.slotOf(gone), -1);
+  assert.equal(sk.live, 6);
+  assert.deepEqual(sk.toExport().plants[0].stems[0].nodes.map((n) => n[0]), [0, 2]);
+  for (let k = 0; k < sk.count; k++) {
+    if (!sk.dead[k]) continue;
+    assert.equal(sk.radius[k], 0);
+    assert.deepEqual(Array.from(sk.end.subarray(k * 3, k * 3 + 3)), Array.from(sk.start.subarray(k * 3, k * 3 + 3)));
+  }
+  assert.ok(sk.compact());
+  assert.ok(!sk.compact(), 'nothing left to squeeze');
   assert.deepEqual(ids(sk), [0, 2, 1, 3, 6, 8]);
   for (const gone of [4, 5, 7]) assert.equal(sk.slotOf(gone), -1);
   for (let i = 0; i < sk.count; i++) {
@@ -61,7 +72,10 @@ test('growing past the capacity keeps every node', () => {
   sk.applyDelta({ seq: 2, iteration: 2, added, radii: [], shed: [], stats: [] });
   assert.equal(sk.count, 5005);
   sk.applyDelta({ seq: 3, iteration: 3, added: [], radii: [], shed: [2], stats: [] });
+  assert.equal(sk.live, 3);
+  sk.compact();
   assert.deepEqual(ids(sk), [0, 1, 3]);
+  assert.ok(sk.growAhead() === false && sk.capacity >= 5005);
   assert.throws(() => sk.applyDelta({ seq: 4, iteration: 4, added: [[9000, 8999, 0, 0, 0, 0, 0, 0.003]],
     radii: [], shed: [], stats: [] }), /parent 8999 is not held/);
 });
@@ -81,6 +95,7 @@ test('snapshot plus deltas from a real daemon equal the export at every iteratio
       const delta = await c.next((m) => m.type === 'delta', 60000);
       shed += delta.shed.length;
       sk.applyDelta(delta);
+      if (it % 3 === 0) sk.compact(); // the page compacts when it has a moment; either way
       assert.equal(sk.iteration, it);
       assert.deepEqual(f32(sk.toExport()), f32(exportSkeleton(d.db, 'w', it)), `iteration ${it}`);
     }
