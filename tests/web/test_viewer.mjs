@@ -217,10 +217,12 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     // the export links name the shown iteration
     const href = await page.getAttribute('#export-skeleton', 'href');
     assert.match(href, /format=skeleton&iteration=2$/);
-    const obj = await httpGet(`${d.http}/${await page.getAttribute('#export-obj', 'href')}`);
-    const cli = spawnSync(SYLVA, ['export', '--db', d.db, '--name', 'site', '--iteration', '2', '--format', 'obj', '-o', '-']);
-    assert.equal(obj.status, 200);
-    assert.ok(obj.body.equals(cli.stdout), 'the OBJ download is the CLI export');
+    for (const [link, format] of [['#export-skeleton', 'skeleton'], ['#export-obj', 'obj'], ['#export-csv', 'csv']]) {
+      const got = await httpGet(`${d.http}/${await page.getAttribute(link, 'href')}`);
+      const cli = spawnSync(SYLVA, ['export', '--db', d.db, '--name', 'site', '--iteration', '2', '--format', format, '-o', '-']);
+      assert.equal(got.status, 200, format);
+      assert.ok(got.body.length > 0 && got.body.equals(cli.stdout), `the ${format} download is the CLI export`);
+    }
     await page.click('#live');
     s = await until(page, (x) => x.live && x.nodes === liveNodes, 'live again');
 
