@@ -78,7 +78,7 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
       w->work.data[w->work.len++] = s->lateral_child[n];
       w->work_r.data[w->work_r.len++] = r_i;
     } else if (apex || !(s->flags[n] & SYLVA__NODE_SCAR)) {
-      double y = floor(r_i);
+      double y = floor(r_i / d->node_cost);
       int32_t grow = y < (double)cap ? (int32_t)y : cap;
       if (grow >= 1) {
         int rc = push_sprout(w, n, stem, grow, r_i, apex);
@@ -138,7 +138,9 @@ int sylva__allocate(sylva_world *w, int iteration) {
       const sylva_species_def *d = &w->species[w->stems[k].species].def;
       if (caps[k] <= 0 || d->allocation != SYLVA_ALLOC_NONE) continue;
       bool apex = s->axis_child[i] < 0;
-      if (!apex && (s->lateral_child[i] >= 0 || (s->flags[i] & SYLVA__NODE_SCAR))) continue;
+      if (!apex && (s->lateral_child[i] >= 0 || (s->flags[i] & SYLVA__NODE_SCAR) ||
+                    iteration - s->birth[i] > d->leaf_age))
+        continue;
       int v[3];
       sylva__node_voxel(w, (int32_t)i, v);
       double l = sylva__grid_light(&w->grid, v);

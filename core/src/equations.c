@@ -62,7 +62,10 @@ bool sylva_equation_decreasing(const sylva_equation *eq, int iteration) {
 }
 
 bool sylva_equation_stops(const sylva_equation *eq, int iteration) {
-  return sylva_equation_cap(eq, iteration) == 0 && sylva_equation_decreasing(eq, iteration);
+  /* Less than one whole internode per iteration once past the inflection
+   * (docs/model.md, "Stop"). */
+  return !(sylva_equation_rate(eq, (double)(iteration - 1)) >= 1.0) &&
+         sylva_equation_decreasing(eq, iteration);
 }
 
 const char *sylva_equation_name(sylva_equation_kind kind) {

@@ -198,10 +198,12 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }
 static int clip_hi(int v, int hi) { return v < hi ? v : hi; }
 
-int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *w, int sign) {
-  /* Pyramid: q = 1..depth voxels below, half-width floor(q / 2); walked chunk by
+int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
+  /* Pyramid: q = 1..depth voxels below, half-width half[q - 1]; walked chunk by
    * chunk so that each chunk is looked up once per stamp. */
-  int h = depth / 2;
+  int depth = p->depth;
+  const int64_t *w = p->w;
+  int h = p->half[depth - 1];
   int zlo = clip_lo(v[2] - depth, 0), zhi = v[2] - 1;
   int xlo = clip_lo(v[0] - h, 0), xhi = clip_hi(v[0] + h, g->n[0] - 1);
   int ylo = clip_lo(v[1] - h, 0), yhi = clip_hi(v[1] + h, g->n[1] - 1);
@@ -210,14 +212,14 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *
       for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {
         int z0 = clip_lo(zlo, cz << 4), z1 = clip_hi(zhi, (cz << 4) + 15);
         /* the widest layer of this chunk is its lowest: skip chunks it misses */
-        int hw = (v[2] - z0) / 2;
+        int hw = p->half[v[2] - z0 - 1];
         if (v[0] + hw < (cx << 4) || v[0] - hw > (cx << 4) + 15 || v[1] + hw < (cy << 4) ||
             v[1] - hw > (cy << 4) + 15)
           continue;
         sylva__chunk *c = chunk_get(g, cx, cy, cz);
         if (!c) return SYLVA_ENOMEM;
         for (int z = z0; z <= z1; z++) {
-          int q = v[2] - z, hq = q / 2;
+          int q = v[2] - z, hq = p->half[q - 1];
           int x0 = clip_lo(clip_lo(v[0] - hq, cx << 4), 0);
           int x1 = clip_hi(clip_hi(v[0] + hq, (cx << 4) + 15), g->n[0] - 1);
           int y0 = clip_lo(clip_lo(v[1] - hq, cy << 4), 0);
@@ -235,12 +237,12 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *
         }
       }
   /* Column: every voxel of the base footprint from depth + 1 below down to the
-   * ground gets w[depth - 1]. Stored as one entry at its top voxel (summed by the
+   * ground gets p->column. Stored as one entry at its top voxel (summed by the
    * voxels of that chunk below it) plus one block sum read by every lower chunk, so
    * the cost does not depend on the height of the tree. */
   int ztop = v[2] - depth - 1;
-  if (ztop < 0) return SYLVA_OK;
-  int64_t value = sign * w[depth - 1];
+  if (ztop < 0 || p->column == 0) return SYLVA_OK;
+  int64_t value = sign * p->column;
   int bz = ztop >> 4, zl = ztop & 15;
   for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
     for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {

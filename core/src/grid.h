@@ -77,9 +77,19 @@ int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem);
 /** Removes one node of stem from voxel v. */
 void sylva__grid_vacate(sylva__grid *g, const int v[3]);
 
-/** Adds (sign +1) or removes (-1) the shade of one node at voxel v: pyramid values
- *  w[q-1] for q = 1..depth, then w[depth-1] per voxel in the column to the ground. */
-int sylva__grid_stamp(sylva__grid *g, const int v[3], int depth, const int64_t *w, int sign);
+/** The shade one node casts (docs/model.md, "Shade"): at q = 1..depth voxels below
+ *  it, w[q-1] on every voxel within horizontal Chebyshev distance half[q-1]; below
+ *  the base, column on every voxel of the base's footprint down to the ground.
+ *  half must not decrease with q. */
+typedef struct sylva__pyramid {
+  int depth;
+  int64_t w[64];
+  int half[64];
+  int64_t column;
+} sylva__pyramid;
+
+/** Adds (sign +1) or removes (-1) the shade of one node at voxel v. */
+int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
 
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]);

@@ -14,11 +14,14 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
       cur_stem = s->stem[i];
       sp = &w->species[w->stems[cur_stem].species];
     }
-    int v[3];
-    sylva__node_voxel(w, (int32_t)i, v);
-    double l = sylva__grid_light(&w->grid, v);
     int age = iteration - s->birth[i];
-    double L = sylva__collected(sp->def.alpha, l, age > 0 ? sylva__species_age_pow(sp, age) : 0.0);
+    double L = 0.0;
+    if (age <= sp->def.leaf_age) { /* only leaf-bearing nodes collect (docs/model.md) */
+      int v[3];
+      sylva__node_voxel(w, (int32_t)i, v);
+      double l = sylva__grid_light(&w->grid, v);
+      L = sylva__collected(sp->def.alpha, l, age > 0 ? sylva__species_age_pow(sp, age) : 0.0);
+    }
     w->q[i] = L;
     if (light) light[i] = L;
   }

@@ -14,16 +14,20 @@ sylva_species_def sylva_default_species_def(void) {
       .w1 = 1.0, .w2 = 0.6, .w3 = 0.3,
       .tau = 6,
       .alpha = 4.0,
+      .leaf_age = 3,
+      .node_cost = 1.0,
       .sigma = 0.5,
       .mu = 1.5,
       .gamma = 0.5,
-      .tropism = {0.0, 0.0, -1.0},
+      .tropism = {0.0, 0.0, 1.0},
       .theta = 45.0,
       .divergence = 137.5,
       .b_min = 1.8, .b_max = 2.2,
       .pyramid_depth = 20,
+      .shade_spread = 1.0,
+      .shade_column = 0.002,
       .r_s = 0.35,
-      .r_tip = 0.003,
+      .r_tip = 0.008,
       .pipe_exponent = 2.5,
       .m0 = 20, .m_min = 4,
       .cone_angle = 60.0,
@@ -70,6 +74,8 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
   SYLVA__REQUIRE(d->tau >= 0 && d->tau <= 100000, "tau");
   SYLVA__REQUIRE(finite_in(d->alpha, 0.0, 1e6) && d->alpha > 0.0, "alpha");
   SYLVA__REQUIRE(finite_in(d->sigma, 0.0, 1.0) && d->sigma > 0.0, "sigma");
+  SYLVA__REQUIRE(d->leaf_age >= 1 && d->leaf_age <= 100000, "leaf_age");
+  SYLVA__REQUIRE(finite_in(d->node_cost, 0.0, 1e6) && d->node_cost > 0.0, "node_cost");
   SYLVA__REQUIRE(finite_in(d->mu, 0.0, 1e3), "mu");
   SYLVA__REQUIRE(finite_in(d->gamma, 0.0, 1e3), "gamma");
   for (int i = 0; i < 3; i++) SYLVA__REQUIRE(finite_in(d->tropism[i], -1e3, 1e3), "tropism");
@@ -78,6 +84,8 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
   SYLVA__REQUIRE(finite_in(d->b_min, 1.0, 1e3) && d->b_min > 1.0, "b_min");
   SYLVA__REQUIRE(finite_in(d->b_max, d->b_min, 1e3), "b_max");
   SYLVA__REQUIRE(d->pyramid_depth >= 1 && d->pyramid_depth <= 64, "pyramid_depth");
+  SYLVA__REQUIRE(finite_in(d->shade_spread, 0.0, 4.0), "shade_spread");
+  SYLVA__REQUIRE(finite_in(d->shade_column, 0.0, 1.0), "shade_column");
   SYLVA__REQUIRE(finite_in(d->r_s, 0.0, 1e6), "r_s");
   SYLVA__REQUIRE(finite_in(d->r_tip, 0.0, 10.0) && d->r_tip > 0.0, "r_tip");
   SYLVA__REQUIRE(finite_in(d->pipe_exponent, 2.0, 3.5), "pipe_exponent");

@@ -4,8 +4,8 @@
 int sylva__shade_node(sylva_world *w, int32_t slot, int sign) {
   const sylva__stem *st = &w->stems[w->nodes.stem[slot]];
   sylva__species *sp = &w->species[st->species];
-  const int64_t *weights = sylva__species_shade_weights(sp, w->nodes.birth[slot] - st->born);
+  const sylva__pyramid *shade = sylva__species_shade(sp, w->nodes.birth[slot] - st->born);
   int v[3];
   sylva__node_voxel(w, slot, v);
-  return sylva__grid_stamp(&w->grid, v, sp->def.pyramid_depth, weights, sign);
+  return sylva__grid_stamp(&w->grid, v, shade, sign);
 }

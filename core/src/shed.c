@@ -12,8 +12,11 @@ int sylva__shed(sylva_world *w, int iteration) {
    * least one iteration old): a newborn node's l^0 = 1 would otherwise count full
    * light in any shade and hold up dark branches only while they still grow. */
   sylva__light_collect(w, iteration + 1, NULL);
-  int32_t *n = w->count; /* subtree node counts */
-  for (size_t i = 0; i < s->count; i++) n[i] = 1;
+  int32_t *n = w->count; /* leaf-bearing nodes of each subtree */
+  for (size_t i = 0; i < s->count; i++) {
+    const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
+    n[i] = iteration + 1 - s->birth[i] <= d->leaf_age ? 1 : 0;
+  }
   for (size_t i = s->count; i-- > 0;)
     if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) n[s->parent[i]] += n[i];
   size_t doomed = 0;
@@ -25,7 +28,8 @@ int sylva__shed(sylva_world *w, int iteration) {
       doomed++;
     } else if (s->flags[i] & SYLVA__NODE_LATERAL) {
       const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
-      double e = w->q[i] / (d->alpha * (double)n[i]);
+      /* mean relative light per leaf-bearing node; a branch without leaves is dead */
+      double e = n[i] > 0 ? w->q[i] / (d->alpha * (double)n[i]) : 0.0;
       if (e < d->r_s) {
         s->flags[i] |= SYLVA__NODE_DOOMED;
         doomed++;

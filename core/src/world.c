@@ -118,14 +118,19 @@ double sylva__species_b(const sylva__species *sp, int t) {
   return d->b_min + (d->b_max - d->b_min) * (double)(t - d->tau) / (double)(sp->t95 - d->tau);
 }
 
-const int64_t *sylva__species_shade_weights(sylva__species *sp, int t) {
+const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
   if (sp->shade_cache_t != t) {
+    sylva__pyramid *p = &sp->shade;
     double b = sylva__species_b(sp, t);
-    for (int q = 1; q <= sp->def.pyramid_depth; q++)
-      sp->shade_w[q - 1] = (int64_t)floor(pow(b, -(double)q) * SYLVA__SHADE_ONE + 0.5);
+    p->depth = sp->def.pyramid_depth;
+    for (int q = 1; q <= p->depth; q++) {
+      p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * SYLVA__SHADE_ONE + 0.5);
+      p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
+    }
+    p->column = (int64_t)floor(sp->def.shade_column * SYLVA__SHADE_ONE + 0.5);
     sp->shade_cache_t = t;
   }
-  return sp->shade_w;
+  return &sp->shade;
 }
 
 double sylva__species_age_pow(sylva__species *sp, int age) {

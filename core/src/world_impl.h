@@ -13,8 +13,8 @@ typedef struct sylva__species {
   int t95;             /* first local iteration with X(T) >= 0.95 limit */
   double *age_pow;     /* age^sigma by age, grown on demand */
   int age_pow_n;
-  int shade_cache_t;   /* local iteration whose pyramid weights are cached, -1 none */
-  int64_t shade_w[64]; /* fixed-point b^-q, q = 1..pyramid_depth */
+  int shade_cache_t;   /* local iteration whose pyramid is cached, -1 none */
+  sylva__pyramid shade; /* fixed-point b^-q, q = 1..pyramid_depth, and its shape */
 } sylva__species;
 
 typedef struct sylva__plant {
@@ -118,8 +118,8 @@ static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
 
 /** Shade base b of a node born at a stem's local iteration t. */
 double sylva__species_b(const sylva__species *sp, int t);
-/** Fixed-point pyramid weights for nodes born at local iteration t. */
-const int64_t *sylva__species_shade_weights(sylva__species *sp, int t);
+/** The shade cast by a node born at local iteration t. */
+const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t);
 /** age^sigma, cached. NaN on allocation failure is avoided by computing directly. */
 double sylva__species_age_pow(sylva__species *sp, int age);
 

@@ -294,6 +294,8 @@ static const species_field species_fields[] = {
     DBL(w3, 0, 1e6, false, false),
     INT(tau, 0, 100000),
     DBL(alpha, 0, 1e6, true, false),
+    INT(leaf_age, 1, 100000),
+    DBL(node_cost, 0, 1e6, true, false),
     DBL(sigma, 0, 1, true, false),
     DBL(mu, 0, 1000, false, false),
     DBL(gamma, 0, 1000, false, false),
@@ -302,6 +304,8 @@ static const species_field species_fields[] = {
     DBL(b_min, 1, 1000, true, false),
     DBL(b_max, 1, 1000, true, false),
     INT(pyramid_depth, 1, 64),
+    DBL(shade_spread, 0, 4, false, false),
+    DBL(shade_column, 0, 1, false, false),
     DBL(r_s, 0, 1e6, false, false),
     DBL(r_tip, 0, 10, true, false),
     DBL(pipe_exponent, 2, 3.5, false, false),
@@ -322,7 +326,8 @@ static const char *const species_keys[] = {
     "preset", "rho",   "growth", "allocation", "sprout_light", "lambda",        "k",
     "w1",     "w2",    "w3",     "tau",        "alpha",        "sigma",         "mu",
     "gamma",  "tropism", "theta", "divergence", "b_min",       "b_max",         "pyramid_depth",
-    "r_s",    "r_tip", "pipe_exponent", "markers", "initial_nodes",
+    "r_s",    "r_tip", "pipe_exponent", "markers", "initial_nodes", "leaf_age", "node_cost",
+    "shade_spread", "shade_column",
 };
 
 static int set_fields(sylva__parser *p, const cJSON *obj, const species_field *fields, size_t count,

@@ -174,15 +174,18 @@ static void shade_by_height(void) {
   sylva__grid g;
   double mn[3] = {0, 0, 0}, mx[3] = {20, 20, 25};
   if (sylva__grid_init(&g, mn, mx, 0.05)) exit(1);
-  int64_t w[20];
-  for (int q = 1; q <= 20; q++) w[q - 1] = (int64_t)(pow(2.0, -q) * SYLVA__SHADE_ONE);
+  sylva__pyramid shade = {.depth = 20};
+  for (int q = 1; q <= 20; q++) {
+    shade.w[q - 1] = (int64_t)(pow(2.0, -q) * SYLVA__SHADE_ONE);
+    shade.half[q - 1] = q; /* the default shade_spread of 1 */
+  }
   double heights[] = {1, 2, 5, 10, 20};
   for (size_t h = 0; h < sizeof heights / sizeof heights[0]; h++) {
     int n = 20000;
     double t0 = now(NULL);
     for (int i = 0; i < n; i++) {
       int v[3] = {100 + (i * 7) % 200, 100 + (i * 13) % 200, (int)(heights[h] / 0.05)};
-      sylva__grid_stamp(&g, v, 20, w, +1);
+      sylva__grid_stamp(&g, v, &shade, +1);
     }
     double t1 = now(NULL);
     printf("   at %4.1f m: %.2f us per internode\n", heights[h], (t1 - t0) * 1e6 / n);

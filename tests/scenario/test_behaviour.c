@@ -12,9 +12,9 @@
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
 
-#define GOLDEN_WALL 0xbba286921422fa8dULL
-#define GOLDEN_STAND 0xc1fb01c34fc9c642ULL
-#define GOLDEN_SHRUB 0x22e5c444f1bd3580ULL
+#define GOLDEN_WALL 0x0986a86abc0e2f36ULL
+#define GOLDEN_STAND 0xca308343415080a4ULL
+#define GOLDEN_SHRUB 0x6deb12b16ac1b420ULL
 
 static sylva_scenario *load(const char *name) {
   return scenario_file(SOURCE_ROOT "/scenarios", name);

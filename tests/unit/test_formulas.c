@@ -38,12 +38,15 @@ static void test_derivatives(void) {
 
 static void test_cap_and_stop(void) {
   sylva_equation lg = {SYLVA_EQ_LOGISTIC, {2.0, 100.0, 0.34}};
-  /* c(T) = round(X'(T - 1)): worked by hand from X' (see MODEL.md section 3) */
+  /* c(T) = round(X'(T - 1)): worked by hand from X' (docs/model.md, "Cap") */
   int expect[] = {0, 1, 1, 1, 2, 2, 3, 4, 5, 6, 7, 8, 8, 8, 8, 7, 6, 5, 4, 3, 2, 2, 1, 1, 1, 0, 0};
   for (int T = 1; T <= 26; T++) CHECK_INT(sylva_equation_cap(&lg, T), expect[T]);
-  /* finished at the first T whose cap is 0 past the inflection: T = 25 */
-  for (int T = 1; T <= 24; T++) CHECK(!sylva_equation_stops(&lg, T));
-  CHECK(sylva_equation_stops(&lg, 25));
+  /* finished at the first T past the inflection whose rate is below one internode
+   * (docs/model.md, "Stop"): X'(21) = 1.2238, X'(22) = 0.8902, so T = 23 */
+  CHECK_NEAR(sylva_equation_rate(&lg, 21.0), 1.2238, 1e-4);
+  CHECK_NEAR(sylva_equation_rate(&lg, 22.0), 0.8902, 1e-4);
+  for (int T = 1; T <= 22; T++) CHECK(!sylva_equation_stops(&lg, T));
+  CHECK(sylva_equation_stops(&lg, 23));
   CHECK(sylva_equation_decreasing(&lg, 20));
   CHECK(!sylva_equation_decreasing(&lg, 5));
   /* round half up: Weibull with omega3 = 1 has X'(0) = omega1 * omega2 = 2.5 */
@@ -222,10 +225,16 @@ static void test_shade_base(void) {
   CHECK_NEAR(sylva__species_b(s, 60), 2.2, 0.0);
   /* the fixed-point pyramid weights are b^-q in units of 2^-32, rounded */
   double b = 1.8 + 0.4 * 7.0 / 15.0;
-  const int64_t *wt = sylva__species_shade_weights(s, 13);
+  const sylva__pyramid *shade = sylva__species_shade(s, 13);
+  const int64_t *wt = shade->w;
+  CHECK_INT(shade->depth, 20);
   CHECK_INT(wt[0], (int64_t)floor(SYLVA__SHADE_ONE / b + 0.5));
   CHECK_INT(wt[2], (int64_t)floor(SYLVA__SHADE_ONE / (b * b * b) + 0.5));
   CHECK_INT(wt[19], (int64_t)floor(pow(b, -20.0) * SYLVA__SHADE_ONE + 0.5));
+  /* half-width floor(q * shade_spread): 1 by default, so the base is 41 voxels wide */
+  CHECK_INT(shade->half[0], 1);
+  CHECK_INT(shade->half[19], 20);
+  CHECK_INT(shade->column, (int64_t)floor(0.002 * SYLVA__SHADE_ONE + 0.5));
   sylva_world_destroy(w);
 }
 

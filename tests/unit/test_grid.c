@@ -9,6 +9,17 @@
 
 static int64_t fixed(double v) { return (int64_t)floor(v * SYLVA__SHADE_ONE + 0.5); }
 
+/* Stamps the pyramid these tests define: half-width floor(q / 2), and the column
+ * below the base at the deepest layer's value. */
+static int stamp(sylva__grid *g, const int v[3], int depth, const int64_t *w, int sign) {
+  sylva__pyramid p = {.depth = depth, .column = w[depth - 1]};
+  for (int q = 1; q <= depth; q++) {
+    p.w[q - 1] = w[q - 1];
+    p.half[q - 1] = q / 2;
+  }
+  return sylva__grid_stamp(g, v, &p, sign);
+}
+
 static void test_pyramid_and_column(void) {
   sylva__grid g;
   double mn[3] = {0, 0, 0}, mx[3] = {2, 2, 2};
@@ -17,7 +28,7 @@ static void test_pyramid_and_column(void) {
   int64_t w[4];
   for (int q = 1; q <= 4; q++) w[q - 1] = fixed(pow(2.0, -q)); /* b = 2 */
   int v[3] = {20, 20, 30};
-  CHECK_INT(sylva__grid_stamp(&g, v, 4, w, +1), 0);
+  CHECK_INT(stamp(&g, v, 4, w, +1), 0);
 #define S(x, y, z) sylva__grid_shade_raw(&g, (int[3]){x, y, z})
   CHECK_INT(S(20, 20, 30), 0);         /* own voxel */
   CHECK_INT(S(20, 20, 31), 0);         /* above */
@@ -40,13 +51,13 @@ static void test_pyramid_and_column(void) {
   CHECK_NEAR(sylva__grid_light(&g, (int[3]){20, 20, 5}), 1.0 - 1.0 / 16.0, 1e-9);
   /* a second node above adds: light falls, never below 0 */
   int v2[3] = {20, 20, 31};
-  CHECK_INT(sylva__grid_stamp(&g, v2, 4, w, +1), 0);
+  CHECK_INT(stamp(&g, v2, 4, w, +1), 0);
   CHECK_INT(S(20, 20, 29), w[0] + w[1]);
-  for (int i = 0; i < 4; i++) CHECK_INT(sylva__grid_stamp(&g, v2, 4, w, +1), 0);
+  for (int i = 0; i < 4; i++) CHECK_INT(stamp(&g, v2, 4, w, +1), 0);
   CHECK_NEAR(sylva__grid_light(&g, (int[3]){20, 20, 30}), 0.0, 0.0);
   /* near the world's edge the pyramid is clipped, nothing crashes */
   int edge[3] = {0, 39, 3};
-  CHECK_INT(sylva__grid_stamp(&g, edge, 4, w, +1), 0);
+  CHECK_INT(stamp(&g, edge, 4, w, +1), 0);
   CHECK_INT(S(0, 39, 2), w[0]);
   CHECK_INT(S(1, 38, 1), w[1]);
 #undef S
@@ -81,14 +92,14 @@ static void test_exact_removal(void) {
     depth[i] = 1 + (int)sylva__rng_below(&r, 20);
     double b = 1.8 + 0.7 * sylva__rng_unit(&r);
     for (int q = 1; q <= 20; q++) w[i][q - 1] = fixed(pow(b, -q));
-    CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], +1), 0);
+    CHECK_INT(stamp(&g, vox[i], depth[i], w[i], +1), 0);
   }
   /* remove the odd ones in reverse order; stamp only the even ones into h */
   for (int i = N - 1; i >= 0; i--)
-    if (i % 2) CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], -1), 0);
-  for (int i = 0; i < N; i += 2) CHECK_INT(sylva__grid_stamp(&h, vox[i], depth[i], w[i], +1), 0);
+    if (i % 2) CHECK_INT(stamp(&g, vox[i], depth[i], w[i], -1), 0);
+  for (int i = 0; i < N; i += 2) CHECK_INT(stamp(&h, vox[i], depth[i], w[i], +1), 0);
   CHECK(grids_equal(&g, &h));
-  for (int i = 0; i < N; i += 2) CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], -1), 0);
+  for (int i = 0; i < N; i += 2) CHECK_INT(stamp(&g, vox[i], depth[i], w[i], -1), 0);
   CHECK(grids_equal(&g, &empty)); /* equal to never having added */
   sylva__grid_free(&g);
   sylva__grid_free(&h);
@@ -110,7 +121,7 @@ static void test_against_definition(void) {
     for (int a = 0; a < 3; a++) vox[i][a] = (int)sylva__rng_below(&r, (uint32_t)g.n[a]);
     depth[i] = 1 + (int)sylva__rng_below(&r, 20);
     for (int q = 1; q <= 20; q++) w[i][q - 1] = fixed(pow(1.8 + 0.01 * i, -q));
-    CHECK_INT(sylva__grid_stamp(&g, vox[i], depth[i], w[i], +1), 0);
+    CHECK_INT(stamp(&g, vox[i], depth[i], w[i], +1), 0);
   }
   long bad = 0;
   for (int z = 0; z < g.n[2]; z++)
@@ -179,7 +190,7 @@ static void test_sparse_site(void) {
   int64_t w[20];
   for (int q = 1; q <= 20; q++) w[q - 1] = fixed(pow(2.0, -q));
   int v[3] = {500, 500, 400};
-  CHECK_INT(sylva__grid_stamp(&g, v, 20, w, +1), 0);
+  CHECK_INT(stamp(&g, v, 20, w, +1), 0);
   CHECK_INT(sylva__grid_occupy(&g, v, 0), 0);
   size_t one = sylva__grid_bytes(&g) - empty;
   CHECK(one < 2u << 20); /* a handful of chunks, not the column to the ground */

@@ -21,6 +21,9 @@ typedef struct sylva_species_def {
   double w1, w2, w3;       /**< priority weights */
   int tau;                 /**< iterations of apical control */
   double alpha;            /**< light conversion rate */
+  int leaf_age;            /**< iterations a node bears leaves: it collects light and its
+                                lateral bud may sprout only while age <= leaf_age */
+  double node_cost;        /**< resource units one new internode costs */
   double sigma;            /**< light sensitivity */
   double mu;               /**< weight of the optimal direction */
   double gamma;            /**< weight of the tropism */
@@ -29,6 +32,8 @@ typedef struct sylva_species_def {
   double divergence;       /**< phyllotaxis divergence angle */
   double b_min, b_max;     /**< shade impact base */
   int pyramid_depth;       /**< Qd, voxels */
+  double shade_spread;     /**< pyramid half-width per voxel of depth */
+  double shade_column;     /**< shade per voxel of the column below the pyramid */
   double r_s;              /**< shedding threshold */
   double r_tip;            /**< terminal radius, m */
   double pipe_exponent;    /**< v of the pipe model */
