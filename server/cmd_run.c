@@ -126,7 +126,7 @@ int cmd_run(int argc, char **argv) {
   const char *path = argv[first];
 
   sylva_scenario *s;
-  int rc = cli_load_scenario(path, &s);
+  int rc = cli_load_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s);
   if (rc) return rc;
   if (seed_text) s->seed = seed;
   int limit = iterations ? (int)iterations : s->iterations;

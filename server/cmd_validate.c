@@ -14,8 +14,9 @@ static const cli_option validate_options[] = {
 static void validate_usage(FILE *f) {
   fputs("Usage: sylva validate SCENARIO.json\n"
         "\n"
-        "Checks a scenario without running it: JSON syntax, every key and value, and\n"
-        "that each root lies inside the world and outside the obstacles. Prints\n"
+        "Checks a scenario without running it: JSON syntax, every key and value, at\n"
+        "least one plant, and that each root lies inside the world and outside the\n"
+        "obstacles. Prints\n"
         "  ok: NAME: P plants, S stems, O obstacles, voxel V m, NXxNYxNZ voxels\n"
         "or the error, named by its JSON pointer, on stderr (exit status 2).\n"
         "\n"
@@ -42,7 +43,7 @@ int cmd_validate(int argc, char **argv) {
   const char *path = argv[first];
 
   sylva_scenario *s;
-  int rc = cli_load_scenario(path, &s);
+  int rc = cli_load_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s);
   if (rc) return rc;
   sylva_world *w;
   rc = cli_build_world(path, s, &w);

@@ -170,7 +170,7 @@ static const struct lws_protocol_vhost_options mime_mjs = {&mime_map, NULL, ".mj
 /* `--run SCENARIO.json`: grow it, unless a run of its name is already held. */
 static int start_scenario(server *d, const char *path) {
   sylva_scenario *s;
-  int rc = cli_load_scenario(path, &s);
+  int rc = cli_load_scenario(path, 0, &s); /* plants not required: an empty site, as with create */
   if (rc) return rc;
   for (run *r = d->runs; r; r = r->next)
     if (strcmp(r->name, s->name) == 0) {

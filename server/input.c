@@ -63,7 +63,7 @@ int cli_read_file(const char *path, size_t max, char **data, size_t *len) {
   return 0;
 }
 
-int cli_load_scenario(const char *path, sylva_scenario **out) {
+int cli_load_scenario(const char *path, unsigned flags, sylva_scenario **out) {
   *out = NULL;
   char *text;
   size_t len;
@@ -77,7 +77,7 @@ int cli_load_scenario(const char *path, sylva_scenario **out) {
     return e == ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
   char err[1024];
-  int rc = sylva_scenario_parse(text, len, out, err, sizeof err);
+  int rc = sylva_scenario_parse_ex(text, len, flags, out, err, sizeof err);
   free(text);
   if (rc < 0) {
     fprintf(stderr, "sylva: %s: %s\n", path, err);

@@ -280,7 +280,8 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
     rc = sylva__want_object(p, item);
     if (!rc) {
       p->base = p->plen;
-      rc = sylva__scenario_from_json(p, item, &m->scenario);
+      /* no SYLVA_SCENARIO_NEED_PLANTS: a site without plants is planted by edits */
+      rc = sylva__scenario_from_json(p, item, 0, &m->scenario);
       p->base = 0;
     }
     sylva__ptr_pop(p, old);

@@ -753,7 +753,7 @@ void sylva_scenario_free(sylva_scenario *s) { scenario_free_parts(s); }
 static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
                                        "world",   "species", "plants",   "obstacles"};
 
-static int parse_top(sylva__parser *p, const cJSON *root, sylva_scenario *s) {
+static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_scenario *s) {
   int rc = sylva__want_object(p, root);
   if (rc) return rc;
   const cJSON *item = member(root, "format");
@@ -861,13 +861,18 @@ static int parse_top(sylva__parser *p, const cJSON *root, sylva_scenario *s) {
   sylva__ptr_pop(p, old);
   if (rc) return rc;
 
-  if ((item = member(root, "plants"))) {
+  const bool need_plants = flags & SYLVA_SCENARIO_NEED_PLANTS;
+  if (!(item = member(root, "plants")) && need_plants)
+    return sylva__fail_at_key(p, "plants", "required");
+  if (item) {
     old = sylva__ptr_push(p, "plants");
     int count = cJSON_IsArray(item) ? cJSON_GetArraySize(item) : 0;
     if (!cJSON_IsArray(item))
       rc = sylva__fail(p, "expected an array, got %s", sylva__type_name(item));
     else if (count > SYLVA_MAX_STEMS)
       rc = sylva__fail(p, "%d plants; a world holds at most %d stems", count, SYLVA_MAX_STEMS);
+    else if (count == 0 && need_plants)
+      rc = sylva__fail(p, "nothing to grow (the list is empty)");
     if (!rc && count && !(s->plants = calloc((size_t)count, sizeof *s->plants)))
       rc = sylva__fail_nomem(p);
     sylva__id_ref *by_name = NULL;
@@ -961,10 +966,11 @@ static int parse_top(sylva__parser *p, const cJSON *root, sylva_scenario *s) {
   return check_world_size(p, s);
 }
 
-int sylva__scenario_from_json(sylva__parser *p, const cJSON *root, sylva_scenario **out) {
+int sylva__scenario_from_json(sylva__parser *p, const cJSON *root, unsigned flags,
+                              sylva_scenario **out) {
   *out = NULL;
   sylva_scenario *s = calloc(1, sizeof *s);
-  int rc = s ? parse_top(p, root, s) : sylva__fail_nomem(p);
+  int rc = s ? parse_top(p, root, flags, s) : sylva__fail_nomem(p);
   if (rc) {
     scenario_free_parts(s);
     return rc;
@@ -975,6 +981,11 @@ int sylva__scenario_from_json(sylva__parser *p, const cJSON *root, sylva_scenari
 
 int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, char *err,
                          size_t errlen) {
+  return sylva_scenario_parse_ex(text, len, 0, out, err, errlen);
+}
+
+int sylva_scenario_parse_ex(const char *text, size_t len, unsigned flags, sylva_scenario **out,
+                            char *err, size_t errlen) {
   *out = NULL;
   if (err && errlen) err[0] = '\0';
   char syntax[400];
@@ -994,7 +1005,7 @@ int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, cha
       snprintf(err, errlen, "out of memory while parsing JSON (or cJSON could not read the text near byte %zu)", offset);
     return SYLVA_ENOMEM;
   }
-  int rc = sylva__scenario_from_json(&p, root, out);
+  int rc = sylva__scenario_from_json(&p, root, flags, out);
   cJSON_Delete(root);
   return rc;
 }

@@ -94,8 +94,10 @@ int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *
 int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obstacle *o);
 
 /** A whole scenario from a cJSON tree, errors under the parser's current pointer
- *  (set p->base to its length). On failure *out is NULL; the status is negative
- *  (SYLVA_EINVAL, SYLVA_ETOOBIG for a world with too many voxels, SYLVA_ENOMEM). */
-int sylva__scenario_from_json(sylva__parser *p, const cJSON *root, sylva_scenario **out);
+ *  (set p->base to its length); flags as for sylva_scenario_parse_ex(). On failure
+ *  *out is NULL; the status is negative (SYLVA_EINVAL, SYLVA_ETOOBIG for a world with
+ *  too many voxels, SYLVA_ENOMEM). */
+int sylva__scenario_from_json(sylva__parser *p, const cJSON *root, unsigned flags,
+                              sylva_scenario **out);
 
 #endif

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Replays input corpora through `sylva validate`.
 
-- every tests/fuzz/bad/*.json: exit status exactly 2, and stderr contains each
-  substring listed for the file in bad/EXPECT.tsv (file<TAB>substring[<TAB>...]);
+- every tests/fuzz/bad/*.json, through `sylva validate` and `sylva run` alike:
+  exit status exactly 2, and stderr contains each substring listed for the file
+  in bad/EXPECT.tsv (file<TAB>substring[<TAB>...]);
 - every JSONTestSuite file (none is a scenario): exit status 2;
 - every scenarios/*.json: exit status 0 and "ok: ..." on stdout;
 - truncated and byte-flipped copies of the scenarios (a fixed pseudo-random
@@ -21,9 +22,9 @@ import tempfile
 CRASH_MARKERS = ("runtime error", "AddressSanitizer", "LeakSanitizer", "UndefinedBehaviorSanitizer")
 
 
-def run_validate(sylva, path):
+def run_validate(sylva, path, command=("validate",)):
     try:
-        proc = subprocess.run([sylva, "validate", path], capture_output=True, timeout=60)
+        proc = subprocess.run([sylva, *command, path], capture_output=True, timeout=60)
     except subprocess.TimeoutExpired:
         return None, "", "timed out after 60 s"
     return (proc.returncode, proc.stdout.decode("utf-8", "replace"),
@@ -41,18 +42,27 @@ def crash_text(rc, err):
     return None
 
 
+# `sylva run` reads a scenario as validate does; one iteration at most, should a
+# bad file get through.
+BAD_COMMANDS = (("validate",), ("run", "--iterations", "1"))
+
+
 def check_bad(sylva, path, expected):
-    rc, _out, err = run_validate(sylva, path)
-    crash = crash_text(rc, err)
-    if crash:
-        return "%s\n    stderr: %s" % (crash, err.strip()[:2000])
-    if rc != 2:
-        return "exit status %s, expected 2\n    stderr: %s" % (rc, err.strip())
-    missing = [s for s in expected if s not in err]
-    if missing:
-        return "stderr lacks %r\n    stderr: %s" % (missing, err.strip())
-    if not err.startswith("sylva: "):
-        return "stderr does not start with 'sylva: '\n    stderr: %s" % err.strip()
+    for command in BAD_COMMANDS:
+        rc, _out, err = run_validate(sylva, path, command)
+        crash = crash_text(rc, err)
+        if crash:
+            problem = "%s\n    stderr: %s" % (crash, err.strip()[:2000])
+        elif rc != 2:
+            problem = "exit status %s, expected 2\n    stderr: %s" % (rc, err.strip())
+        elif any(s not in err for s in expected):
+            problem = "stderr lacks %r\n    stderr: %s" % (
+                [s for s in expected if s not in err], err.strip())
+        elif not err.startswith("sylva: "):
+            problem = "stderr does not start with 'sylva: '\n    stderr: %s" % err.strip()
+        else:
+            continue
+        return "sylva %s: %s" % (command[0], problem)
     return None
 
 

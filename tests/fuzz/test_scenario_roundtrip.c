@@ -174,6 +174,26 @@ static void fixed_cases(void) {
          "tiny buffer: '%s'", small);
   EXPECT(sylva_scenario_parse("[]", 2, &s, NULL, 0) < 0 && s == NULL, "NULL buffer");
 
+  /* No plants: an empty site by default (the daemon plants it by edits); refused
+   * with SYLVA_SCENARIO_NEED_PLANTS (a scenario to grow as it is). */
+  static const char *const no_plants[][2] = {
+      {"", "/plants: required"},
+      {", \"plants\": []", "/plants: nothing to grow (the list is empty)"}};
+  for (size_t i = 0; i < sizeof no_plants / sizeof no_plants[0]; i++) {
+    char text[200], err[200] = "";
+    snprintf(text, sizeof text,
+             "{\"format\": \"sylva.scenario/1\", \"world\": {\"min\": [0, 0, 0], "
+             "\"max\": [1, 1, 1]}%s}",
+             no_plants[i][0]);
+    s = parse_ok("no plants", text, strlen(text));
+    EXPECT(s && s->plant_count == 0, "%s", text);
+    sylva_scenario_free(s);
+    EXPECT(sylva_scenario_parse_ex(text, strlen(text), SYLVA_SCENARIO_NEED_PLANTS, &s, err,
+                                   sizeof err) < 0 &&
+               s == NULL && strcmp(err, no_plants[i][1]) == 0,
+           "%s: '%s'", text, err);
+  }
+
   /* Formatters. */
   char buf[SYLVA_FMT_BUFSIZE];
   struct {

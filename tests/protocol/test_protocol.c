@@ -160,6 +160,20 @@ static void test_valid(void) {
     CHECK_STR(m.ref, "\"c1\"");
   }
   sylva_msg_free(&m);
+  /* An empty site, to be planted by edits: no plants, or an empty list (a
+   * scenario file needs plants: `sylva run` and `validate` refuse both). */
+  static const char *const empty_sites[] = {"", ",\"plants\":[]"};
+  for (size_t i = 0; i < sizeof empty_sites / sizeof empty_sites[0]; i++) {
+    snprintf(text, sizeof text,
+             "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/1\","
+             "\"world\":{\"min\":[-2,-2,0],\"max\":[2,2,4]}%s}}",
+             empty_sites[i]);
+    if (PARSE_OK(text, &m)) {
+      CHECK(m.scenario != NULL);
+      if (m.scenario) CHECK_INT(m.scenario->plant_count, 0);
+    }
+    sylva_msg_free(&m);
+  }
 
   if (PARSE_OK("{\"type\":\"subscribe\",\"run\":3}", &m)) {
     CHECK_INT(m.type, SYLVA_MSG_SUBSCRIBE);

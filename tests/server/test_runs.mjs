@@ -613,6 +613,38 @@ test('edit: a wall and a seedling between iterations; subscribers get a fresh sn
   }
 });
 
+// A scenario file needs plants (`sylva run` and `validate` refuse one without),
+// but create makes an empty site, to be planted by edits.
+test('create: an empty site, without plants or with an empty list, planted by an edit', async () => {
+  const d = await startDaemon();
+  try {
+    const bare = scenario('wall.json', { iterations: 10 });
+    delete bare.plants;
+    const c = await connect(d.url);
+    for (const [name, sc] of [['bare', bare], ['empty', { ...bare, plants: [] }]]) {
+      c.send({ type: 'create', name, start: false, scenario: sc, id: name });
+      const created = await c.next((m) => m.ref === name);
+      assert.equal(created.type, 'created', JSON.stringify(created));
+      c.send({ type: 'subscribe', run: created.run });
+      const snap = await c.next((m) => m.type === 'snapshot' && m.run === created.run);
+      assert.deepEqual(snap.plants, [], name);
+      c.send({ type: 'edit', run: created.run, id: `e-${name}`, add_plants: [SEEDLING] });
+      const st = await c.next((m) => m.ref === `e-${name}`);
+      assert.equal(st.type, 'status', JSON.stringify(st));
+      const planted = await c.next((m) => m.type === 'snapshot' && m.run === created.run);
+      assert.deepEqual(planted.plants.map((p) => p.id), ['t9'], name);
+      const before = planted.plants[0].stems[0].nodes.length;
+      const model = await stepAndFollow(c, created.run, 2, new Model(planted));
+      assert.ok(JSON.parse(model.plantsJSON())[0].stems[0].nodes.length > before, `${name}: the seedling grew`);
+    }
+    c.close();
+    await stopClean(d);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
 // An edit sent while an iteration is in flight waits for it, and lands between
 // two iterations: a run given the same edit at that iteration ends the same.
 test('edit of a running run: applied between iterations, as a paused run edited there', async () => {

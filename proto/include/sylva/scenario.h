@@ -84,6 +84,19 @@ typedef struct sylva_scenario {
 int sylva_scenario_parse(const char *text, size_t len, sylva_scenario **out, char *err,
                          size_t errlen);
 
+/** Flags of sylva_scenario_parse_ex(). */
+enum {
+  /** Refuse a scenario without plants: "plants" missing ("/plants: required") or
+   *  empty ("/plants: nothing to grow (the list is empty)"). For a scenario grown as
+   *  it is (`sylva run`, `sylva validate`); without it a scenario without plants is
+   *  an empty site, to be planted by edits (the daemon's create). */
+  SYLVA_SCENARIO_NEED_PLANTS = 1
+};
+
+/** sylva_scenario_parse() with SYLVA_SCENARIO_* flags. */
+int sylva_scenario_parse_ex(const char *text, size_t len, unsigned flags, sylva_scenario **out,
+                            char *err, size_t errlen);
+
 /** A canonical JSON form of s: every species fully resolved (no presets), the
  *  voxel explicit, numbers that read back exactly; parsing it gives the same
  *  scenario. malloc'd, ends with a newline; NULL when out of memory. */
