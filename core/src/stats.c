@@ -1,4 +1,4 @@
-/* Per-stem measures of MODEL.md: height, dbh, crown width and base, nodes, light. */
+/* Per-stem measures of docs/model.md: height, dbh, crown width and base, nodes, light. */
 #include <math.h>
 
 #include "light.h"

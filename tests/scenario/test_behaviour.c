@@ -1,4 +1,4 @@
-/* The behaviours MODEL.md promises, on the ready scenarios: simplified IGM follows
+/* The behaviours docs/model.md promises, on the ready scenarios: simplified IGM follows
  * its growth equation, S-shaped height below Xm * rho, nodes never in obstacles or
  * outside, crowns away from walls and out of a board's shadow, one stem per voxel,
  * competition, determinism, the per-iteration stem order, and snapshots that

@@ -1,4 +1,4 @@
-/* Every formula of MODEL.md against hand-worked values: growth equations and their
+/* Every formula of docs/model.md against hand-worked values: growth equations and their
  * derivatives, the cap/stop rule, BH shares, priority weights, light sensitivity,
  * lateral directions, the generator, and one hand-worked allocation. */
 #include <string.h>

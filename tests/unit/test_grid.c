@@ -107,7 +107,7 @@ static void test_exact_removal(void) {
 }
 
 /* The grid against the definition, voxel by voxel: random nodes (near chunk borders
- * and the world's edges too), each voxel's S summed directly from MODEL.md. */
+ * and the world's edges too), each voxel's S summed directly from docs/model.md. */
 static void test_against_definition(void) {
   sylva__grid g;
   double mn[3] = {0, 0, 0}, mx[3] = {2.2, 1.9, 3.3};

@@ -4,7 +4,7 @@
 
 #include <stdbool.h>
 
-/** Kinds of growth equation (MODEL.md section 3). */
+/** Kinds of growth equation (docs/model.md, "Cap"). */
 typedef enum sylva_equation_kind {
   SYLVA_EQ_LOGISTIC = 0,    /**< p = {X0, Xm, r} */
   SYLVA_EQ_BERTALANFFY = 1, /**< p = {beta1, beta2} */

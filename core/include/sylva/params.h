@@ -1,4 +1,4 @@
-/* sylva: species parameters (MODEL.md symbols; scenario.md keys and defaults). */
+/* sylva: species parameters (docs/model.md symbols; scenario.md keys and defaults). */
 #ifndef SYLVA_PARAMS_H
 #define SYLVA_PARAMS_H
 

@@ -71,7 +71,7 @@ typedef struct sylva_radius_change {
   float radius;
 } sylva_radius_change;
 
-/** Per-stem measures (MODEL.md "Measures"); NaN where the measure is null. */
+/** Per-stem measures (docs/model.md "Measures"); NaN where the measure is null. */
 typedef struct sylva_stem_stats {
   int32_t plant, stem;
   double height, dbh, crown_width, crown_base, light;
