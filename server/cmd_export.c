@@ -1,6 +1,5 @@
 /* `sylva export`: a stored iteration as a skeleton (JSON), a mesh (OBJ, PLY), or the
  * stats of every iteration (CSV). */
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,6 +7,7 @@
 #include "commands.h"
 #include "export.h"
 #include "options.h"
+#include "outfile.h"
 #include "stored.h"
 #include "sylva/scenario.h"
 
@@ -83,58 +83,24 @@ int cmd_export(int argc, char **argv) {
   store_run r;
   int rc = cli_open_run("export", db, name, &st, &r);
   if (rc) return rc;
-  int at = has_iteration ? (int)iteration : r.last_iteration;
-  if (at > r.last_iteration) {
-    fprintf(stderr, "sylva: %s: run \"%s\" has no iteration %d (it has 0 to %d)\n", db, name, at,
-            r.last_iteration);
-    store_run_free(&r);
-    store_close(st);
-    return CLI_EXIT_USAGE;
-  }
+  int at = 0;
+  rc = cli_stored_iteration(db, &r, has_iteration, iteration, &at);
   spec.run = r.id;
   spec.name = r.name;
   spec.iteration = at;
   spec.sides = (int)sides;
 
   /* write to OUT.tmp and rename, so that OUT is never half written */
-  bool to_stdout = strcmp(out, "-") == 0;
-  char *tmp = NULL;
-  FILE *f = stdout;
-  if (!to_stdout) {
-    size_t n = strlen(out) + 5;
-    tmp = malloc(n);
-    if (tmp) snprintf(tmp, n, "%s.tmp", out);
-    if (!tmp || !(f = fopen(tmp, "wb"))) {
-      fprintf(stderr, "sylva: -o: cannot create %s: %s\n", tmp ? tmp : out,
-              tmp ? strerror(errno) : "out of memory");
-      free(tmp);
-      store_run_free(&r);
-      store_close(st);
-      return CLI_EXIT_USAGE;
-    }
-  }
-  char err[512];
-  int failed = export_write(f, st, NULL, &spec, cli_store_warn, err, sizeof err);
-  if (failed == EXPORT_EWRITE)
-    fprintf(stderr, "sylva: %s: %s\n", out, err);
-  else if (failed)
-    fprintf(stderr, "sylva: %s\n", err);
-  if (failed) rc = CLI_EXIT_FAILURE;
-  if (fflush(f) != 0 && rc == CLI_EXIT_OK) {
-    fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
-    rc = CLI_EXIT_FAILURE;
-  }
-  if (!to_stdout) {
-    if (fclose(f) != 0 && rc == CLI_EXIT_OK) {
-      fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
-      rc = CLI_EXIT_FAILURE;
-    }
-    if (rc == CLI_EXIT_OK && rename(tmp, out) != 0) {
-      fprintf(stderr, "sylva: %s: %s\n", out, strerror(errno));
-      rc = CLI_EXIT_FAILURE;
-    }
-    if (rc != CLI_EXIT_OK) remove(tmp);
-    free(tmp);
+  cli_outfile o;
+  if (rc == CLI_EXIT_OK) rc = cli_outfile_open(&o, "-o", out, true);
+  if (rc == CLI_EXIT_OK) {
+    char err[512];
+    int failed = export_write(o.f, st, NULL, &spec, cli_store_warn, err, sizeof err);
+    if (failed == EXPORT_EWRITE)
+      fprintf(stderr, "sylva: %s: %s\n", out, err);
+    else if (failed)
+      fprintf(stderr, "sylva: %s\n", err);
+    rc = cli_outfile_close(&o, failed ? CLI_EXIT_FAILURE : CLI_EXIT_OK);
   }
   store_run_free(&r);
   store_close(st);

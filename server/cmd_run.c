@@ -12,6 +12,7 @@
 #include "grow.h"
 #include "input.h"
 #include "options.h"
+#include "outfile.h"
 #include "store.h"
 #include "stored.h"
 #include "sylva/encode.h"
@@ -52,28 +53,6 @@ static void run_usage(FILE *f) {
         "Options:\n",
         f);
   cli_print_options(f, run_options, OPT_COUNT);
-}
-
-/* Writes data to the already opened tmp file, then renames it over path. */
-static int finish_export(FILE *f, const char *tmp, const char *path, const char *data) {
-  size_t len = strlen(data);
-  bool ok = fwrite(data, 1, len, f) == len;
-  ok = fflush(f) == 0 && ok;
-  int e = ok ? 0 : errno;
-  if (fclose(f) != 0 && ok) {
-    ok = false;
-    e = errno;
-  }
-  if (ok && rename(tmp, path) != 0) {
-    ok = false;
-    e = errno;
-  }
-  if (!ok) {
-    fprintf(stderr, "sylva: %s: %s\n", path, strerror(e ? e : EIO));
-    remove(tmp);
-    return CLI_EXIT_FAILURE;
-  }
-  return CLI_EXIT_OK;
 }
 
 int cmd_run(int argc, char **argv) {
@@ -132,22 +111,10 @@ int cmd_run(int argc, char **argv) {
   int limit = iterations ? (int)iterations : s->iterations;
 
   /* Open the export file now, so that a bad path fails before a long run. */
-  char *tmp = NULL;
-  FILE *export_file = NULL;
-  if (export_path) {
-    size_t n = strlen(export_path) + 5;
-    if (!(tmp = malloc(n))) {
-      fprintf(stderr, "sylva: out of memory\n");
-      sylva_scenario_free(s);
-      return CLI_EXIT_FAILURE;
-    }
-    snprintf(tmp, n, "%s.tmp", export_path);
-    if (!(export_file = fopen(tmp, "wb"))) {
-      fprintf(stderr, "sylva: --export: cannot create %s: %s\n", tmp, strerror(errno));
-      free(tmp);
-      sylva_scenario_free(s);
-      return CLI_EXIT_USAGE;
-    }
+  cli_outfile export_out = {0};
+  if (export_path && (rc = cli_outfile_open(&export_out, "--export", export_path, false))) {
+    sylva_scenario_free(s);
+    return rc;
   }
 
   sylva_world *w = NULL;
@@ -160,24 +127,17 @@ int cmd_run(int argc, char **argv) {
   if (rc == CLI_EXIT_OK) rc = grow_run(&job);
   store_close(job.st);
 
-  if (export_file) {
-    if (rc == CLI_EXIT_OK) {
-      char *skeleton = sylva_encode_skeleton(w);
-      if (skeleton) {
-        rc = finish_export(export_file, tmp, export_path, skeleton);
-      } else {
-        fprintf(stderr, "sylva: --export: out of memory\n");
-        fclose(export_file);
-        remove(tmp);
-        rc = CLI_EXIT_FAILURE;
-      }
-      free(skeleton);
+  if (export_path && rc == CLI_EXIT_OK) {
+    char *skeleton = sylva_encode_skeleton(w);
+    if (skeleton) {
+      fputs(skeleton, export_out.f);
     } else {
-      fclose(export_file);
-      remove(tmp);
+      fprintf(stderr, "sylva: --export: out of memory\n");
+      rc = CLI_EXIT_FAILURE;
     }
+    free(skeleton);
   }
-  free(tmp);
+  rc = cli_outfile_close(&export_out, rc);
   if (w) sylva_world_destroy(w);
   sylva_scenario_free(s);
   return rc;

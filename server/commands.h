@@ -18,6 +18,10 @@ int cmd_runs(int argc, char **argv);
 /** `sylva export --db FILE --name NAME --format F -o OUT`: export a stored iteration. */
 int cmd_export(int argc, char **argv);
 
+/** `sylva render (--db FILE --name NAME | SCENARIO.json) -o OUT`: draw front, side
+ *  and top views into a PNG, SVG or PDF file. */
+int cmd_render(int argc, char **argv);
+
 /** `sylva serve [options]`: the daemon. */
 int cmd_serve(int argc, char **argv);
 

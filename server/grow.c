@@ -78,14 +78,16 @@ int grow_run(grow_job *job) {
         break;
       }
     }
-    char *line = sylva_encode_stats_line(w, j, elapsed);
-    bool nomem = !line, ok = line && grow_put_line(line);
-    free(line);
-    if (!ok) {
-      progress_clear(&pr);
-      fprintf(stderr, "sylva: %s\n", nomem ? "out of memory" : "cannot write to stdout");
-      rc = CLI_EXIT_FAILURE;
-      break;
+    if (!job->silent) {
+      char *line = sylva_encode_stats_line(w, j, elapsed);
+      bool nomem = !line, ok = line && grow_put_line(line);
+      free(line);
+      if (!ok) {
+        progress_clear(&pr);
+        fprintf(stderr, "sylva: %s\n", nomem ? "out of memory" : "cannot write to stdout");
+        rc = CLI_EXIT_FAILURE;
+        break;
+      }
     }
     progress_show(&pr, sylva_world_iteration(w), job->limit, sylva_world_node_count(w));
   }
@@ -99,14 +101,14 @@ int grow_run(grow_job *job) {
       store_set_status(job->st, job->run, "failed", NULL, 0);
     if (rc != CLI_EXIT_OK && job->reason) fprintf(stderr, "sylva: %s\n", store_error(job->st));
   }
-  if (rc == CLI_EXIT_OK) {
+  if (rc == CLI_EXIT_OK && !job->silent) {
     char *done = sylva_encode_done_line(sylva_world_iteration(w), job->reason);
     if (!done || !grow_put_line(done)) {
       fprintf(stderr, "sylva: %s\n", done ? "cannot write to stdout" : "out of memory");
       rc = CLI_EXIT_FAILURE;
     }
     free(done);
-  } else {
+  } else if (rc != CLI_EXIT_OK) {
     job->reason = NULL;
   }
   return rc;

@@ -16,6 +16,7 @@ typedef struct grow_job {
   sylva_world *w;
   int limit;          /**< the iteration limit */
   bool progress;      /**< show a progress bar on stderr */
+  bool silent;        /**< print no stats or done lines on stdout */
   store *st;          /**< NULL: not stored */
   int64_t run;        /**< the stored run */
   int snapshot_every; /**< iterations between full snapshots when stored */
@@ -23,7 +24,7 @@ typedef struct grow_job {
 } grow_job;
 
 /** Grows until every stem finished or the limit, printing one line per iteration
- *  and the done line; stores every iteration when job->st is set (a full snapshot
+ *  and the done line (unless silent); stores every iteration when job->st is set (a full snapshot
  *  every snapshot_every iterations and at the end). Returns the exit status. */
 int grow_run(grow_job *job);
 

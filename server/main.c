@@ -23,6 +23,9 @@ static void usage(FILE *f) {
         "  runs --db FILE          list the stored runs\n"
         "  export --db FILE --name NAME --format F -o OUT\n"
         "                          a stored iteration as skeleton, obj, ply or csv\n"
+        "  render (--db FILE --name NAME | SCENARIO.json) -o OUT.png|svg|pdf\n"
+        "                          front, side and top views of a stored iteration or\n"
+        "                          of a scenario grown to its end\n"
         "  serve                   the daemon: grows runs, streams them over WebSockets\n"
         "\n"
         "Options:\n"
@@ -53,6 +56,7 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "resume") == 0) return cmd_resume(argc - 1, argv + 1);
   if (strcmp(cmd, "runs") == 0) return cmd_runs(argc - 1, argv + 1);
   if (strcmp(cmd, "export") == 0) return cmd_export(argc - 1, argv + 1);
+  if (strcmp(cmd, "render") == 0) return cmd_render(argc - 1, argv + 1);
   if (strcmp(cmd, "serve") == 0) return cmd_serve(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);

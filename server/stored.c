@@ -65,6 +65,19 @@ int cli_open_run(const char *command, const char *db, const char *name, store **
   return rc;
 }
 
+int cli_stored_iteration(const char *db, const store_run *r, bool given, uint64_t iteration,
+                         int *at) {
+  *at = r->last_iteration;
+  if (!given) return CLI_EXIT_OK;
+  if (iteration > (uint64_t)r->last_iteration) {
+    fprintf(stderr, "sylva: %s: run \"%s\" has no iteration %llu (it has 0 to %d)\n", db,
+            r->name, (unsigned long long)iteration, r->last_iteration);
+    return CLI_EXIT_USAGE;
+  }
+  *at = (int)iteration;
+  return CLI_EXIT_OK;
+}
+
 int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
   if (store_world_at(st, r->id, at, cli_store_warn, edit_replay, out)) {
     fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));

@@ -5,6 +5,7 @@
 #define SYLVA_SERVER_STORED_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "grow.h"
 #include "store.h"
@@ -28,6 +29,12 @@ int cli_open_run(const char *command, const char *db, const char *name, store **
 
 /** Finds run `name`; exit status 2 with a message when there is none. */
 int cli_store_find(store *st, const char *db, const char *name, store_run *out);
+
+/** The iteration of run r a command was asked for: `iteration` when given,
+ *  otherwise the last stored one. Exit status 2 with a message naming the stored
+ *  range when the run has no such iteration. */
+int cli_stored_iteration(const char *db, const store_run *r, bool given, uint64_t iteration,
+                         int *at);
 
 /** The world of a stored run at iteration `at`: the newest good snapshot at or
  *  before it, regrown to `at`, each regrown iteration checked against the stored

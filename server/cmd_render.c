@@ -1,0 +1,190 @@
+/* `sylva render`: a stored iteration, or a scenario grown to its end, drawn as
+ * front, side and top views into a PNG, SVG or PDF file (render.h). */
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <cairo.h>
+#include <fontconfig/fontconfig.h>
+
+#include "commands.h"
+#include "grow.h"
+#include "input.h"
+#include "options.h"
+#include "outfile.h"
+#include "render.h"
+#include "stored.h"
+#include "sylva/scenario.h"
+
+enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_SEED, OPT_ITERATIONS, OPT_VIEW, OPT_WIDTH, OPT_OUT,
+       OPT_HELP, OPT_COUNT };
+
+static const cli_option render_cli_options[OPT_COUNT] = {
+    [OPT_DB] = {"db", 0, "FILE", "the store holding the run"},
+    [OPT_NAME] = {"name", 0, "NAME", "the stored run"},
+    [OPT_ITERATION] = {"iteration", 0, "T", "the stored iteration (default: the last)"},
+    [OPT_SEED] = {"seed", 0, "N", "SCENARIO: override its seed (0 to 2^53)"},
+    [OPT_ITERATIONS] = {"iterations", 0, "N", "SCENARIO: override its iteration limit (1 to 100000)"},
+    [OPT_VIEW] = {"view", 0, "V", "front, side, top or all (default all)"},
+    [OPT_WIDTH] = {"width", 0, "PX", "picture width (default 500 per view)"},
+    [OPT_OUT] = {"output", 'o', "OUT", "the file to write: OUT.png, OUT.svg or OUT.pdf (required)"},
+    [OPT_HELP] = {"help", 'h', NULL, "show this help"},
+};
+
+static void render_usage(FILE *f) {
+  fputs("Usage: sylva render --db FILE --name NAME [--iteration T] [--view V] [--width PX] -o OUT\n"
+        "       sylva render SCENARIO.json [--seed N] [--iterations N] [--view V] [--width PX]\n"
+        "                    -o OUT\n"
+        "\n"
+        "Draws a stored iteration of a run, or a scenario grown until every stem has\n"
+        "finished or its iteration limit, as orthographic views of the world's box:\n"
+        "  front  x-z, looking along +y (x to the right)\n"
+        "  side   y-z, looking along -x (y to the right)\n"
+        "  top    x-y, seen from above (x to the right, y up)\n"
+        "  all    the three side by side (the default)\n"
+        "Internodes are lines as wide as their diameter (at least half a pixel), one\n"
+        "colour per plant; obstacles are translucent grey boxes; front and side show\n"
+        "the ground. Each view has scales in metres (equal on both axes), and a title\n"
+        "line names the run, the iteration and the live nodes.\n"
+        "The format follows OUT's extension: .png, .svg or .pdf (SVG and PDF are\n"
+        "vector pictures, one point per pixel). OUT is written to OUT.tmp, then renamed.\n"
+        "\n"
+        "Options:\n",
+        f);
+  cli_print_options(f, render_cli_options, OPT_COUNT);
+}
+
+/* What the command line asked for. */
+typedef struct render_args {
+  const char *db, *name, *scenario, *seed_text, *out;
+  uint64_t iteration, seed, iterations;
+  bool has_iteration;
+  render_options ro;
+} render_args;
+
+/* Parses argv into a; returns -1 to go on, or the exit status to end with. */
+static int parse_args(int argc, char **argv, render_args *a) {
+  cli_parser p;
+  cli_parser_init(&p, "render", render_cli_options, OPT_COUNT, argc, argv);
+  uint64_t width = 0;
+  const char *arg;
+  int first = argc, opt;
+  while ((opt = cli_next(&p, &arg, &first)) >= 0) {
+    switch (opt) {
+    case OPT_DB: a->db = arg; break;
+    case OPT_NAME: a->name = arg; break;
+    case OPT_ITERATION:
+      if (cli_parse_u64("render", "iteration", arg, 0, SYLVA_SCENARIO_MAX_ITERATIONS,
+                        &a->iteration))
+        return CLI_EXIT_USAGE;
+      a->has_iteration = true;
+      break;
+    case OPT_SEED:
+      if (cli_parse_u64("render", "seed", arg, 0, (uint64_t)SYLVA_SCENARIO_SEED_MAX, &a->seed))
+        return CLI_EXIT_USAGE;
+      a->seed_text = arg;
+      break;
+    case OPT_ITERATIONS:
+      if (cli_parse_u64("render", "iterations", arg, 1, SYLVA_SCENARIO_MAX_ITERATIONS,
+                        &a->iterations))
+        return CLI_EXIT_USAGE;
+      break;
+    case OPT_VIEW:
+      if (!render_view_parse(arg, &a->ro.view))
+        return cli_usage_error("render", "--view: expected " RENDER_VIEW_NAMES ", got '%s'", arg);
+      break;
+    case OPT_WIDTH:
+      if (cli_parse_u64("render", "width", arg, RENDER_MIN_WIDTH, RENDER_MAX_SIZE, &width))
+        return CLI_EXIT_USAGE;
+      a->ro.width = (int)width;
+      break;
+    case OPT_OUT: a->out = arg; break;
+    default:
+      render_usage(stdout);
+      return CLI_EXIT_OK;
+    }
+  }
+  if (opt == -2) return CLI_EXIT_USAGE;
+  if (argc - first > 1) return cli_usage_error("render", "unexpected argument '%s'", argv[first + 1]);
+  if (argc - first == 1) a->scenario = argv[first];
+  if (a->scenario && (a->db || a->name || a->has_iteration))
+    return cli_usage_error("render", "--db, --name and --iteration are for a stored run, not "
+                                     "for SCENARIO.json");
+  if (!a->scenario && (a->seed_text || a->iterations))
+    return cli_usage_error("render", "--seed and --iterations need SCENARIO.json");
+  if (!a->scenario && !a->db && !a->name)
+    return cli_usage_error("render", "expected --db FILE --name NAME, or SCENARIO.json");
+  if (!a->out || !a->out[0]) return cli_usage_error("render", "-o OUT is required");
+  if (!render_format_from_path(a->out, &a->ro.format))
+    return cli_usage_error("render", "-o: '%s' does not end in " RENDER_FORMAT_NAMES, a->out);
+  return -1;
+}
+
+/* Draws w into the already opened output. */
+static int render_to(cli_outfile *o, const sylva_world *w, const render_options *ro) {
+  char err[512];
+  int failed = render_write(o->f, w, ro, err, sizeof err);
+  if (failed == RENDER_EWRITE)
+    fprintf(stderr, "sylva: %s: %s\n", o->path, err);
+  else if (failed)
+    fprintf(stderr, "sylva: render: %s\n", err);
+  return failed ? CLI_EXIT_FAILURE : CLI_EXIT_OK;
+}
+
+/* The stored form: --db FILE --name NAME [--iteration T]. */
+static int render_stored(render_args *a) {
+  store *st;
+  store_run r;
+  int rc = cli_open_run("render", a->db, a->name, &st, &r);
+  if (rc) return rc;
+  int at = 0;
+  rc = cli_stored_iteration(a->db, &r, a->has_iteration, a->iteration, &at);
+  cli_outfile o = {0};
+  if (rc == CLI_EXIT_OK) rc = cli_outfile_open(&o, "-o", a->out, false);
+  sylva_world *w = NULL;
+  if (rc == CLI_EXIT_OK) rc = cli_store_world_at(st, &r, at, &w);
+  a->ro.name = r.name;
+  if (rc == CLI_EXIT_OK) rc = render_to(&o, w, &a->ro);
+  rc = cli_outfile_close(&o, rc);
+  if (w) sylva_world_destroy(w);
+  store_run_free(&r);
+  store_close(st);
+  return rc;
+}
+
+/* The scenario form: SCENARIO.json grown silently to its end. */
+static int render_scenario(render_args *a) {
+  sylva_scenario *s;
+  int rc = cli_load_scenario(a->scenario, &s);
+  if (rc) return rc;
+  if (a->seed_text) s->seed = a->seed;
+  /* open the output now, so that a bad path fails before the growing */
+  cli_outfile o = {0};
+  rc = cli_outfile_open(&o, "-o", a->out, false);
+  sylva_world *w = NULL;
+  if (rc == CLI_EXIT_OK) rc = cli_build_world(a->scenario, s, &w);
+  grow_job job = {.label = a->scenario, .w = w,
+                  .limit = a->iterations ? (int)a->iterations : s->iterations,
+                  .progress = isatty(STDERR_FILENO), .silent = true};
+  if (rc == CLI_EXIT_OK) rc = grow_run(&job);
+  a->ro.name = s->name;
+  if (rc == CLI_EXIT_OK) rc = render_to(&o, w, &a->ro);
+  rc = cli_outfile_close(&o, rc);
+  if (w) sylva_world_destroy(w);
+  sylva_scenario_free(s);
+  return rc;
+}
+
+int cmd_render(int argc, char **argv) {
+  render_args a = {.ro = {.format = RENDER_PNG, .view = RENDER_ALL, .width = 0, .name = NULL}};
+  int rc = parse_args(argc, argv, &a);
+  if (rc >= 0) return rc;
+  rc = a.scenario ? render_scenario(&a) : render_stored(&a);
+  /* cairo's font caches and fontconfig's hold memory until the process ends;
+   * free them so that leak checkers see none */
+  cairo_debug_reset_static_data();
+  FcFini();
+  return rc;
+}

@@ -1,0 +1,110 @@
+/* sylva server: a picture of a world, drawn with cairo as PNG, SVG or PDF: front,
+ * side and top orthographic views (`sylva render`).
+ *
+ * Views (z is up; every view is seen from outside the world's box):
+ *   front  the x-z plane looking along +y: x to the right, z up;
+ *   side   the y-z plane looking along -x: y to the right, z up;
+ *   top    the x-y plane seen from above (looking along -z): x to the right, y up.
+ * RENDER_ALL puts front, side and top side by side, in that order.
+ *
+ * Each panel spans the world's box in its two axes (so walls and world sides
+ * show), at one scale for both axes and for every panel of the picture. In it,
+ * clipped to it and in this order:
+ *   - a white background;
+ *   - every obstacle as a translucent grey rectangle (its box projected,
+ *     RENDER_OBSTACLE_FILL) with a darker outline;
+ *   - every internode (a node with a parent) as a straight line from its parent to
+ *     the node, as wide as the node's diameter (2 * radius * scale, at least
+ *     RENDER_MIN_LINE), with round caps, in its plant's colour (RENDER_PALETTE,
+ *     cycled by plant id). Thin internodes are drawn first and thick ones last
+ *     (by radius, then id), so trunks stay visible; branches are drawn over the
+ *     obstacles, never hidden by them;
+ *   - the frame of the world's box and, in front and side, over it the ground
+ *     line at z = the world's min z (the ground; 0 in the ready scenarios).
+ * Around each panel: its title above, ticks and labels in metres along the bottom
+ * and the left (every multiple of a 1, 2 or 5 x 10^k metre step, the smallest
+ * step that leaves at least RENDER_TICK_SPACING between ticks) and the axis names
+ * ("x (m)", "z (m)", ...). Above everything, a title line: the name, the
+ * iteration and the number of live nodes.
+ *
+ * The mapping from metres to the picture (pixels for PNG; points for SVG and PDF,
+ * one point per pixel), with n panels, panel k spanning [u0_k, u1_k] x
+ * [v0_k, v1_k] metres and W the picture's width:
+ *   scale s = (W - n * (RENDER_MARGIN_LEFT + RENDER_MARGIN_RIGHT)) / sum_k (u1_k - u0_k),
+ *             lowered, if need be, until the height fits RENDER_MAX_SIZE;
+ *   panel k's left edge  L_k = RENDER_MARGIN_LEFT + sum_{j<k} (RENDER_MARGIN_LEFT
+ *                              + (u1_j - u0_j) * s + RENDER_MARGIN_RIGHT);
+ *   panels' top edge     T   = RENDER_TITLE_HEIGHT + RENDER_PANEL_TITLE_HEIGHT;
+ *   a point (u, v) is drawn at (L_k + (u - u0_k) * s, T + (v1_k - v) * s);
+ *   the height is ceil(T + max_k (v1_k - v0_k) * s + RENDER_MARGIN_BOTTOM).
+ * The same world and options always give the same picture. */
+#ifndef SYLVA_SERVER_RENDER_H
+#define SYLVA_SERVER_RENDER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#include "sylva/world.h"
+
+/** Output formats. */
+typedef enum render_format { RENDER_PNG, RENDER_SVG, RENDER_PDF } render_format;
+
+/** What to draw. */
+typedef enum render_view { RENDER_FRONT, RENDER_SIDE, RENDER_TOP, RENDER_ALL } render_view;
+
+/** The view names, for messages. */
+#define RENDER_VIEW_NAMES "front, side, top or all"
+/** The format names (file extensions), for messages. */
+#define RENDER_FORMAT_NAMES ".png, .svg or .pdf"
+
+/* The layout, in pixels (points for SVG and PDF). */
+#define RENDER_MARGIN_LEFT 64.0        /**< left of each panel: tick labels, axis name */
+#define RENDER_MARGIN_RIGHT 24.0       /**< right of each panel */
+#define RENDER_MARGIN_BOTTOM 52.0      /**< below the panels: tick labels, axis name */
+#define RENDER_TITLE_HEIGHT 34.0       /**< the title line at the top */
+#define RENDER_PANEL_TITLE_HEIGHT 26.0 /**< each panel's title, above it */
+#define RENDER_TICK_SPACING 50.0       /**< least distance between two ticks */
+#define RENDER_MIN_LINE 0.5            /**< thinnest internode */
+
+/** Widths a picture may have (and the greatest height). */
+#define RENDER_MIN_WIDTH 200
+#define RENDER_MAX_SIZE 16384
+/** The default width per panel: 1500 for all three views, 500 for one. */
+#define RENDER_PANEL_WIDTH 500
+
+/** Plant colours, 0xRRGGBB, the viewer's (web/scene.mjs); plant id i gets
+ *  RENDER_PALETTE[i % RENDER_PALETTE_SIZE]. */
+#define RENDER_PALETTE_SIZE 12
+extern const unsigned render_palette[RENDER_PALETTE_SIZE];
+
+/** Obstacle fill: grey RENDER_OBSTACLE_GREY (0..1) at RENDER_OBSTACLE_ALPHA; over
+ *  the white background it is the grey 1 - ALPHA * (1 - GREY). */
+#define RENDER_OBSTACLE_GREY 0.55
+#define RENDER_OBSTACLE_ALPHA 0.35
+
+/** The view called `name` (front, side, top, all); false for none. */
+bool render_view_parse(const char *name, render_view *out);
+
+/** The format of a file name by its extension (.png, .svg, .pdf; any case);
+ *  false for anything else. */
+bool render_format_from_path(const char *path, render_format *out);
+
+/** How to draw. */
+typedef struct render_options {
+  render_format format;
+  render_view view;
+  int width;        /**< RENDER_MIN_WIDTH..RENDER_MAX_SIZE; 0: RENDER_PANEL_WIDTH per panel */
+  const char *name; /**< the run's or scenario's name, for the title */
+} render_options;
+
+/** Returned by render_write when writing to the stream failed. */
+#define RENDER_EWRITE (-2)
+
+/** Draws w as o asks and writes the picture to f (flushed, not closed). Returns 0;
+ *  -1 for bad options or when cairo failed (out of memory); RENDER_EWRITE when
+ *  writing to f failed; err then says why in one line. */
+int render_write(FILE *f, const sylva_world *w, const render_options *o, char *err,
+                 size_t errlen);
+
+#endif

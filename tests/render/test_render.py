@@ -1,0 +1,347 @@
+"""`sylva render` through the real binary (Python 3 standard library only).
+
+meson runs `python3 test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR PART`, PART:
+  formats   a small stored run drawn as PNG, SVG and PDF, checked with `file`,
+            `rsvg-convert` and `pdfinfo`;
+  pixels    the tree beside a wall drawn from the front into a PNG, decoded here:
+            tree-coloured pixels on the open side of the wall, none inside it;
+  errors    bad views, extensions, runs, iterations and paths: exit 2 (1 for a
+            failed write), a message naming the problem, no output file;
+  scenario  the scenario form, grown to its end, equals the stored run's picture.
+The layout constants and the palette are read from server/render.h and
+server/render.c, so the pixel test maps metres to pixels as the renderer does.
+"""
+import json
+import math
+import os
+import re
+import shutil
+import struct
+import subprocess
+import sys
+import zlib
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "store"))
+from store_common import CRASH_MARKERS, Checks, Env  # noqa: E402
+
+SCENARIO = "wall_small.json"
+RUN = "small wall"
+
+
+class Png:
+    """An 8-bit RGB or RGBA, non-interlaced PNG (what cairo writes), decoded."""
+
+    def __init__(self, path):
+        with open(path, "rb") as f:
+            data = f.read()
+        if data[:8] != b"\x89PNG\r\n\x1a\n":
+            raise ValueError("%s: not a PNG" % path)
+        pos, idat, header = 8, b"", None
+        while pos < len(data):
+            length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+            body = data[pos + 8:pos + 8 + length]
+            if kind == b"IHDR":
+                header = struct.unpack(">IIBBBBB", body)
+            elif kind == b"IDAT":
+                idat += body
+            elif kind == b"IEND":
+                break
+            pos += 12 + length
+        self.width, self.height, depth, color, _, _, interlace = header
+        if depth != 8 or color not in (2, 6) or interlace != 0:
+            raise ValueError("unexpected PNG type: depth %d, colour %d, interlace %d"
+                             % (depth, color, interlace))
+        bpp = self.bpp = 3 if color == 2 else 4
+        raw = zlib.decompress(idat)
+        stride = self.width * bpp
+        self.rows, prev = [], bytearray(stride)
+        for y in range(self.height):
+            start = y * (stride + 1)
+            kind, line = raw[start], bytearray(raw[start + 1:start + 1 + stride])
+            if kind == 2:  # Up, most rows: one pass without the neighbours
+                line = bytearray((a + b) & 255 for a, b in zip(line, prev))
+            elif kind in (1, 3, 4):
+                for i in range(stride):
+                    a = line[i - bpp] if i >= bpp else 0
+                    b = prev[i]
+                    c = prev[i - bpp] if i >= bpp else 0
+                    if kind == 1:
+                        line[i] = (line[i] + a) & 255
+                    elif kind == 3:
+                        line[i] = (line[i] + (a + b) // 2) & 255
+                    else:
+                        p = a + b - c
+                        pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                        pred = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+                        line[i] = (line[i] + pred) & 255
+            self.rows.append(bytes(line))
+            prev = line
+
+    def pixel(self, x, y):
+        """(r, g, b) at column x, row y."""
+        return tuple(self.rows[y][x * self.bpp:x * self.bpp + 3])
+
+
+def png_size(path):
+    """(width, height) from a PNG's header."""
+    with open(path, "rb") as f:
+        head = f.read(24)
+    return struct.unpack(">II", head[16:24])
+
+
+def render_constants(server_dir):
+    """The layout defines of render.h and the first palette colour of render.c."""
+    with open(os.path.join(server_dir, "render.h")) as f:
+        defines = {m.group(1): float(m.group(2)) for m in
+                   re.finditer(r"#define (RENDER_\w+) ([0-9.]+)", f.read())}
+    with open(os.path.join(server_dir, "render.c")) as f:
+        m = re.search(r"render_palette\[RENDER_PALETTE_SIZE\] = \{\s*0x([0-9a-fA-F]{6})", f.read())
+    first = int(m.group(1), 16)
+    defines["palette0"] = ((first >> 16) & 255, (first >> 8) & 255, first & 255)
+    return defines
+
+
+def tree_coloured(pixel, colour, backgrounds, tol=6):
+    """Whether pixel is the plant colour over one of the backgrounds with a coverage
+    of at least one half (antialiased twig edges count when mostly covered)."""
+    for bg in backgrounds:
+        k = max(range(3), key=lambda i: abs(colour[i] - bg[i]))
+        alpha = (pixel[k] - bg[k]) / (colour[k] - bg[k])
+        if alpha >= 0.5 and all(abs(pixel[i] - (bg[i] + alpha * (colour[i] - bg[i]))) <= tol
+                                for i in range(3)):
+            return True
+    return False
+
+
+def no_output(path):
+    return not os.path.exists(path) and not os.path.exists(path + ".tmp")
+
+
+def clean_stderr(err):
+    return not any(m in err for m in CRASH_MARKERS)
+
+
+class RenderEnv(Env):
+    def __init__(self, argv):
+        super().__init__(argv)
+        self.server = os.path.abspath(argv[3])
+        self.db = self.path("render.db")
+
+    def stored_run(self, c):
+        rc, _, err = self.sylva("run", self.scenario(SCENARIO), "--db", self.db,
+                                "--iterations", 4, "--quiet-progress")
+        return c.check(rc == 0, "sylva run --db stores the small run", err)
+
+    def render(self, *args):
+        return self.sylva("render", *args)
+
+
+def part_formats(env, c):
+    if not env.stored_run(c):
+        return
+    for ext, magic in (("png", "PNG image data"), ("svg", "SVG Scalable Vector Graphics image"),
+                       ("pdf", "PDF document")):
+        out = env.path("run." + ext)
+        rc, stdout, err = env.render("--db", env.db, "--name", RUN, "-o", out)
+        c.check(rc == 0 and stdout == "" and clean_stderr(err) and err == "",
+                "render -o run.%s exits 0 silently" % ext, "%s %r %s" % (rc, stdout, err))
+        c.check(os.path.exists(out) and not os.path.exists(out + ".tmp"),
+                "run.%s written, no run.%s.tmp left" % (ext, ext))
+        if not os.path.exists(out):
+            continue
+        kind = subprocess.run(["file", "-b", out], capture_output=True).stdout.decode()
+        c.check(kind.startswith(magic), "file says %s is %s" % (out, magic), kind)
+    svg, pdf = env.path("run.svg"), env.path("run.pdf")
+    if os.path.exists(svg):
+        p = subprocess.run(["rsvg-convert", "-o", env.path("svg.png"), svg], capture_output=True)
+        c.check(p.returncode == 0 and os.path.getsize(env.path("svg.png")) > 0,
+                "rsvg-convert converts the SVG", p.stderr.decode())
+    if os.path.exists(pdf):
+        p = subprocess.run(["pdfinfo", pdf], capture_output=True)
+        info = p.stdout.decode()
+        c.check(p.returncode == 0 and re.search(r"^Pages:\s+1$", info, re.M),
+                "pdfinfo reads the PDF: one page", info + p.stderr.decode())
+    # the default picture is 500 per view; --width, --view and --iteration are honoured
+    w, _ = png_size(env.path("run.png"))
+    c.check(w == 1500, "all three views: 1500 pixels wide by default", w)
+    for view in ("front", "side", "top"):
+        out = env.path("%s.png" % view)
+        rc, _, err = env.render("--db", env.db, "--name", RUN, "--view", view, "--width", 640,
+                                "--iteration", 2, "-o", out)
+        c.check(rc == 0 and os.path.exists(out), "render --view %s --iteration 2" % view, err)
+        if rc == 0:
+            c.check(png_size(out)[0] == 640, "--width 640 gives 640 pixels (%s)" % view)
+
+
+def part_pixels(env, c):
+    if not env.stored_run(c):
+        return
+    k = render_constants(env.server)
+    with open(env.scenario(SCENARIO)) as f:
+        scenario = json.load(f)
+    lo, hi = scenario["world"]["min"], scenario["world"]["max"]
+    wall = scenario["obstacles"][0]
+    width = 800
+    out = env.path("front.png")
+    rc, _, err = env.render("--db", env.db, "--name", RUN, "--view", "front", "--width", width,
+                            "-o", out)
+    if not c.check(rc == 0, "render --view front", err):
+        return
+    png = Png(out)
+    w, h = png.width, png.height
+    # render.h: one panel, x to the right, z up
+    scale = (width - k["RENDER_MARGIN_LEFT"] - k["RENDER_MARGIN_RIGHT"]) / (hi[0] - lo[0])
+    top = k["RENDER_TITLE_HEIGHT"] + k["RENDER_PANEL_TITLE_HEIGHT"]
+
+    def px(x):
+        return k["RENDER_MARGIN_LEFT"] + (x - lo[0]) * scale
+
+    def py(z):
+        return top + (hi[2] - z) * scale
+
+    c.check(w == width and h == math.ceil(top + (hi[2] - lo[2]) * scale
+                                          + k["RENDER_MARGIN_BOTTOM"]),
+            "the picture's size follows render.h", (w, h))
+    grey = round(255 * (1 - k["RENDER_OBSTACLE_ALPHA"] * (1 - k["RENDER_OBSTACLE_GREY"])))
+    tree = k["palette0"]
+    backgrounds = ((255, 255, 255), (grey, grey, grey))
+
+    def is_grey(p):
+        return abs(p[0] - grey) <= 3 and abs(p[1] - grey) <= 3 and abs(p[2] - grey) <= 3
+
+    def box(x0, x1, z0, z1, inset):
+        """Pixel columns and rows whose centres lie inside the box of metres,
+        shrunk by inset pixels, clipped to the picture."""
+        cols = range(max(0, int(px(x0) + inset)), min(w, int(px(x1) - inset)))
+        lines = range(max(0, int(py(z1) + inset)), min(h, int(py(z0) - inset)))
+        return [(x, y) for y in lines for x in cols]
+
+    # The wall's rectangle, where the mapping puts it, is the obstacle grey.
+    wall_px = box(wall["min"][0], wall["max"][0], wall["min"][2], wall["max"][2], 3)
+    greys = sum(1 for x, y in wall_px if is_grey(png.pixel(x, y)))
+    c.check(wall_px and greys >= 0.95 * len(wall_px),
+            "the wall's projected rectangle is obstacle grey (%d)" % grey,
+            "%d of %d pixels" % (greys, len(wall_px)))
+    # ... and the grey pixels of the panel lie in that rectangle (the mapping agrees)
+    panel = box(lo[0], hi[0], lo[2], hi[2], 2)
+    found = [(x, y) for x, y in panel if is_grey(png.pixel(x, y))]
+    if c.check(found, "grey pixels in the panel"):
+        xs = [x for x, _ in found]
+        ys = [y for _, y in found]
+        expect = (px(wall["min"][0]), px(wall["max"][0]), py(wall["max"][2]), py(wall["min"][2]))
+        got = (min(xs), max(xs) + 1, min(ys), max(ys) + 1)
+        c.check(all(abs(a - b) <= 3 for a, b in zip(got, expect)),
+                "the grey rectangle is where render.h maps the wall", "%s vs %s" % (got, expect))
+
+    seen = {}  # a picture has few distinct colours
+
+    def count_tree(pixels):
+        n = 0
+        for x, y in pixels:
+            p = png.pixel(x, y)
+            if p not in seen:
+                seen[p] = tree_coloured(p, tree, backgrounds)
+            n += seen[p]
+        return n
+
+    # Tree-coloured pixels on the open side of the wall, none inside it.
+    open_side = box(lo[0], wall["min"][0], lo[2], hi[2], 2)
+    inside = box(wall["min"][0], wall["max"][0], wall["min"][2], wall["max"][2], 2)
+    n_open, n_inside = count_tree(open_side), count_tree(inside)
+    c.check(n_open >= 10, "tree-coloured pixels on the open side of the wall (x < %g)"
+            % wall["min"][0], n_open)
+    c.check(n_inside == 0, "no tree-coloured pixel inside the wall", n_inside)
+    # Control: the same count finds the trunk, a rectangle of the wall's width at the root.
+    trunk = box(-0.1, 0.1, lo[2], lo[2] + 0.2, 2)
+    c.check(count_tree(trunk) > 0, "control: the count finds the trunk at x = 0",
+            count_tree(trunk))
+
+
+def part_errors(env, c):
+    if not env.stored_run(c):
+        return
+    out = env.path("bad.png")
+    base = ["--db", env.db, "--name", RUN]
+    cases = [
+        (base + ["--view", "back", "-o", out], 2, "--view: expected front, side, top or all"),
+        (base + ["-o", env.path("bad.gif")], 2, ".png, .svg or .pdf"),
+        (base + ["-o", env.path("bad")], 2, ".png, .svg or .pdf"),
+        (["--db", env.db, "--name", "nosuch", "-o", out], 2, 'no run named "nosuch"'),
+        (base + ["--iteration", 99, "-o", out], 2, "has no iteration 99 (it has 0 to 4)"),
+        (base + ["--width", 10, "-o", out], 2, "--width"),
+        (base + ["-o", env.path("no/such/dir/bad.png")], 2, "cannot create"),
+        (base, 2, "-o OUT is required"),
+        (["--db", env.db, "-o", out], 2, "--name NAME is required"),
+        (["-o", out], 2, "expected --db FILE --name NAME, or SCENARIO.json"),
+        ([env.scenario(SCENARIO), "--db", env.db, "-o", out], 2, "are for a stored run"),
+        (base + ["--seed", 3, "-o", out], 2, "--seed and --iterations need SCENARIO.json"),
+        ([env.path("missing.json"), "-o", out], 2, "missing.json"),
+        (["--db", env.path("nodb.db"), "--name", RUN, "-o", out], 2, "nodb.db"),
+    ]
+    for args, status, words in cases:
+        for path in (out, env.path("bad.gif"), env.path("bad")):
+            if os.path.exists(path):
+                os.remove(path)
+        rc, stdout, err = env.render(*args)
+        what = "render %s" % " ".join(str(a) for a in args)
+        c.check(rc == status and words in err and clean_stderr(err),
+                "%s: exit %d, says '%s'" % (what, status, words), "%s: %s" % (rc, err))
+        c.check(no_output(out) and no_output(env.path("bad.gif")) and no_output(env.path("bad")),
+                "%s: no output file left" % what)
+    # A failed write (OUT is a directory, so the rename fails): exit 1, no OUT.tmp left.
+    target = env.path("dir.png")
+    os.mkdir(target)
+    rc, _, err = env.render(*base, "-o", target)
+    c.check(rc == 1 and "dir.png" in err and clean_stderr(err)
+            and not os.path.exists(target + ".tmp"),
+            "render -o DIRECTORY.png: exit 1 naming it, no .tmp left", "%s: %s" % (rc, err))
+    rc, stdout, _ = env.render("--help")
+    c.check(rc == 0 and stdout.startswith("Usage: sylva render"), "render --help")
+
+
+def part_scenario(env, c):
+    scenario = env.scenario(SCENARIO)
+    # grown to its end (the file's own limit, 4) it equals the stored run's last iteration
+    if not env.stored_run(c):
+        return
+    direct, stored = env.path("direct.png"), env.path("stored.png")
+    rc, stdout, err = env.render(scenario, "-o", direct)
+    c.check(rc == 0 and stdout == "" and clean_stderr(err), "render SCENARIO -o direct.png",
+            "%s %r %s" % (rc, stdout, err))
+    rc, _, err = env.render("--db", env.db, "--name", RUN, "-o", stored)
+    c.check(rc == 0, "render the stored run", err)
+    if os.path.exists(direct) and os.path.exists(stored):
+        with open(direct, "rb") as a, open(stored, "rb") as b:
+            c.check(a.read() == b.read(),
+                    "the scenario grown to its end draws the stored run's last iteration")
+    out = env.path("seeded.svg")
+    rc, _, err = env.render(scenario, "--seed", 5, "--iterations", 2, "--view", "side", "-o", out)
+    c.check(rc == 0 and os.path.exists(out) and clean_stderr(err),
+            "render SCENARIO --seed 5 --iterations 2 --view side -o seeded.svg", err)
+    if os.path.exists(out):
+        kind = subprocess.run(["file", "-b", out], capture_output=True).stdout.decode()
+        c.check(kind.startswith("SVG"), "seeded.svg is an SVG", kind)
+
+
+PARTS = {"formats": part_formats, "pixels": part_pixels, "errors": part_errors,
+         "scenario": part_scenario}
+
+
+def main():
+    if len(sys.argv) != 5 or sys.argv[4] not in PARTS:
+        sys.exit("usage: test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR "
+                 + "|".join(PARTS))
+    for tool in ("file", "rsvg-convert", "pdfinfo"):
+        if not shutil.which(tool):
+            sys.exit("test_render.py: %s is missing (scripts/bootstrap installs it)" % tool)
+    env = RenderEnv(sys.argv)
+    c = Checks()
+    try:
+        PARTS[sys.argv[4]](env, c)
+    finally:
+        env.cleanup()
+    c.finish()
+
+
+if __name__ == "__main__":
+    main()
