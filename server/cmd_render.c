@@ -157,7 +157,7 @@ static int render_stored(render_args *a) {
 /* The scenario form: SCENARIO.json grown silently to its end. */
 static int render_scenario(render_args *a) {
   sylva_scenario *s;
-  int rc = cli_load_scenario(a->scenario, &s);
+  int rc = cli_load_scenario(a->scenario, SYLVA_SCENARIO_NEED_PLANTS, &s);
   if (rc) return rc;
   if (a->seed_text) s->seed = a->seed;
   /* open the output now, so that a bad path fails before the growing */
