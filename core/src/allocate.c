@@ -60,7 +60,7 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
     items[0] = apex;
     from = 1;
   }
-  qsort(items + from, (size_t)(nb - from), sizeof *items, cmp_ranked);
+  if (nb - from > 1) qsort(items + from, (size_t)(nb - from), sizeof *items, cmp_ranked);
   double sum = 0.0;
   for (int rank = 0; rank < nb; rank++) {
     double wr = sylva__priority_weight(rank, nb, d->k, d->w1, d->w2, d->w3);
@@ -150,7 +150,8 @@ int sylva__allocate(sylva_world *w, int iteration) {
     }
   }
   /* Shoots of a stem are appended in decreasing R_i (slot breaks ties). */
-  qsort(w->sprouts.data, w->sprouts.len, sizeof *w->sprouts.data, cmp_sprout);
+  if (w->sprouts.len > 1) /* none may have been allocated yet: no NULL to qsort */
+    qsort(w->sprouts.data, w->sprouts.len, sizeof *w->sprouts.data, cmp_sprout);
   size_t j = 0;
   for (int k = 0; k <= w->stem_count; k++) {
     while (j < w->sprouts.len && w->sprouts.data[j].stem < k) j++;
