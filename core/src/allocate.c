@@ -139,7 +139,7 @@ int sylva__allocate(sylva_world *w, int iteration) {
       if (caps[k] <= 0 || d->allocation != SYLVA_ALLOC_NONE) continue;
       bool apex = s->axis_child[i] < 0;
       if (!apex && (s->lateral_child[i] >= 0 || (s->flags[i] & SYLVA__NODE_SCAR) ||
-                    iteration - s->birth[i] > d->leaf_age))
+                    !sylva__bears_leaves(d, s->birth[i], iteration)))
         continue;
       int v[3];
       sylva__node_voxel(w, (int32_t)i, v);

@@ -16,7 +16,7 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
     }
     int age = iteration - s->birth[i];
     double L = 0.0;
-    if (age <= sp->def.leaf_age) { /* only leaf-bearing nodes collect (docs/model.md) */
+    if (sylva__bears_leaves(&sp->def, s->birth[i], iteration)) {
       int v[3];
       sylva__node_voxel(w, (int32_t)i, v);
       double l = sylva__grid_light(&w->grid, v);

@@ -13,9 +13,13 @@ int sylva__shed(sylva_world *w, int iteration) {
    * light in any shade and hold up dark branches only while they still grow. */
   sylva__light_collect(w, iteration + 1, NULL);
   int32_t *n = w->count; /* leaf-bearing nodes of each subtree */
-  for (size_t i = 0; i < s->count; i++) {
-    const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
-    n[i] = iteration + 1 - s->birth[i] <= d->leaf_age ? 1 : 0;
+  const sylva_species_def *d = NULL;
+  for (size_t i = 0, stem = SIZE_MAX; i < s->count; i++) {
+    if ((size_t)s->stem[i] != stem) { /* looked up again only when the stem changes */
+      stem = (size_t)s->stem[i];
+      d = &w->species[w->stems[stem].species].def;
+    }
+    n[i] = sylva__bears_leaves(d, s->birth[i], iteration + 1) ? 1 : 0;
   }
   for (size_t i = s->count; i-- > 0;)
     if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) n[s->parent[i]] += n[i];

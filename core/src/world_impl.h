@@ -116,6 +116,13 @@ static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
   return world_iteration - s->born;
 }
 
+/** Does a node born at world iteration birth bear leaves at iteration T? It does
+ *  for its first leaf_age iterations (docs/model.md, "Light"): only then does it
+ *  collect light, and only then may its lateral bud sprout. */
+static inline bool sylva__bears_leaves(const sylva_species_def *d, int32_t birth, int T) {
+  return T - birth <= d->leaf_age;
+}
+
 /** Shade base b of a node born at a stem's local iteration t. */
 double sylva__species_b(const sylva__species *sp, int t);
 /** The shade cast by a node born at local iteration t. */

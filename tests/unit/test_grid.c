@@ -202,7 +202,35 @@ static void test_sparse_site(void) {
   CHECK_INT(sylva__grid_init(&g, mn, big, 0.01), SYLVA_ETOOBIG);
 }
 
+/* The calibrated shape: half-width q (shade_spread 1) and a column value of its own. */
+static void test_wide_pyramid(void) {
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {2, 2, 2};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  sylva__pyramid p = {.depth = 3, .column = fixed(0.002)};
+  for (int q = 1; q <= 3; q++) {
+    p.w[q - 1] = fixed(pow(2.0, -q));
+    p.half[q - 1] = q;
+  }
+  int v[3] = {20, 20, 30};
+  CHECK_INT(sylva__grid_stamp(&g, v, &p, +1), 0);
+#define S(x, y, z) sylva__grid_shade_raw(&g, (int[3]){x, y, z})
+  CHECK_INT(S(21, 19, 29), p.w[0]); /* q = 1 already reaches one voxel sideways */
+  CHECK_INT(S(22, 20, 29), 0);
+  CHECK_INT(S(23, 17, 27), p.w[2]); /* q = 3: half-width 3 */
+  CHECK_INT(S(24, 20, 27), 0);
+  CHECK_INT(S(17, 23, 26), p.column); /* the column: the base's 7 x 7 footprint */
+  CHECK_INT(S(20, 20, 0), p.column);
+  CHECK_INT(S(24, 20, 10), 0);
+  CHECK_INT(sylva__grid_stamp(&g, v, &p, -1), 0);
+  CHECK_INT(S(17, 23, 26), 0);
+  CHECK_INT(S(21, 19, 29), 0);
+#undef S
+  sylva__grid_free(&g);
+}
+
 int main(void) {
+  test_wide_pyramid();
   test_pyramid_and_column();
   test_against_definition();
   test_exact_removal();

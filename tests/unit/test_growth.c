@@ -233,7 +233,31 @@ static void test_add_plant_errors(void) {
   sylva_world_destroy(w);
 }
 
+/* Only leaf-bearing nodes collect: the initial trunk (birth 0) collects alpha in
+ * full light until it is older than leaf_age, then nothing; a lateral bud on a
+ * leafless node gets no resource and does not sprout. */
+static void test_leaves(void) {
+  sylva_species_def sp = sylva_default_species_def();
+  sp.leaf_age = 2;
+  sylva_world *w = one_tree(&sp, 5);
+  CHECK(w != NULL);
+  CHECK_INT(sylva__reserve_scratch(w), 0);
+  sylva__skeleton *k = &w->nodes;
+  sylva__light_collect(w, 2, w->light); /* age 2: leaves */
+  CHECK_NEAR(w->light[2], sp.alpha, 0.0); /* the unshaded top: alpha * 1^(2^sigma) */
+  CHECK(w->light[1] > 0.0 && w->light[1] < sp.alpha); /* under the top's pyramid */
+  sylva__light_collect(w, 3, w->light); /* age 3: bare wood */
+  for (size_t i = 0; i < k->count; i++) CHECK_NEAR(w->light[i], 0.0, 0.0);
+  CHECK_NEAR(w->q[k->count - 1], 0.0, 0.0);
+  /* a sprouting pass at T = 3 finds no light to share: no sprout at all */
+  w->iteration = 2;
+  CHECK_INT(sylva__allocate(w, 3), 0);
+  CHECK_INT((int)w->sprouts.len, 0);
+  sylva_world_destroy(w);
+}
+
 int main(void) {
+  test_leaves();
   test_radii();
   test_shedding();
   test_snapshot_lockstep();
