@@ -50,6 +50,16 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
     double rbh = (s->flags[n] & SYLVA__NODE_SCAR) ? 0.0 : sylva__bh_share(lm, ll, d->lambda);
     w->ranked.data[i] = (sylva__ranked){rbh, i};
   }
+  /* The trunk's apex continues the main flow: besides its own light it takes the
+   * share apical_flow of what the BH shares of the other nodes leave of the axis's
+   * light (docs/model.md, "Allocation"). */
+  int32_t apex_node = w->axis.data[nb - 1];
+  if (trunk && s->lateral_child[apex_node] < 0 && d->apical_flow > 0.0) {
+    double laterals = 0.0;
+    for (int i = 0; i < nb - 1; i++) laterals += w->ranked.data[i].rbh;
+    double own = w->ranked.data[nb - 1].rbh, rest = w->q[first] - laterals - own;
+    if (rest > 0.0) w->ranked.data[nb - 1].rbh = own + d->apical_flow * rest;
+  }
   /* Apical control: the trunk's apex is ranked first while T <= tau. */
   bool apical = trunk && local <= d->tau;
   sylva__ranked *items = w->ranked.data;

@@ -16,6 +16,7 @@ sylva_species_def sylva_default_species_def(void) {
       .alpha = 4.0,
       .leaf_age = 3,
       .node_cost = 1.0,
+      .apical_flow = 0.02,
       .sigma = 0.5,
       .mu = 1.5,
       .gamma = 0.5,
@@ -24,7 +25,7 @@ sylva_species_def sylva_default_species_def(void) {
       .divergence = 137.5,
       .b_min = 1.8, .b_max = 2.2,
       .pyramid_depth = 20,
-      .shade_spread = 1.0,
+      .shade_spread = 0.75,
       .shade_column = 0.002,
       .r_s = 0.35,
       .r_tip = 0.008,
@@ -76,6 +77,7 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
   SYLVA__REQUIRE(finite_in(d->sigma, 0.0, 1.0) && d->sigma > 0.0, "sigma");
   SYLVA__REQUIRE(d->leaf_age >= 1 && d->leaf_age <= 100000, "leaf_age");
   SYLVA__REQUIRE(finite_in(d->node_cost, 0.0, 1e6) && d->node_cost > 0.0, "node_cost");
+  SYLVA__REQUIRE(finite_in(d->apical_flow, 0.0, 1.0), "apical_flow");
   SYLVA__REQUIRE(finite_in(d->mu, 0.0, 1e3), "mu");
   SYLVA__REQUIRE(finite_in(d->gamma, 0.0, 1e3), "gamma");
   for (int i = 0; i < 3; i++) SYLVA__REQUIRE(finite_in(d->tropism[i], -1e3, 1e3), "tropism");

@@ -160,8 +160,9 @@ static bool contested(const sylva_world *w, const index_ctx *ix, const double p[
 
 /* ---- one shoot ----------------------------------------------------------------- */
 
-/* Optimal direction Vo = sum of l_j v_j: unit vectors to the usable marker points,
- * drawn uniformly in the cone (spherical sector) around vd, weighted by their light. */
+/* Optimal direction Vo = normalise(sum of l_j v_j): unit vectors to the usable marker
+ * points, drawn uniformly in the cone (spherical sector) around vd, weighted by their
+ * light. */
 static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_species_def *d,
                               int markers, const double tip[3], const double vd[3],
                               int32_t self, double vo[3]) {
@@ -189,6 +190,9 @@ static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_s
     if (contested(w, ix, p, r * r, self)) continue;
     for (int i = 0; i < 3; i++) vo[i] += l * dir[i];
   }
+  /* only the direction counts: mu weighs it against Vd and Vt whatever the number
+   * of markers (docs/model.md, "Shoots") */
+  if (!normalize(vo)) vo[0] = vo[1] = vo[2] = 0.0;
 }
 
 static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int iteration) {

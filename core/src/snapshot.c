@@ -74,7 +74,7 @@ static uint64_t fnv1a(const uint8_t *p, size_t n) {
   X(rho) X(growth.p[0]) X(growth.p[1]) X(growth.p[2]) X(sprout_light) X(lambda) X(k) X(w1) \
   X(w2) X(w3) X(alpha) X(sigma) X(mu) X(gamma) X(tropism[0]) X(tropism[1]) X(tropism[2])   \
   X(theta) X(divergence) X(b_min) X(b_max) X(r_s) X(r_tip) X(pipe_exponent) X(cone_angle)  \
-  X(cone_radius) X(node_cost) X(shade_spread) X(shade_column)
+  X(cone_radius) X(node_cost) X(shade_spread) X(shade_column) X(apical_flow)
 #define SYLVA__SPECIES_I32(X) X(tau) X(pyramid_depth) X(m0) X(m_min) X(initial_nodes) X(leaf_age)
 
 static void put_stats(writer *o, const sylva_stem_stats *s) {

@@ -12,9 +12,9 @@
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
 
-#define GOLDEN_WALL 0x0986a86abc0e2f36ULL
-#define GOLDEN_STAND 0xca308343415080a4ULL
-#define GOLDEN_SHRUB 0x6deb12b16ac1b420ULL
+#define GOLDEN_WALL 0x71ea62b4476d6cfcULL
+#define GOLDEN_STAND 0x1492934ed178a4faULL
+#define GOLDEN_SHRUB 0x6ae4757b8e638029ULL
 
 static sylva_scenario *load(const char *name) {
   return scenario_file(SOURCE_ROOT "/scenarios", name);

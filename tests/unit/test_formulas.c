@@ -203,6 +203,34 @@ static void test_allocation_hand_worked(void) {
   double hi = rb_a > rb_b ? rb_a : rb_b, lo = rb_a > rb_b ? rb_b : rb_a;
   double sum = 0.1 * 1.0 + hi * 1.0 + lo * 0.5;
   CHECK_NEAR(apex_r, 100.0 * 0.1 / sum, 1e-12);
+  /* The apex's share of the main flow (docs/model.md, "Allocation"), lambda 0.6, no
+   * apical control: L = 1, 2, 4, Q = 7, 6, 4. RBH a = 7*.4*1/(3.6+.4) = 0.7,
+   * b = 6*.4*2/(2.4+.8) = 1.5, apex own 4; the rest 7 - 0.7 - 1.5 - 4 = 0.8.
+   * apical_flow 0.5: RBH apex 4.4; ranks apex, b, a with w 1, 1, 0.5: weighted
+   * 4.4, 1.5, 0.35 (sum 6.25), R_trunk 10 -> apex 7.04 (7 internodes), b 2.4 (2). */
+  w->species[0].def.tau = 0;
+  w->species[0].def.lambda = 0.6;
+  w->species[0].def.apical_flow = 0.5;
+  w->light[3] = 4, w->light[2] = 2, w->light[1] = 1;
+  w->q[3] = 4, w->q[2] = 6, w->q[1] = 7, w->q[0] = 10;
+  CHECK_INT(sylva__allocate(w, 12), 0);
+  CHECK_INT(w->sprouts.len, 2);
+  if (w->sprouts.len == 2) {
+    CHECK(w->sprouts.data[0].apex);
+    CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.4 / 6.25, 1e-12);
+    CHECK_INT(w->sprouts.data[0].n, 7);
+    CHECK_NEAR(w->sprouts.data[1].r, 10.0 * 1.5 / 6.25, 1e-12);
+    CHECK_INT(w->sprouts.data[1].n, 2);
+  }
+  /* apical_flow 0: the apex has its own light only (4 of 5.85) */
+  w->species[0].def.apical_flow = 0.0;
+  CHECK_INT(sylva__allocate(w, 12), 0);
+  if (w->sprouts.len) CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 5.85, 1e-12);
+  /* lambda 0.5 leaves no rest: apical_flow changes nothing */
+  w->species[0].def.lambda = 0.5;
+  w->species[0].def.apical_flow = 1.0;
+  CHECK_INT(sylva__allocate(w, 12), 0);
+  if (w->sprouts.len) CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 6.5, 1e-12);
   sylva_world_destroy(w);
 }
 
@@ -231,9 +259,11 @@ static void test_shade_base(void) {
   CHECK_INT(wt[0], (int64_t)floor(SYLVA__SHADE_ONE / b + 0.5));
   CHECK_INT(wt[2], (int64_t)floor(SYLVA__SHADE_ONE / (b * b * b) + 0.5));
   CHECK_INT(wt[19], (int64_t)floor(pow(b, -20.0) * SYLVA__SHADE_ONE + 0.5));
-  /* half-width floor(q * shade_spread): 1 by default, so the base is 41 voxels wide */
-  CHECK_INT(shade->half[0], 1);
-  CHECK_INT(shade->half[19], 20);
+  /* half-width floor(q * shade_spread): 0.75 by default, so the base is 31 voxels wide */
+  CHECK_INT(shade->half[0], 0);
+  CHECK_INT(shade->half[1], 1);
+  CHECK_INT(shade->half[3], 3);
+  CHECK_INT(shade->half[19], 15);
   CHECK_INT(shade->column, (int64_t)floor(0.002 * SYLVA__SHADE_ONE + 0.5));
   sylva_world_destroy(w);
 }
