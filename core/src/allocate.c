@@ -48,6 +48,9 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
     double ll = s->lateral_child[n] >= 0 ? w->q[s->lateral_child[n]] : w->light[n];
     /* a scar (shed branch) has no bud left to feed */
     double rbh = (s->flags[n] & SYLVA__NODE_SCAR) ? 0.0 : sylva__bh_share(lm, ll, d->lambda);
+    /* Apical dominance: a free bud fewer than apical_zone internodes below the
+     * axis's apex stays dormant and takes no share (docs/model.md, "Allocation"). */
+    if (s->lateral_child[n] < 0 && i < nb - 1 && nb - 1 - i < d->apical_zone) rbh = 0.0;
     w->ranked.data[i] = (sylva__ranked){rbh, i};
   }
   /* The trunk's apex continues the main flow: besides its own light it takes the

@@ -16,6 +16,7 @@ sylva_species_def sylva_default_species_def(void) {
       .alpha = 4.0,
       .leaf_age = 3,
       .node_cost = 1.0,
+      .apical_zone = 12,
       .apical_flow = 0.02,
       .sigma = 0.5,
       .mu = 1.5,
@@ -28,7 +29,7 @@ sylva_species_def sylva_default_species_def(void) {
       .shade_spread = 0.75,
       .shade_column = 0.002,
       .r_s = 0.35,
-      .r_tip = 0.008,
+      .r_tip = 0.012,
       .pipe_exponent = 2.5,
       .m0 = 20, .m_min = 4,
       .cone_angle = 60.0,
@@ -78,6 +79,7 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
   SYLVA__REQUIRE(d->leaf_age >= 1 && d->leaf_age <= 100000, "leaf_age");
   SYLVA__REQUIRE(finite_in(d->node_cost, 0.0, 1e6) && d->node_cost > 0.0, "node_cost");
   SYLVA__REQUIRE(finite_in(d->apical_flow, 0.0, 1.0), "apical_flow");
+  SYLVA__REQUIRE(d->apical_zone >= 0 && d->apical_zone <= 100000, "apical_zone");
   SYLVA__REQUIRE(finite_in(d->mu, 0.0, 1e3), "mu");
   SYLVA__REQUIRE(finite_in(d->gamma, 0.0, 1e3), "gamma");
   for (int i = 0; i < 3; i++) SYLVA__REQUIRE(finite_in(d->tropism[i], -1e3, 1e3), "tropism");

@@ -75,7 +75,8 @@ static uint64_t fnv1a(const uint8_t *p, size_t n) {
   X(w2) X(w3) X(alpha) X(sigma) X(mu) X(gamma) X(tropism[0]) X(tropism[1]) X(tropism[2])   \
   X(theta) X(divergence) X(b_min) X(b_max) X(r_s) X(r_tip) X(pipe_exponent) X(cone_angle)  \
   X(cone_radius) X(node_cost) X(shade_spread) X(shade_column) X(apical_flow)
-#define SYLVA__SPECIES_I32(X) X(tau) X(pyramid_depth) X(m0) X(m_min) X(initial_nodes) X(leaf_age)
+#define SYLVA__SPECIES_I32(X) X(tau) X(pyramid_depth) X(m0) X(m_min) X(initial_nodes) X(leaf_age) \
+  X(apical_zone)
 
 static void put_stats(writer *o, const sylva_stem_stats *s) {
   put_f64(o, s->height);

@@ -297,6 +297,7 @@ static const species_field species_fields[] = {
     INT(leaf_age, 1, 100000),
     DBL(node_cost, 0, 1e6, true, false),
     DBL(apical_flow, 0, 1, false, false),
+    INT(apical_zone, 0, 100000),
     DBL(sigma, 0, 1, true, false),
     DBL(mu, 0, 1000, false, false),
     DBL(gamma, 0, 1000, false, false),
@@ -328,7 +329,7 @@ static const char *const species_keys[] = {
     "w1",     "w2",    "w3",     "tau",        "alpha",        "sigma",         "mu",
     "gamma",  "tropism", "theta", "divergence", "b_min",       "b_max",         "pyramid_depth",
     "r_s",    "r_tip", "pipe_exponent", "markers", "initial_nodes", "leaf_age", "node_cost",
-    "shade_spread", "shade_column", "apical_flow",
+    "shade_spread", "shade_column", "apical_flow", "apical_zone",
 };
 
 static int set_fields(sylva__parser *p, const cJSON *obj, const species_field *fields, size_t count,

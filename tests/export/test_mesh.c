@@ -25,6 +25,7 @@ static sylva_world *make_world(int iterations) {
   sylva_world *w;
   if (sylva_world_create(&wd, &w) < 0) return NULL;
   sylva_species_def sp = sylva_default_species_def();
+  sp.apical_zone = 0; /* buds break from the start: six iterations already branch */
   int species = sylva_world_add_species(w, &sp, "x");
   double tree[1][3] = {{-2.0, 0.0, 0.0}};
   double shrub[2][3] = {{2.0, 0.0, 0.0}, {2.4, 0.3, 0.0}};

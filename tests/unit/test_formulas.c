@@ -164,6 +164,7 @@ static void test_allocation_hand_worked(void) {
   sp.lambda = 0.5;
   sp.tau = 0;
   sp.initial_nodes = 3;
+  sp.apical_zone = 0; /* every bud may sprout; the zone has its own test below */
   int s = sylva_world_add_species(w, &sp, "x");
   double root[1][3] = {{0, 0, 0}};
   sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1};
@@ -231,6 +232,36 @@ static void test_allocation_hand_worked(void) {
   w->species[0].def.apical_flow = 1.0;
   CHECK_INT(sylva__allocate(w, 12), 0);
   if (w->sprouts.len) CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 6.5, 1e-12);
+  /* Apical zone (docs/model.md, "Allocation"), the first case again (lambda 0.5,
+   * RBH a 1, b 2, apex 4). Zone 1: b is 1 internode below the apex and a 2, both
+   * may sprout: as before. Zone 2: b's bud is dormant (RBH 0); ranks apex, a, b with
+   * w 1, 1, 0.5: weighted 4, 1, 0 (sum 5) -> apex 8 (cap 8), a 2 (2 internodes).
+   * Zone 3: a too; the apex takes all 10 and grows its cap of 8. */
+  w->species[0].def.apical_flow = 0.0;
+  w->light[3] = 4, w->light[2] = 2, w->light[1] = 1;
+  w->q[3] = 4, w->q[2] = 6, w->q[1] = 7, w->q[0] = 10;
+  /* zone; then the expected sprouts in order: slot, R, internodes */
+  const struct {
+    int zone;
+    size_t len;
+    int32_t slot[2];
+    double r[2];
+    int32_t n[2];
+  } zones[] = {
+      {1, 2, {3, 2}, {10.0 * 4.0 / 6.5, 10.0 * 2.0 / 6.5}, {6, 3}},
+      {2, 2, {3, 1}, {8.0, 2.0}, {8, 2}},
+      {3, 1, {3, -1}, {10.0, 0.0}, {8, 0}},
+  };
+  for (size_t z = 0; z < sizeof zones / sizeof zones[0]; z++) {
+    w->species[0].def.apical_zone = zones[z].zone;
+    CHECK_INT(sylva__allocate(w, 12), 0);
+    CHECK_INT(w->sprouts.len, zones[z].len);
+    for (size_t i = 0; i < zones[z].len && i < w->sprouts.len; i++) {
+      CHECK_INT(w->sprouts.data[i].slot, zones[z].slot[i]);
+      CHECK_NEAR(w->sprouts.data[i].r, zones[z].r[i], 1e-12);
+      CHECK_INT(w->sprouts.data[i].n, zones[z].n[i]);
+    }
+  }
   sylva_world_destroy(w);
 }
 

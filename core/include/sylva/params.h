@@ -24,6 +24,8 @@ typedef struct sylva_species_def {
   int leaf_age;            /**< iterations a node bears leaves: it collects light and its
                                 lateral bud may sprout only while age <= leaf_age */
   double node_cost;        /**< resource units one new internode costs */
+  int apical_zone;         /**< internodes below an axis's apex whose lateral buds stay
+                                dormant (LGTM; docs/model.md, "Allocation") */
   double apical_flow;      /**< share of the BH main flow the trunk's apex takes on top of
                                 its own light (docs/model.md, "Allocation") */
   double sigma;            /**< light sensitivity */

@@ -8,7 +8,7 @@
 #include "world.h"
 
 /** Format version written by this build. */
-#define SYLVA_SNAPSHOT_VERSION 3
+#define SYLVA_SNAPSHOT_VERSION 4
 
 /** Serialises w into a malloc'd buffer (*data, *size); the caller frees it. */
 int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size);
