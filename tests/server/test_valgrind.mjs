@@ -26,26 +26,27 @@ test('valgrind: a full session ends with every block freed', { timeout: 600000 }
   await c.next((m) => m.type === 'light_slice' || m.type === 'error', 120000);
   c.send('{"type":"bogus"}');
   await c.type('error', 120000);
-  // HTTP, on a run large enough that an export takes seconds here: an export (a
-  // regrown iteration), a ready scenario file, a bad request
-  c.send({ type: 'create', name: 'st', start: true, scenario: scenario('stand.json', { iterations: 9 }) });
+  // HTTP, on a run large enough (the stand grown to its end, about 9,000 internodes)
+  // that an export takes seconds under valgrind: an export (a regrown iteration), a
+  // ready scenario file, a bad request
+  c.send({ type: 'create', name: 'st', start: true, scenario: scenario('stand.json', { iterations: 20 }) });
   const st = (await c.type('created', 120000)).run;
   c.send({ type: 'subscribe', run: st });
   await c.next((m) => m.type === 'status' && m.run === st && m.status === 'finished', 300000);
-  const ex = await fetch(`${d.http}/api/runs/st/export?format=ply&iteration=8&obstacles=1`);
+  const ex = await fetch(`${d.http}/api/runs/st/export?format=ply&iteration=19&obstacles=1`);
   assert.equal(ex.status, 200);
-  assert.ok(Buffer.from(await ex.arrayBuffer()).equals(exportBytes(d.db, 'st', 'ply', 8, ['--obstacles'])));
+  assert.ok(Buffer.from(await ex.arrayBuffer()).equals(exportBytes(d.db, 'st', 'ply', 19, ['--obstacles'])));
   assert.equal((await fetch(`${d.http}/api/scenarios/wall`)).status, 200);
   assert.equal((await fetch(`${d.http}/api/runs/st/export?format=obj&iteration=99`)).status, 400);
   // clients that leave while their exports are written, and exports in flight when
   // the daemon stops
   for (let i = 0; i < 3; i++)
-    await askOnly(d.port, '/api/runs/st/export?format=obj&iteration=8', { leave: true });
+    await askOnly(d.port, '/api/runs/st/export?format=obj&iteration=19', { leave: true });
   const deadline = Date.now() + 120000;
   while (!/export: the client left/.test(d.stderr()) && Date.now() < deadline)
     await new Promise((r) => setTimeout(r, 200));
   assert.match(d.stderr(), /\[run st\] export: the client left before it was written/);
-  for (let i = 0; i < 2; i++) await askOnly(d.port, '/api/runs/st/export?format=skeleton&iteration=7');
+  for (let i = 0; i < 2; i++) await askOnly(d.port, '/api/runs/st/export?format=skeleton&iteration=18');
   await new Promise((r) => setTimeout(r, 500));
   const exit = await stopDaemon(d, 'SIGTERM');
   const err = d.stderr();
