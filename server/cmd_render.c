@@ -26,9 +26,9 @@ static const cli_option render_cli_options[OPT_COUNT] = {
     [OPT_NAME] = {"name", 0, "NAME", "the stored run"},
     [OPT_ITERATION] = {"iteration", 0, "T", "the stored iteration (default: the last)"},
     [OPT_SEED] = {"seed", 0, "N", "SCENARIO: override its seed (0 to 2^53)"},
-    [OPT_ITERATIONS] = {"iterations", 0, "N", "SCENARIO: override its iteration limit (1 to 100000)"},
+    [OPT_ITERATIONS] = {"iterations", 0, "N", "SCENARIO: override its limit (1 to 100000)"},
     [OPT_VIEW] = {"view", 0, "V", "front, side, top or all (default all)"},
-    [OPT_WIDTH] = {"width", 0, "PX", "picture width (default 500 per view)"},
+    [OPT_WIDTH] = {"width", 0, "PX", "picture width, 400 to 16384 (default 500 per view)"},
     [OPT_OUT] = {"output", 'o', "OUT", "the file to write: OUT.png, OUT.svg or OUT.pdf (required)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
@@ -107,7 +107,8 @@ static int parse_args(int argc, char **argv, render_args *a) {
     }
   }
   if (opt == -2) return CLI_EXIT_USAGE;
-  if (argc - first > 1) return cli_usage_error("render", "unexpected argument '%s'", argv[first + 1]);
+  if (argc - first > 1)
+    return cli_usage_error("render", "unexpected argument '%s'", argv[first + 1]);
   if (argc - first == 1) a->scenario = argv[first];
   if (a->scenario && (a->db || a->name || a->has_iteration))
     return cli_usage_error("render", "--db, --name and --iteration are for a stored run, not "

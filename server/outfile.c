@@ -11,6 +11,7 @@ int cli_outfile_open(cli_outfile *o, const char *option, const char *path, bool 
   if (allow_stdout && strcmp(path, "-") == 0) return CLI_EXIT_OK;
   size_t n = strlen(path) + 5;
   if (!(o->tmp = malloc(n))) {
+    o->f = NULL;
     fprintf(stderr, "sylva: out of memory\n");
     return CLI_EXIT_FAILURE;
   }

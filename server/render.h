@@ -67,8 +67,9 @@ typedef enum render_view { RENDER_FRONT, RENDER_SIDE, RENDER_TOP, RENDER_ALL } r
 #define RENDER_TICK_SPACING 50.0       /**< least distance between two ticks */
 #define RENDER_MIN_LINE 0.5            /**< thinnest internode */
 
-/** Widths a picture may have (and the greatest height). */
-#define RENDER_MIN_WIDTH 200
+/** Widths a picture may have (and the greatest height); the least leaves room
+ *  for the margins of three views. */
+#define RENDER_MIN_WIDTH 400
 #define RENDER_MAX_SIZE 16384
 /** The default width per panel: 1500 for all three views, 500 for one. */
 #define RENDER_PANEL_WIDTH 500
