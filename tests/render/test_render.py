@@ -8,8 +8,8 @@ meson runs `python3 test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR PART`, 
   errors    bad views, extensions, runs, iterations and paths: exit 2 (1 for a
             failed write), a message naming the problem, no output file;
   scenario  the scenario form, grown to its end, equals the stored run's picture.
-The layout constants and the palette are read from server/render.h and
-server/render.c, so the pixel test maps metres to pixels as the renderer does.
+The layout constants and the palette are read from server/export/render.h and
+server/export/render.c, so the pixel test maps metres to pixels as the renderer does.
 """
 import json
 import math

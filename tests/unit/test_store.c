@@ -47,13 +47,13 @@ int main(void) {
   snprintf(newer, sizeof newer, "%s/newer.db", dir);
 
   store *st = NULL;
-  CHECK_INT(store_open(path, false, &st), STORE_EINPUT); /* not created without create */
+  CHECK_INT(store_open(path, false, &st), SERVER_EINPUT); /* not created without create */
   CHECK(strstr(store_open_error(), "runs.db") != NULL);
   CHECK_INT(store_open(path, true, &st), 0);
   sylva_world *w = small_world();
   int64_t run = 0, other = 0;
   CHECK_INT(store_create_run(st, "r1", "{}", 7, 12, 3, w, &run), 0);
-  CHECK_INT(store_create_run(st, "r1", "{}", 7, 12, 3, w, &other), STORE_EINPUT); /* taken */
+  CHECK_INT(store_create_run(st, "r1", "{}", 7, 12, 3, w, &other), SERVER_EINPUT); /* taken */
   CHECK(strstr(store_error(st), "exists") != NULL);
   uint64_t hashes[8];
   hashes[0] = sylva_world_hash(w);
@@ -126,12 +126,12 @@ int main(void) {
 
   /* foreign and newer files are refused, and left as they were */
   exec_sql(foreign, "CREATE TABLE t (a)");
-  CHECK_INT(store_open(foreign, true, &st), STORE_EINPUT);
+  CHECK_INT(store_open(foreign, true, &st), SERVER_EINPUT);
   CHECK(strstr(store_open_error(), "another program") != NULL);
   CHECK_INT(store_open(newer, true, &st), 0);
   store_close(st);
   exec_sql(newer, "PRAGMA user_version = 99");
-  CHECK_INT(store_open(newer, false, &st), STORE_EINPUT);
+  CHECK_INT(store_open(newer, false, &st), SERVER_EINPUT);
   CHECK(strstr(store_open_error(), "newer") != NULL);
 
   sylva_world_destroy(w);

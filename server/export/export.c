@@ -38,7 +38,7 @@ static void unlock_store(uv_mutex_t *lock) {
 
 static int write_failed(char *err, size_t errlen) {
   snprintf(err, errlen, "%s", strerror(errno ? errno : EIO));
-  return EXPORT_EWRITE;
+  return SERVER_EWRITE;
 }
 
 int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,

@@ -66,10 +66,8 @@ int grow_run(grow_job *job) {
       break;
     }
     if (job->st) {
-      /* a full snapshot every snapshot_every iterations and at the end */
       int it = j->iteration;
-      bool last = sylva_world_finished(w) || it >= job->limit;
-      if (store_save_iteration(job->st, job->run, w, j, last || it % job->snapshot_every == 0)) {
+      if (store_save_step(job->st, job->run, w, j, job->snapshot_every, job->limit)) {
         progress_clear(&pr);
         fprintf(stderr, "sylva: %s\n", store_error(job->st));
         fprintf(stderr, "sylva: %s: stopped after iteration %d; what was stored before is "

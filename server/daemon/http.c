@@ -12,7 +12,7 @@
 #include "daemon.h"
 #include "export.h"
 #include "handlers.h"
-#include "input.h"
+#include "files.h"
 #include "mesh.h"
 
 /* Bytes of a reply's body per lws_write. */
@@ -166,7 +166,7 @@ static void scenario_file(server *d, http_pss *pss, const char *name) {
   size_t len = 0;
   int e = sb.st_size > (off_t)HTTP_MAX_SCENARIO_FILE
               ? EFBIG
-              : cli_read_file(path, HTTP_MAX_SCENARIO_FILE, &data, &len);
+              : files_read(path, HTTP_MAX_SCENARIO_FILE, &data, &len);
   if (e) {
     if (e == EFBIG)
       server_log(NULL, "%s: larger than %u bytes; not served", path, HTTP_MAX_SCENARIO_FILE);

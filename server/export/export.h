@@ -35,15 +35,12 @@ typedef struct export_spec {
   bool obstacles;       /**< obj, ply: also the obstacle boxes */
 } export_spec;
 
-/** Returned by export_write when writing to the stream failed. */
-#define EXPORT_EWRITE (-2)
-
 /** Writes spec to f (flushed, not closed). When lock is not NULL it is held while
  *  st is used: while the world is restored (the newest good snapshot at or before
  *  the iteration, regrown to it: seconds for a large run) and, for the CSV, for
  *  the whole write, which streams from the store. warn (may be NULL) hears of
- *  damaged snapshots passed over. Returns 0; -1 when the store failed or memory
- *  ran out, EXPORT_EWRITE when writing to f failed; err then says why in one
+ *  damaged snapshots passed over. Returns SERVER_OK; SERVER_EFAIL when the store
+ *  failed or memory ran out, SERVER_EWRITE when writing to f failed; err then says why in one
  *  line. */
 int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,
                  void (*warn)(const char *msg), char *err, size_t errlen);

@@ -1,4 +1,4 @@
-#include "stored.h"
+#include "cli_store.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -6,13 +6,11 @@
 #include "edit.h"
 #include "options.h"
 
-void cli_store_warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
-
 int cli_store_open(const char *path, bool create, store **out) {
   int rc = store_open(path, create, out);
   if (rc) {
     fprintf(stderr, "sylva: %s\n", store_open_error());
-    return rc == STORE_EINPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
+    return server_exit_status(rc);
   }
   return CLI_EXIT_OK;
 }
@@ -31,7 +29,7 @@ int cli_store_new_run(const char *db, const char *name, const sylva_scenario *s,
   free(json);
   if (failed) {
     fprintf(stderr, "sylva: %s\n", store_error(job->st));
-    return failed == STORE_EINPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
+    return server_exit_status(failed);
   }
   return CLI_EXIT_OK;
 }
@@ -75,13 +73,5 @@ int cli_stored_iteration(const char *db, const store_run *r, bool given, uint64_
     return CLI_EXIT_USAGE;
   }
   *at = (int)iteration;
-  return CLI_EXIT_OK;
-}
-
-int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
-  if (store_world_at(st, r->id, at, cli_store_warn, edit_replay, out)) {
-    fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));
-    return CLI_EXIT_FAILURE;
-  }
   return CLI_EXIT_OK;
 }

@@ -12,7 +12,7 @@
 #include "client.h"
 #include "handlers.h"
 #include "http.h"
-#include "input.h"
+#include "files.h"
 #include "runs.h"
 #include "sylva/protocol.h"
 
@@ -167,16 +167,17 @@ static const struct lws_protocol_vhost_options mime_mjs = {&mime_map, NULL, ".mj
 
 /* ---- start and stop ------------------------------------------------------------ */
 
-/* `--run SCENARIO.json`: grow it, unless a run of its name is already held. */
+/* `--run SCENARIO.json`: grow it, unless a run of its name is already held.
+ * Returns SERVER_OK or a server_error. */
 static int start_scenario(server *d, const char *path) {
   sylva_scenario *s;
-  int rc = cli_load_scenario(path, 0, &s); /* plants not required: an empty site, as with create */
+  int rc = files_load_scenario(path, 0, &s); /* plants not required: an empty site, as with create */
   if (rc) return rc;
   for (run *r = d->runs; r; r = r->next)
     if (strcmp(r->name, s->name) == 0) {
       server_log(r->name, "already held (%s); not created again", r->status);
       sylva_scenario_free(s);
-      return 0;
+      return SERVER_OK;
     }
   const char *code;
   char err[512];
@@ -184,9 +185,9 @@ static int start_scenario(server *d, const char *path) {
   sylva_scenario_free(s);
   if (!r) {
     server_log(NULL, "%s: %s", path, err);
-    return 2;
+    return SERVER_EINPUT;
   }
-  return 0;
+  return SERVER_OK;
 }
 
 static void stop(server *d) {
@@ -274,7 +275,7 @@ int server_main(const server_options *opt) {
     rc = 1;
   }
   if (!rc && runs_load(d)) rc = 1;
-  if (!rc && opt->start_scenario) rc = start_scenario(d, opt->start_scenario);
+  if (!rc && opt->start_scenario) rc = server_exit_status(start_scenario(d, opt->start_scenario));
   if (!rc) {
     uv_signal_init(&d->loop, &d->sigint);
     uv_signal_init(&d->loop, &d->sigterm);

@@ -1,8 +1,8 @@
 /* sylva server: stored runs for the command line: opening a store, creating a
- * run, and restoring a run's world at any stored iteration. Each prints its own
- * error ("sylva: ...") and returns an exit status (options.h). */
-#ifndef SYLVA_SERVER_STORED_H
-#define SYLVA_SERVER_STORED_H
+ * run, finding a run and one of its iterations. Each prints its own error
+ * ("sylva: ...") and returns an exit status (options.h). */
+#ifndef SYLVA_SERVER_CLI_STORE_H
+#define SYLVA_SERVER_CLI_STORE_H
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -10,9 +10,6 @@
 #include "grow.h"
 #include "store.h"
 #include "sylva/scenario.h"
-
-/** Prints a store's warning (a damaged snapshot passed over) on stderr. */
-void cli_store_warn(const char *msg);
 
 /** Opens a store (create: a new file may be made). */
 int cli_store_open(const char *path, bool create, store **out);
@@ -35,10 +32,5 @@ int cli_store_find(store *st, const char *db, const char *name, store_run *out);
  *  range when the run has no such iteration. */
 int cli_stored_iteration(const char *db, const store_run *r, bool given, uint64_t iteration,
                          int *at);
-
-/** The world of a stored run at iteration `at`: the newest good snapshot at or
- *  before it, regrown to `at`, each regrown iteration checked against the stored
- *  world hash. */
-int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out);
 
 #endif

@@ -1,4 +1,4 @@
-#include "input.h"
+#include "files.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -6,10 +6,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "options.h"
+#include "server_error.h"
 #include "sylva/status.h"
 
-int cli_read_file(const char *path, size_t max, char **data, size_t *len) {
+int files_read(const char *path, size_t max, char **data, size_t *len) {
   *data = NULL;
   *len = 0;
   FILE *f = fopen(path, "rb");
@@ -63,35 +63,35 @@ int cli_read_file(const char *path, size_t max, char **data, size_t *len) {
   return 0;
 }
 
-int cli_load_scenario(const char *path, unsigned flags, sylva_scenario **out) {
+int files_load_scenario(const char *path, unsigned flags, sylva_scenario **out) {
   *out = NULL;
   char *text;
   size_t len;
-  int e = cli_read_file(path, CLI_MAX_INPUT, &text, &len);
+  int e = files_read(path, FILES_MAX_INPUT, &text, &len);
   if (e == EFBIG) {
-    fprintf(stderr, "sylva: %s: larger than %u MiB\n", path, CLI_MAX_INPUT >> 20);
-    return CLI_EXIT_USAGE;
+    fprintf(stderr, "sylva: %s: larger than %u MiB\n", path, FILES_MAX_INPUT >> 20);
+    return SERVER_EINPUT;
   }
   if (e) {
     fprintf(stderr, "sylva: %s: %s\n", path, strerror(e));
-    return e == ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+    return e == ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   }
   char err[1024];
   int rc = sylva_scenario_parse_ex(text, len, flags, out, err, sizeof err);
   free(text);
   if (rc < 0) {
     fprintf(stderr, "sylva: %s: %s\n", path, err);
-    return rc == SYLVA_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+    return rc == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   }
-  return CLI_EXIT_OK;
+  return SERVER_OK;
 }
 
-int cli_build_world(const char *path, const sylva_scenario *s, sylva_world **out) {
+int files_build_world(const char *path, const sylva_scenario *s, sylva_world **out) {
   char err[1024];
   int rc = sylva_scenario_build(s, out, err, sizeof err);
   if (rc < 0) {
     fprintf(stderr, "sylva: %s: %s\n", path, err);
-    return rc == SYLVA_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+    return rc == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   }
-  return CLI_EXIT_OK;
+  return SERVER_OK;
 }

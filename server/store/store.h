@@ -4,13 +4,15 @@
  * iteration, so after a crash the file holds a consistent prefix of every run).
  *
  * Snapshots are core images (sylva/snapshot.h), which carry their own checksum.
- * Every function returns 0 or -1 (STORE_EINPUT where the caller's input is at
- * fault: not a sylva store, a newer schema, a missing file, a taken name); after
+ * Every function returns SERVER_OK or SERVER_EFAIL (SERVER_EINPUT where the
+ * caller's input is at fault: not a sylva store, a newer schema, a missing file, a taken name); after
  * a failure store_error() says what failed, with the file's name and SQLite's
  * reason, e.g.
  *   "runs.db: storing iteration 12 of run \"oak\": disk I/O error". */
 #ifndef SYLVA_SERVER_STORE_H
 #define SYLVA_SERVER_STORE_H
+
+#include "server_error.h"
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -24,9 +26,6 @@
 #define STORE_SCHEMA_VERSION 1
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
-
-/** A failure caused by the input (exit status 2), not by the machine (1). */
-#define STORE_EINPUT (-2)
 
 typedef struct store store;
 
@@ -73,6 +72,12 @@ void store_runs_free(store_run *runs, size_t count);
  *  when snapshot is true, the full world image. */
 int store_save_iteration(store *st, int64_t run, const sylva_world *w,
                          const sylva_journal *j, bool snapshot);
+/** The step-and-persist rule of every growing run (command line and daemon):
+ *  stores iteration j with a full snapshot every `every` iterations and at the
+ *  last one (the world finished, or j->iteration reached `limit`), the lighter
+ *  record in between. */
+int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
+                    int every, int limit);
 /** Sets a run's status (and reason, may be NULL) and iteration limit (> 0 to change). */
 int store_set_status(store *st, int64_t run, const char *status, const char *reason,
                      int iterations);

@@ -4,7 +4,7 @@
 
 #include "commands.h"
 #include "options.h"
-#include "stored.h"
+#include "cli_store.h"
 
 enum { OPT_DB, OPT_HELP, OPT_COUNT };
 

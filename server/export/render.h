@@ -45,6 +45,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "server_error.h"
 #include "sylva/world.h"
 
 /** Output formats. */
@@ -99,11 +100,8 @@ typedef struct render_options {
   const char *name; /**< the run's or scenario's name, for the title */
 } render_options;
 
-/** Returned by render_write when writing to the stream failed. */
-#define RENDER_EWRITE (-2)
-
-/** Draws w as o asks and writes the picture to f (flushed, not closed). Returns 0;
- *  -1 for bad options or when cairo failed (out of memory); RENDER_EWRITE when
+/** Draws w as o asks and writes the picture to f (flushed, not closed). Returns SERVER_OK;
+ *  SERVER_EFAIL for bad options or when cairo failed (out of memory); SERVER_EWRITE when
  *  writing to f failed; err then says why in one line. */
 int render_write(FILE *f, const sylva_world *w, const render_options *o, char *err,
                  size_t errlen);

@@ -420,7 +420,7 @@ int render_write(FILE *f, const sylva_world *w, const render_options *o, char *e
     out.error = errno ? errno : EIO;
   if (out.error) {
     snprintf(err, errlen, "%s", strerror(out.error));
-    return RENDER_EWRITE;
+    return SERVER_EWRITE;
   }
   if (status != CAIRO_STATUS_SUCCESS) {
     snprintf(err, errlen, "cairo: %s", cairo_status_to_string(status));

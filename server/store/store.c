@@ -121,7 +121,7 @@ static int migrate(store *st) {
   if (sqlite3_exec(st->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
     if ((sqlite3_errcode(st->db) & 0xff) == SQLITE_NOTADB) {
       fail(st, "not a sylva store (not an SQLite database)");
-      return STORE_EINPUT;
+      return SERVER_EINPUT;
     }
     return fail(st, "cannot open the store");
   }
@@ -132,19 +132,19 @@ static int migrate(store *st) {
   if (!ok1 || !ok2 || !ok3) {
     rollback(st);
     fail(st, "not a sylva store (cannot read it as an SQLite database)");
-    return STORE_EINPUT;
+    return SERVER_EINPUT;
   }
   if (app != STORE_APPLICATION_ID && (app != 0 || objects > 0)) {
     rollback(st);
     fail(st, "not a sylva store (an SQLite file of another program, application_id 0x%llx)",
          (unsigned long long)app);
-    return STORE_EINPUT;
+    return SERVER_EINPUT;
   }
   if (version > STORE_SCHEMA_VERSION) {
     rollback(st);
     fail(st, "written by a newer sylva (schema %lld; this build knows up to %d)",
          (long long)version, STORE_SCHEMA_VERSION);
-    return STORE_EINPUT;
+    return SERVER_EINPUT;
   }
   for (int64_t v = version; v < STORE_SCHEMA_VERSION; v++) {
     if (exec(st, migrations[v], "migrating the schema")) {
@@ -177,7 +177,7 @@ int store_open(const char *path, bool create, store **out) {
              st->db ? sqlite3_errmsg(st->db) : "cannot open");
     if (!create && st->db && sqlite3_errcode(st->db) == SQLITE_CANTOPEN) {
       snprintf(open_error, sizeof open_error, "%s: no such store (or it cannot be opened)", path);
-      rc = STORE_EINPUT;
+      rc = SERVER_EINPUT;
     }
     store_close(st);
     return rc;
@@ -192,7 +192,7 @@ int store_open(const char *path, bool create, store **out) {
       exec(st, "PRAGMA foreign_keys = ON", "opening the store")) {
     snprintf(open_error, sizeof open_error, "%s", st->error);
     store_close(st);
-    return rc == STORE_EINPUT ? STORE_EINPUT : -1;
+    return rc == SERVER_EINPUT ? SERVER_EINPUT : -1;
   }
   *out = st;
   return 0;
@@ -270,7 +270,7 @@ int store_create_run(store *st, const char *name, const char *scenario_json, uin
     snprintf(st->error, sizeof st->error,
              "%s: a run named \"%s\" exists already (continue it with 'sylva resume', or "
              "choose another --name)", st->path, name);
-    return STORE_EINPUT;
+    return SERVER_EINPUT;
   }
   if (rc != SQLITE_DONE) {
     fail(st, "creating run \"%s\"", name);
@@ -463,6 +463,12 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
     return -1;
   }
   return 0;
+}
+
+int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
+                    int every, int limit) {
+  bool last = sylva_world_finished(w) || j->iteration >= limit;
+  return store_save_iteration(st, run, w, j, last || j->iteration % every == 0);
 }
 
 int store_set_status(store *st, int64_t run, const char *status, const char *reason,

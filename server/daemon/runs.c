@@ -5,7 +5,7 @@
 #include <time.h>
 
 #include "edit.h"
-#include "stored.h"
+#include "replay.h"
 #include "sylva/protocol.h"
 #include "sylva/status.h"
 
@@ -103,10 +103,8 @@ static void work_cb(uv_work_t *req) {
              sylva_world_iteration(r->w) + 1, sylva_strerror(r->work_status));
     return;
   }
-  int it = j->iteration;
-  bool last = sylva_world_finished(r->w) || it >= r->limit;
   uv_mutex_lock(&d->store_lock);
-  int failed = store_save_iteration(d->st, r->id, r->w, j, last || it % r->snapshot_every == 0);
+  int failed = store_save_step(d->st, r->id, r->w, j, r->snapshot_every, r->limit);
   if (failed) snprintf(r->work_error, sizeof r->work_error, "%s", store_error(d->st));
   uv_mutex_unlock(&d->store_lock);
   if (failed) {
@@ -259,7 +257,7 @@ int runs_load(server *d) {
   for (size_t i = 0; i < n; i++) {
     store_run *sr = &stored[i];
     sylva_world *w;
-    if (cli_store_world_at(d->st, sr, sr->last_iteration, &w)) {
+    if (store_world_at_logged(d->st, sr, sr->last_iteration, &w)) {
       server_log(sr->name, "not loaded (see above)");
       continue;
     }
