@@ -40,9 +40,14 @@ static int check_passed, check_failed;
     }                                                                                        \
   } while (0)
 
-/* Ends a suite: prints the summary line and gives the exit status. */
+/* Ends a suite: prints the summary line and gives the exit status. A suite in
+ * which no check ran fails too (an unknown test name selects nothing). */
 static inline int check_summary(const char *suite) {
   printf("%s: %d passed, %d failed\n", suite, check_passed, check_failed);
+  if (check_passed + check_failed == 0) {
+    fprintf(stderr, "%s: no check ran\n", suite);
+    return 1;
+  }
   return check_failed ? 1 : 0;
 }
 #endif

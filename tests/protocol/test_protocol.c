@@ -3,7 +3,8 @@
  * encoders' JSON, a snapshot plus deltas that reproduce the skeleton, and the
  * light slice.
  *
- * argv[1]: the JSONTestSuite test_parsing directory. */
+ * With --jsontestsuite DIR: the JSONTestSuite test_parsing files only (exit 77,
+ * skipped, when DIR is missing). */
 #include "../read_file.h"
 #include <cjson/cJSON.h>
 #include <dirent.h>
@@ -1305,16 +1306,25 @@ static void test_light_slice(void) {
 }
 
 int main(int argc, char **argv) {
+  if (argc == 3 && strcmp(argv[1], "--jsontestsuite") == 0) {
+    DIR *d = opendir(argv[2]);
+    if (!d) {
+      printf("skip: no JSONTestSuite at %s (meson option jsontestsuite)\n", argv[2]);
+      return 77;
+    }
+    closedir(d);
+    test_suite(argv[2]);
+    return check_summary("protocol JSONTestSuite");
+  }
+  if (argc != 1) {
+    fprintf(stderr, "usage: test-protocol [--jsontestsuite DIR]\n");
+    return 2;
+  }
   test_valid();
   test_invalid();
   test_depth();
   test_encoders();
   test_snapshot_deltas();
   test_light_slice();
-  if (argc > 1) test_suite(argv[1]);
-  else {
-    check_failed++;
-    fprintf(stderr, "usage: test-protocol JSONTESTSUITE_DIR\n");
-  }
   return check_summary("protocol");
 }
