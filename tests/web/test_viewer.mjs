@@ -376,3 +376,81 @@ test('a daemon with a token: a changing action asks for it', async () => {
     cleanup(d.dir);
   }
 });
+
+// Creates runs over the protocol, in order ({scenario, name, start}); resolves
+// with their ids by name.
+async function createRuns(d, list) {
+  const c = await connect(d.url);
+  const ids = {};
+  for (const { scenario: sc, name, start } of list) {
+    c.send({ type: 'create', scenario: sc, name, start, id: name });
+    ids[name] = (await c.type('created')).run;
+  }
+  c.close();
+  return ids;
+}
+
+const hashOf = (page) => page.evaluate(() => location.hash);
+const watching = (page, name) => until(page, (s) => s.name === name && s.seq >= 0, `the page watching ${name}`);
+
+test('the page opens on the run its hash names, else on the most recently active run, and names it in the hash', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    // an empty site that was started stays running (it waits for plants), so
+    // it is the most recently active run although a newer one was created after it
+    const site = { ...scenario('wall.json'), plants: [] };
+    const ids = await createRuns(d, [
+      { scenario: scenario('wall.json'), name: 'first', start: false },
+      { scenario: site, name: 'site', start: true },
+      { scenario: scenario('wall.json'), name: 'newest & β', start: false },
+    ]);
+    assert.equal((await serverRun(d.http, 'site')).status, 'running');
+
+    // #run=NAME opens that run
+    const { page, errors } = await openViewer(browser, d.http, { hash: '#run=first' });
+    let s = await watching(page, 'first');
+    assert.equal(s.run, ids.first);
+    assert.equal(await page.getAttribute(`#runs tr[data-run="${ids.first}"]`, 'class'), 'selected');
+    assert.equal(await hashOf(page), '#run=first');
+
+    // switching runs names the new one in the hash, so a reload opens it again
+    await page.click(`#runs tr[data-run="${ids['newest & β']}"]`);
+    await watching(page, 'newest & β');
+    assert.equal(await hashOf(page), '#run=newest%20%26%20%CE%B2');
+    await page.reload();
+    await page.waitForFunction(() => window.sylva?.state().connection === 'open');
+    s = await watching(page, 'newest & β');
+    assert.equal(s.run, ids['newest & β']);
+    // back in the browser's history: the run before
+    await page.goBack();
+    s = await watching(page, 'first');
+    assert.equal(await hashOf(page), '#run=first');
+    assert.deepEqual(errors, []);
+    await page.close();
+
+    // without a hash, or with the name of no run: the running run
+    for (const hash of ['', '#run=gone']) {
+      const v = await openViewer(browser, d.http, { hash });
+      s = await watching(v.page, 'site');
+      assert.equal(s.run, ids.site, `opened at "${hash}"`);
+      assert.equal(s.status, 'running');
+      assert.equal(await hashOf(v.page), '#run=site', `the hash after opening at "${hash}"`);
+      assert.deepEqual(v.errors, []);
+      await v.page.close();
+    }
+
+    // nothing running: the newest run
+    const c = await connect(d.url);
+    c.send({ type: 'control', run: ids.site, action: 'stop', id: 's' });
+    assert.equal((await c.type('status')).status, 'finished');
+    c.close();
+    const v = await openViewer(browser, d.http);
+    s = await watching(v.page, 'newest & β');
+    assert.equal(await hashOf(v.page), '#run=newest%20%26%20%CE%B2');
+    assert.deepEqual(v.errors, []);
+    await v.page.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
