@@ -454,3 +454,49 @@ test('the page opens on the run its hash names, else on the most recently active
     cleanup(d.dir);
   }
 });
+
+test('the run list\'s columns are not cut off in a 1280 x 800 window', async () => {
+  const d = await startDaemon({ args: [...WEB, '--run', join(ROOT, 'scenarios', 'stand.json')] });
+  try {
+    // long names (one without a space to wrap at) and thousands of internodes
+    const stand = 'Five-tree stand, 2 m apart (IGM fig. 13)';
+    await createRuns(d, [
+      { scenario: scenario('wall.json'), name: 'a-run-name-without-any-space-to-wrap-at-0123456789', start: false },
+      { scenario: scenario('wall.json'), name: 'Tree beside a wall (IGM fig. 11)', start: true },
+    ]);
+    const end = Date.now() + 120000 * SLOW;
+    while ((await serverRun(d.http, stand)).status !== 'finished') {
+      assert.ok(Date.now() < end, 'the stand to finish');
+      await new Promise((r) => setTimeout(r, 200));
+    }
+    const nodes = (await serverRun(d.http, stand)).nodes;
+    assert.ok(nodes >= 1000, `a count with a thousands separator (${nodes})`);
+
+    const { page, errors } = await openViewer(browser, d.http, { width: 1280, height: 800 });
+    // a scenario in the form makes the panel scroll (its scroll bar takes width)
+    await page.selectOption('#scenario-select', 'stand');
+    await page.waitForSelector('#scenario-form [data-pointer="/name"]');
+    await page.waitForFunction((n) => [...document.querySelectorAll('#runs td')].some((td) => td.textContent === n),
+      nodes.toLocaleString('en'));
+    const m = await page.evaluate(() => {
+      const table = document.getElementById('runs');
+      const panel = document.getElementById('left');
+      return {
+        rows: table.tBodies[0].rows.length,
+        clipped: [...table.querySelectorAll('th, td')].filter((c) => c.scrollWidth > c.clientWidth)
+          .map((c) => `${c.textContent}: ${c.scrollWidth} > ${c.clientWidth}`),
+        table: table.scrollWidth,
+        section: table.parentElement.clientWidth,
+        panel: [panel.scrollWidth, panel.clientWidth],
+      };
+    });
+    assert.equal(m.rows, 3);
+    assert.deepEqual(m.clipped, [], 'no cell is cut off');
+    assert.ok(m.table <= m.section, `the table (${m.table} px) within its section (${m.section} px)`);
+    assert.ok(m.panel[0] <= m.panel[1], `nothing wider than the panel (${m.panel[0]} > ${m.panel[1]} px)`);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
