@@ -1,8 +1,20 @@
 // The page's side of the connection to the daemon: the socket itself lives in a
 // worker (socket_worker.mjs) that reconnects by itself and parses off this
-// thread. Here: requests with ids and their replies, server pushes to onMessage,
-// and the state (connecting, open, closed) to onState; onOpen runs after each
-// (re)connection so the page can say hello and resubscribe.
+// thread. Here: requests with ids and their replies, server pushes to onMessage
+// (with what the worker measured), and the state (connecting, open, closed) to
+// onState; onOpen runs after each (re)connection so the page can say hello and
+// resubscribe.
+
+// A request that failed: `code` is the protocol's error code, or 'closed' when
+// the connection was not open or was lost; `msg` is the daemon's `error`
+// message, null when there was none.
+export class RequestError extends Error {
+  constructor(message, code, msg = null) {
+    super(message);
+    this.code = code;
+    this.msg = msg;
+  }
+}
 
 export class Connection {
   constructor(url, { onMessage, onState, onOpen }) {
@@ -28,7 +40,7 @@ export class Connection {
     if (m.unsent) {
       const id = m.unsent.id;
       if (id !== undefined && this.pending.has(id)) {
-        this.pending.get(id).reject(Object.assign(new Error('not connected'), { code: 'closed' }));
+        this.pending.get(id).reject(new RequestError('not connected', 'closed'));
         this.pending.delete(id);
       }
       return;
@@ -38,20 +50,19 @@ export class Connection {
       return;
     }
     const msg = m.message;
-    msg.parseMs = m.parseMs + m.convertMs;
-    msg.bytes = m.bytes;
     if (msg.ref !== undefined && this.pending.has(msg.ref)) {
       const p = this.pending.get(msg.ref);
       this.pending.delete(msg.ref);
-      if (msg.type === 'error') p.reject(Object.assign(new Error(msg.message), { code: msg.code, msg }));
+      if (msg.type === 'error') p.reject(new RequestError(msg.message, msg.code, msg));
       else p.resolve(msg);
       return;
     }
-    this.onMessage(msg);
+    // what the worker measured: parsing and conversion time, and the text's length
+    this.onMessage(msg, { parseMs: m.parseMs + m.convertMs, bytes: m.bytes });
   }
 
   failPending(why) {
-    for (const p of this.pending.values()) p.reject(Object.assign(new Error(why), { code: 'closed' }));
+    for (const p of this.pending.values()) p.reject(new RequestError(why, 'closed'));
     this.pending.clear();
   }
 
@@ -62,13 +73,13 @@ export class Connection {
     return true;
   }
 
-  // Sends a message with an id; resolves with its reply, rejects with an error
-  // (err.code is the protocol's code, or 'closed').
+  // Sends a message with an id; resolves with its reply, rejects with a
+  // RequestError.
   request(msg) {
     return new Promise((resolve, reject) => {
       const id = String(this.nextId++);
       if (!this.send({ ...msg, id })) {
-        reject(Object.assign(new Error('not connected'), { code: 'closed' }));
+        reject(new RequestError('not connected', 'closed'));
         return;
       }
       this.pending.set(id, { resolve, reject });

@@ -1,6 +1,7 @@
 // Live plots of every stem against iteration: height, DBH, crown width,
 // internodes and the growth cap c(T). One point per iteration and stem, from the
-// run's stored stats (stats.csv) and then from each delta's stats.
+// run's stored stats (stats.csv, parsed by helpers.mjs) and then from each
+// delta's stats.
 import uPlot from 'uplot';
 import { plantColor } from './scene.mjs';
 
@@ -12,29 +13,11 @@ export const MEASURES = [
   { key: 'cap', title: 'Growth cap c(T)' },
 ];
 
-// Parses `sylva export --format csv` / stats.csv text into stats rows by iteration.
-export function parseStatsCsv(text) {
-  const lines = text.trim().split('\n');
-  const head = lines.shift().split(',');
-  const byIteration = new Map();
-  for (const line of lines) {
-    if (!line) continue;
-    const cells = line.split(',');
-    const row = {};
-    head.forEach((h, i) => {
-      const c = cells[i];
-      row[h] = h === 'plant' ? c : c === '' ? null : c === 'true' ? true : c === 'false' ? false : Number(c);
-    });
-    if (!byIteration.has(row.iteration)) byIteration.set(row.iteration, []);
-    byIteration.get(row.iteration).push(row);
-  }
-  return byIteration;
-}
-
 export class Plots {
   constructor(container) {
     this.container = container;
     this.charts = [];
+    this.rebuild = false;   // the charts must be made again (new stems)
     this.reset();
   }
 

@@ -57,6 +57,11 @@ class Branches {
     this.material = material;
     this.version = -1;
     this.mesh = null;
+    this.sk = null;   // the skeleton the buffers follow
+    this.start = null;
+    this.end = null;
+    this.radius = null;
+    this.plant = null;
   }
 
   rebuild(sk) {
@@ -162,9 +167,13 @@ export class View {
     this.ortho = new THREE.OrthographicCamera(-1, 1, 1, -1, -500, 500);
     this.ortho.up.set(0, 0, 1);
     this.camera = this.persp;
+    this.viewName = 'persp';
+    this.orthoHalf = 0;   // half the height the orthographic views show (0: not fitted to a world)
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener('change', () => this.invalidate());
     this.worldKey = '';
+    this.world = null;
+    this.ground = null;
     this.obstacleKey = '';
     this.slice = null;
     this.dirty = true;

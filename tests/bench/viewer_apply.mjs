@@ -6,7 +6,7 @@
 // For every delta the page reports its size, the time the socket worker took to
 // parse it and turn it into typed arrays, and the time to apply it in the page:
 // the skeleton's typed arrays changed in place plus the GPU attributes marked for
-// upload (web/app.mjs, handlers.delta). Then the separate task after it that
+// upload (web/watch.mjs, Watch.delta). Then the separate task after it that
 // squeezes shed slots out and grows the arrays ahead of need. Also the time of the
 // frames drawn meanwhile; Chromium draws with SwiftShader here (WebGL on the CPU),
 // so frame times say little about a real GPU. Use a release build.

@@ -376,3 +376,127 @@ test('a daemon with a token: a changing action asks for it', async () => {
     cleanup(d.dir);
   }
 });
+
+// Creates runs over the protocol, in order ({scenario, name, start}); resolves
+// with their ids by name.
+async function createRuns(d, list) {
+  const c = await connect(d.url);
+  const ids = {};
+  for (const { scenario: sc, name, start } of list) {
+    c.send({ type: 'create', scenario: sc, name, start, id: name });
+    ids[name] = (await c.type('created')).run;
+  }
+  c.close();
+  return ids;
+}
+
+const hashOf = (page) => page.evaluate(() => location.hash);
+const watching = (page, name) => until(page, (s) => s.name === name && s.seq >= 0, `the page watching ${name}`);
+
+test('the page opens on the run its hash names, else on the most recently active run, and names it in the hash', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    // an empty site that was started stays running (it waits for plants), so
+    // it is the most recently active run although a newer one was created after it
+    const site = { ...scenario('wall.json'), plants: [] };
+    const ids = await createRuns(d, [
+      { scenario: scenario('wall.json'), name: 'first', start: false },
+      { scenario: site, name: 'site', start: true },
+      { scenario: scenario('wall.json'), name: 'newest & β', start: false },
+    ]);
+    assert.equal((await serverRun(d.http, 'site')).status, 'running');
+
+    // #run=NAME opens that run
+    const { page, errors } = await openViewer(browser, d.http, { hash: '#run=first' });
+    let s = await watching(page, 'first');
+    assert.equal(s.run, ids.first);
+    assert.equal(await page.getAttribute(`#runs tr[data-run="${ids.first}"]`, 'class'), 'selected');
+    assert.equal(await hashOf(page), '#run=first');
+
+    // switching runs names the new one in the hash, so a reload opens it again
+    await page.click(`#runs tr[data-run="${ids['newest & β']}"]`);
+    await watching(page, 'newest & β');
+    assert.equal(await hashOf(page), '#run=newest%20%26%20%CE%B2');
+    await page.reload();
+    await page.waitForFunction(() => window.sylva?.state().connection === 'open');
+    s = await watching(page, 'newest & β');
+    assert.equal(s.run, ids['newest & β']);
+    // back in the browser's history: the run before
+    await page.goBack();
+    s = await watching(page, 'first');
+    assert.equal(await hashOf(page), '#run=first');
+    assert.deepEqual(errors, []);
+    await page.close();
+
+    // without a hash, or with the name of no run: the running run
+    for (const hash of ['', '#run=gone']) {
+      const v = await openViewer(browser, d.http, { hash });
+      s = await watching(v.page, 'site');
+      assert.equal(s.run, ids.site, `opened at "${hash}"`);
+      assert.equal(s.status, 'running');
+      assert.equal(await hashOf(v.page), '#run=site', `the hash after opening at "${hash}"`);
+      assert.deepEqual(v.errors, []);
+      await v.page.close();
+    }
+
+    // nothing running: the newest run
+    const c = await connect(d.url);
+    c.send({ type: 'control', run: ids.site, action: 'stop', id: 's' });
+    assert.equal((await c.type('status')).status, 'finished');
+    c.close();
+    const v = await openViewer(browser, d.http);
+    s = await watching(v.page, 'newest & β');
+    assert.equal(await hashOf(v.page), '#run=newest%20%26%20%CE%B2');
+    assert.deepEqual(v.errors, []);
+    await v.page.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('the run list\'s columns are not cut off in a 1280 x 800 window', async () => {
+  const d = await startDaemon({ args: [...WEB, '--run', join(ROOT, 'scenarios', 'stand.json')] });
+  try {
+    // long names (one without a space to wrap at) and thousands of internodes
+    const stand = 'Five-tree stand, 2 m apart (IGM fig. 13)';
+    await createRuns(d, [
+      { scenario: scenario('wall.json'), name: 'a-run-name-without-any-space-to-wrap-at-0123456789', start: false },
+      { scenario: scenario('wall.json'), name: 'Tree beside a wall (IGM fig. 11)', start: true },
+    ]);
+    const end = Date.now() + 120000 * SLOW;
+    while ((await serverRun(d.http, stand)).status !== 'finished') {
+      assert.ok(Date.now() < end, 'the stand to finish');
+      await new Promise((r) => setTimeout(r, 200));
+    }
+    const nodes = (await serverRun(d.http, stand)).nodes;
+    assert.ok(nodes >= 1000, `a count with a thousands separator (${nodes})`);
+
+    const { page, errors } = await openViewer(browser, d.http, { width: 1280, height: 800 });
+    // a scenario in the form makes the panel scroll (its scroll bar takes width)
+    await page.selectOption('#scenario-select', 'stand');
+    await page.waitForSelector('#scenario-form [data-pointer="/name"]');
+    await page.waitForFunction((n) => [...document.querySelectorAll('#runs td')].some((td) => td.textContent === n),
+      nodes.toLocaleString('en'));
+    const m = await page.evaluate(() => {
+      const table = document.getElementById('runs');
+      const panel = document.getElementById('left');
+      return {
+        rows: table.tBodies[0].rows.length,
+        clipped: [...table.querySelectorAll('th, td')].filter((c) => c.scrollWidth > c.clientWidth)
+          .map((c) => `${c.textContent}: ${c.scrollWidth} > ${c.clientWidth}`),
+        table: table.scrollWidth,
+        section: table.parentElement.clientWidth,
+        panel: [panel.scrollWidth, panel.clientWidth],
+      };
+    });
+    assert.equal(m.rows, 3);
+    assert.deepEqual(m.clipped, [], 'no cell is cut off');
+    assert.ok(m.table <= m.section, `the table (${m.table} px) within its section (${m.section} px)`);
+    assert.ok(m.panel[0] <= m.panel[1], `nothing wider than the panel (${m.panel[0]} > ${m.panel[1]} px)`);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});

@@ -1,0 +1,172 @@
+// The viewer's pure helpers (web/helpers.mjs) in node, as the page uses them.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import {
+  round, wsAddress, connectionLabel, runSummary, runCells, runHash, runFromHash, mostRecentRun, initialRun,
+  controlsDisabled, stepCount, exportHref, freeId, parsePoint, obstacleBox, obstacleFromFields, plantAt,
+  parseScenario, createErrorPlace, parseStatsCsv,
+} from '../../web/helpers.mjs';
+
+const run = (id, name, status) => ({ run: id, name, status, iteration: 3, stems: 1, nodes: 40 });
+
+test('round keeps centimetres', () => {
+  assert.equal(round(1.234), 1.23);
+  assert.equal(round(-2.005 - 1e-9), -2.01);
+  assert.equal(round(3), 3);
+});
+
+test('the WebSocket address follows the page\'s scheme', () => {
+  assert.equal(wsAddress('http:', '127.0.0.1:8080'), 'ws://127.0.0.1:8080/ws');
+  assert.equal(wsAddress('https:', 'trees.example'), 'wss://trees.example/ws');
+});
+
+test('the connection badge says the state and why it closed', () => {
+  assert.equal(connectionLabel('open', ''), 'connected');
+  assert.equal(connectionLabel('connecting', ''), 'connecting…');
+  assert.equal(connectionLabel('closed', ''), 'disconnected; retrying');
+  assert.equal(connectionLabel('closed', 'closed (1001)'), 'disconnected — closed (1001); retrying');
+});
+
+test('a run summary has every field, from a list entry or an id and a name', () => {
+  assert.deepEqual(runSummary({ run: 4, name: 'wall', status: 'paused', iteration: 7, stems: 2, nodes: 90 }),
+    { run: 4, name: 'wall', status: 'paused', iteration: 7, stems: 2, nodes: 90 });
+  assert.deepEqual(runSummary({ run: 5, name: 'fork', type: 'created', ref: '3' }),
+    { run: 5, name: 'fork', status: '', iteration: 0, stems: 0, nodes: 0 });
+  assert.deepEqual(Object.keys(runSummary({ run: 6 })), ['run', 'name', 'status', 'iteration', 'stems', 'nodes']);
+  assert.equal(runSummary({ run: 6 }).name, '6');
+});
+
+test('a run\'s row: name, status, iteration, stems, internodes with thousands separators', () => {
+  assert.deepEqual(runCells({ run: 1, name: 'stand', status: 'running', iteration: 12, stems: 5, nodes: 1234567 }),
+    ['stand', 'running', '12', '5', '1,234,567']);
+});
+
+test('the location hash names a run and gives it back', () => {
+  for (const name of ['wall', 'Tree beside a wall (IGM fig. 11)', 'a/b&c=d#e', 'élan 100%', '+plus+']) {
+    assert.equal(runFromHash(runHash(name)), name, name);
+  }
+  assert.equal(runHash('a b'), '#run=a%20b');
+  assert.equal(runFromHash('#run=wall'), 'wall');
+  assert.equal(runFromHash('run=wall'), 'wall');
+  assert.equal(runFromHash('#view=top&run=my%20run'), 'my run');
+  assert.equal(runFromHash('#run=a+b'), 'a+b', 'a plus is a plus, not a space');
+  assert.equal(runFromHash(''), null);
+  assert.equal(runFromHash('#'), null);
+  assert.equal(runFromHash('#run='), null);
+  assert.equal(runFromHash('#runs=wall'), null);
+  assert.equal(runFromHash('#run=%E0%A4%A'), null, 'a malformed escape names no run');
+});
+
+test('the most recently active run: the newest running one, else the newest', () => {
+  assert.equal(mostRecentRun([]), null);
+  const a = run(1, 'a', 'finished'), b = run(2, 'b', 'running'), c = run(3, 'c', 'running'), d = run(4, 'd', 'paused');
+  assert.equal(mostRecentRun([a]), a);
+  assert.equal(mostRecentRun([a, b, d]), b);
+  assert.equal(mostRecentRun([a, b, c, d]), c);
+  assert.equal(mostRecentRun([a, d]), d);
+  assert.equal(mostRecentRun([d, run(5, 'e', 'failed')]).name, 'e');
+});
+
+test('the page opens on the run its hash names, else on the most recently active one', () => {
+  const list = [run(1, 'old', 'running'), run(2, 'a b', 'finished'), run(3, 'new', 'paused')];
+  assert.equal(initialRun(list, '#run=a%20b').run, 2);
+  assert.equal(initialRun(list, '#run=old').run, 1);
+  assert.equal(initialRun(list, '#run=gone').run, 1, 'an unknown name: the running one');
+  assert.equal(initialRun(list, '').run, 1);
+  assert.equal(initialRun(list.slice(1), '').run, 3, 'nothing running: the newest');
+  assert.equal(initialRun([], '#run=old'), null);
+});
+
+test('which controls work for a status', () => {
+  const all = { start: true, pause: true, step: true, stop: true };
+  assert.deepEqual(controlsDisabled(null), all);
+  assert.deepEqual(controlsDisabled('running'), { start: true, pause: false, step: false, stop: false });
+  assert.deepEqual(controlsDisabled('paused'), { start: false, pause: true, step: false, stop: false });
+  assert.deepEqual(controlsDisabled('finished'), all);
+  assert.deepEqual(controlsDisabled('failed'), all);
+  assert.deepEqual(controlsDisabled(''), { start: false, pause: true, step: false, stop: false }, 'not yet listed');
+});
+
+test('a step count is at least 1', () => {
+  assert.equal(stepCount('3'), 3);
+  assert.equal(stepCount(''), 1);
+  assert.equal(stepCount('0'), 1);
+  assert.equal(stepCount('-2'), 1);
+  assert.equal(stepCount('many'), 1);
+});
+
+test('export links name the run (encoded), the format and the iteration', () => {
+  assert.equal(exportHref('site', 'obj', 4), 'api/runs/site/export?format=obj&iteration=4');
+  assert.equal(exportHref('a/b c', 'csv', 0), 'api/runs/a%2Fb%20c/export?format=csv&iteration=0');
+});
+
+test('a free id is the first unused number after the prefix', () => {
+  assert.equal(freeId('wall', new Set()), 'wall1');
+  assert.equal(freeId('wall', new Set(['wall1', 'wall2', 'wall4'])), 'wall3');
+  assert.equal(freeId('tree', new Set(['wall1', 'tree'])), 'tree1');
+});
+
+test('a point is two numbers separated by a comma', () => {
+  assert.deepEqual(parsePoint('-2, 1.5'), [-2, 1.5]);
+  assert.deepEqual(parsePoint(' 3 ,4 '), [3, 4]);
+  assert.deepEqual(parsePoint('1e1,0'), [10, 0]);
+  for (const bad of ['', '3', '1, 2, 3', '1, ', ', 2', 'x, 1', '1; 2', 'Infinity, 0']) {
+    assert.equal(parsePoint(bad), null, JSON.stringify(bad));
+  }
+});
+
+test('an obstacle box from two corners: a wall stands on the ground, a board lies at its height', () => {
+  assert.deepEqual(obstacleBox('wall', [-2, -1.5], [-2, 1.5], 3, 0.2), { min: [-2.1, -1.5, 0], max: [-1.9, 1.5, 3] });
+  assert.deepEqual(obstacleBox('board', [2, 3], [-1, 0], 2.5, 0.1), { min: [-1, 0, 2.5], max: [2, 3, 2.6] });
+  // corners in any order give the same box
+  assert.deepEqual(obstacleBox('wall', [1, 2], [0, 0], 2, 0.2), obstacleBox('wall', [0, 0], [1, 2], 2, 0.2));
+  // one point: a post as thick as the thickness both ways
+  assert.deepEqual(obstacleBox('wall', [1, 1], [1, 1], 2, 0.4), { min: [0.8, 0.8, 0], max: [1.2, 1.2, 2] });
+  // the corners are not changed
+  const a = [0, 0], b = [0, 3];
+  obstacleBox('wall', a, b, 1, 0.2);
+  assert.deepEqual([a, b], [[0, 0], [0, 3]]);
+});
+
+test('an obstacle from the edit fields, or what is wrong with them', () => {
+  const fields = { kind: 'wall', cornerA: '-2, -1.5', cornerB: '-2, 1.5', z: '3', thickness: '0.2' };
+  assert.deepEqual(obstacleFromFields(fields, new Set(['wall1'])),
+    { obstacle: { id: 'wall2', kind: 'box', min: [-2.1, -1.5, 0], max: [-1.9, 1.5, 3] } });
+  assert.equal(obstacleFromFields({ ...fields, kind: 'board' }, new Set(['wall1'])).obstacle.id, 'board1');
+  assert.match(obstacleFromFields({ ...fields, cornerB: '' }, new Set()).error, /both corners/);
+  for (const [z, thickness] of [['', '0.2'], ['high', '0.2'], ['3', '0'], ['3', '-1'], ['3', '']]) {
+    assert.equal(obstacleFromFields({ ...fields, z, thickness }, new Set()).error,
+      'height and thickness must be numbers', `${z}, ${thickness}`);
+  }
+});
+
+test('a new plant at a ground point takes the first free tree id', () => {
+  assert.deepEqual(plantAt(3.004, -1.996, 'broadleaf', new Set(['tree', 'tree1'])),
+    { id: 'tree2', species: 'broadleaf', roots: [[3, -2, 0]] });
+});
+
+test('a scenario is a JSON object', () => {
+  assert.deepEqual(parseScenario('{"format": "sylva.scenario/1"}'), { format: 'sylva.scenario/1' });
+  for (const bad of ['[]', 'null', '3', '"wall"']) assert.throws(() => parseScenario(bad), /a scenario is a JSON object/);
+  assert.throws(() => parseScenario('{"format": '), SyntaxError);
+});
+
+test('a refused create is shown at the name, in the form or on the message line', () => {
+  assert.equal(createErrorPlace('/name: longer than 255 bytes', true), 'name');
+  assert.equal(createErrorPlace('runs.db: a run named "wall" exists already', true), 'name');
+  assert.equal(createErrorPlace('/scenario/plants/0/roots/0: expected [x, y, z]', true), 'form');
+  assert.equal(createErrorPlace('/names: unknown', true), 'form');
+  assert.equal(createErrorPlace('not connected', false), 'message');
+});
+
+test('stats.csv rows by iteration, typed', () => {
+  const csv = 'iteration,plant,stem,height,dbh,finished\n1,tree,0,1.5,,false\n1,bush,0,0.5,,false\n2,tree,0,2.25,0.01,true\n';
+  const rows = parseStatsCsv(csv);
+  assert.deepEqual([...rows.keys()], [1, 2]);
+  assert.deepEqual(rows.get(1), [
+    { iteration: 1, plant: 'tree', stem: 0, height: 1.5, dbh: null, finished: false },
+    { iteration: 1, plant: 'bush', stem: 0, height: 0.5, dbh: null, finished: false },
+  ]);
+  assert.deepEqual(rows.get(2), [{ iteration: 2, plant: 'tree', stem: 0, height: 2.25, dbh: 0.01, finished: true }]);
+  assert.equal(parseStatsCsv('iteration,plant\n').size, 0);
+});

@@ -1,0 +1,2 @@
+// An element of the page (index.html) by its id.
+export const $ = (id) => document.getElementById(id);
