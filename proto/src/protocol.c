@@ -477,10 +477,10 @@ char *sylva_msg_created(int64_t run, const char *name, const char *ref) {
   return sylva__strbuf_finish(&b);
 }
 
-char *sylva_msg_status(int64_t run, const char *status, int iteration, const char *ref) {
+char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, const char *ref) {
   sylva__strbuf b = {0};
   sylva__strbuf_printf(&b, "{\"type\":\"status\",\"run\":%" PRId64 ",\"status\":", run);
-  put_string(&b, status);
+  put_string(&b, sylva_run_status_name(status));
   sylva__strbuf_printf(&b, ",\"iteration\":%d", iteration);
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
@@ -493,7 +493,7 @@ static void put_runs(sylva__strbuf *b, const sylva_run_summary *runs, size_t n) 
     sylva__strbuf_printf(b, "%s{\"run\":%" PRId64 ",\"name\":", i ? "," : "", r->run);
     put_string(b, r->name);
     sylva__strbuf_puts(b, ",\"status\":");
-    put_string(b, r->status);
+    put_string(b, sylva_run_status_name(r->status));
     sylva__strbuf_printf(b, ",\"iteration\":%d,\"stems\":%d,\"nodes\":%" PRId64 "}", r->iteration,
                          r->stems, r->nodes);
   }

@@ -66,7 +66,7 @@ int cmd_resume(int argc, char **argv) {
                   .progress = !quiet && isatty(STDERR_FILENO), .st = st, .run = r.id,
                   .snapshot_every = r.snapshot_every};
   rc = server_exit_status(store_world_at_logged(st, &r, r.last_iteration, &job.w));
-  if (rc == CLI_EXIT_OK && store_set_status(st, r.id, "running", NULL, job.limit)) {
+  if (rc == CLI_EXIT_OK && store_set_status(st, r.id, SYLVA_RUN_RUNNING, NULL, job.limit)) {
     fprintf(stderr, "sylva: %s\n", store_error(st));
     rc = CLI_EXIT_FAILURE;
   }

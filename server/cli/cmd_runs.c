@@ -63,7 +63,7 @@ int cmd_runs(int argc, char **argv) {
     const store_run *r = &runs[i];
     char it[32];
     snprintf(it, sizeof it, "%d/%d", r->last_iteration, r->iterations);
-    printf("%-*s  %-8s  %-8s  %9s  %9lld  %20llu  %-20s  %s\n", width, r->name, r->status,
+    printf("%-*s  %-8s  %-8s  %9s  %9lld  %20llu  %-20s  %s\n", width, r->name, sylva_run_status_name(r->status),
            r->reason[0] ? r->reason : "-", it, (long long)r->nodes, (unsigned long long)r->seed,
            r->created, r->updated);
   }

@@ -94,9 +94,9 @@ int grow_run(grow_job *job) {
     /* best effort: after a failure of the disk this may fail too, and the run can
      * still be resumed from what was stored */
     if (rc == CLI_EXIT_OK)
-      rc = store_set_status(job->st, job->run, "finished", job->reason, 0) ? CLI_EXIT_FAILURE : rc;
+      rc = store_set_status(job->st, job->run, SYLVA_RUN_FINISHED, job->reason, 0) ? CLI_EXIT_FAILURE : rc;
     else
-      store_set_status(job->st, job->run, "failed", NULL, 0);
+      store_set_status(job->st, job->run, SYLVA_RUN_FAILED, NULL, 0);
     if (rc != CLI_EXIT_OK && job->reason) fprintf(stderr, "sylva: %s\n", store_error(job->st));
   }
   if (rc == CLI_EXIT_OK && !job->silent) {

@@ -175,7 +175,8 @@ static int start_scenario(server *d, const char *path) {
   if (rc) return rc;
   for (run *r = d->runs; r; r = r->next)
     if (strcmp(r->name, s->name) == 0) {
-      server_log(r->name, "already held (%s); not created again", r->status);
+      server_log(r->name, "already held (%s); not created again",
+                 sylva_run_status_name(r->status));
       sylva_scenario_free(s);
       return SERVER_OK;
     }

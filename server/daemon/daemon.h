@@ -77,7 +77,7 @@ struct run {
   int64_t id;       /**< the store's run id, also the protocol's "run" */
   char *name;
   sylva_world *w;   /**< owned; touched by the worker while busy */
-  char status[16];  /**< running, paused, finished, failed */
+  sylva_run_status status;
   int limit;        /**< iteration limit */
   int snapshot_every;
   int steps;        /**< iterations still wanted while paused (control step) */

@@ -38,22 +38,22 @@ static bool changes(sylva_msg_type t) {
 static void handle_control(client *c, run *r, const sylva_msg *m) {
   switch (m->action) {
   case SYLVA_CONTROL_START:
-    if (strcmp(r->status, "finished") == 0 || strcmp(r->status, "failed") == 0) {
+    if (sylva_run_status_over(r->status)) {
       reply_error(c, "bad_request", "/action: the run has ended; fork it to go on", m->ref);
       return;
     }
-    run_set_status(r, "running");
+    run_set_status(r, SYLVA_RUN_RUNNING);
     break;
   case SYLVA_CONTROL_PAUSE:
-    if (strcmp(r->status, "running") == 0) run_set_status(r, "paused");
+    if (r->status == SYLVA_RUN_RUNNING) run_set_status(r, SYLVA_RUN_PAUSED);
     r->steps = 0;
     break;
   case SYLVA_CONTROL_STEP:
-    if (strcmp(r->status, "finished") == 0 || strcmp(r->status, "failed") == 0) {
+    if (sylva_run_status_over(r->status)) {
       reply_error(c, "bad_request", "/action: the run has ended; fork it to go on", m->ref);
       return;
     }
-    if (strcmp(r->status, "running") == 0) run_set_status(r, "paused");
+    if (r->status == SYLVA_RUN_RUNNING) run_set_status(r, SYLVA_RUN_PAUSED);
     r->steps += m->count;
     break;
   case SYLVA_CONTROL_STOP:
@@ -61,7 +61,7 @@ static void handle_control(client *c, run *r, const sylva_msg *m) {
     if (r->busy)
       r->stop_after = true; /* ends when the iteration in flight is stored */
     else
-      run_set_status(r, "finished");
+      run_set_status(r, SYLVA_RUN_FINISHED);
     break;
   }
   run_schedule(r);
@@ -169,7 +169,7 @@ void handle_message(client *c, const char *text, size_t len) {
     break;
   }
   case SYLVA_MSG_EDIT:
-    if (strcmp(r->status, "failed") == 0)
+    if (r->status == SYLVA_RUN_FAILED)
       reply_error(c, "bad_request", "/run: the run has failed", m.ref);
     else
       run_edit(r, c, &m, text, len);

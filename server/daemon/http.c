@@ -101,7 +101,7 @@ static char *metrics_text(server *d) {
   int64_t runs = 0, running = 0;
   for (run *r = d->runs; r; r = r->next) {
     runs++;
-    running += strcmp(r->status, "running") == 0;
+    running += r->status == SYLVA_RUN_RUNNING;
   }
   char *text = NULL;
   size_t size = 0;

@@ -48,7 +48,7 @@ static void run_note(run *r) {
 }
 
 static bool run_wants_step(const run *r) {
-  if (strcmp(r->status, "running") != 0 && !(strcmp(r->status, "paused") == 0 && r->steps > 0))
+  if (r->status != SYLVA_RUN_RUNNING && !(r->status == SYLVA_RUN_PAUSED && r->steps > 0))
     return false;
   return !sylva_world_finished(r->w) && sylva_world_iteration(r->w) < r->limit;
 }
@@ -71,14 +71,13 @@ void run_broadcast_status(run *r) {
   msgbuf_unref(m);
 }
 
-void run_set_status(run *r, const char *status) {
-  if (strcmp(r->status, status) == 0) return;
-  snprintf(r->status, sizeof r->status, "%s", status);
+void run_set_status(run *r, sylva_run_status status) {
+  if (r->status == status) return;
+  r->status = status;
   const char *reason = NULL;
-  if (strcmp(status, "finished") == 0)
-    reason = sylva_world_finished(r->w) ? "finished" : "limit";
+  if (status == SYLVA_RUN_FINISHED) reason = sylva_world_finished(r->w) ? "finished" : "limit";
   persist_status(r, reason);
-  server_log(r->name, "%s at iteration %d", status, r->iteration);
+  server_log(r->name, "%s at iteration %d", sylva_run_status_name(status), r->iteration);
   run_broadcast_status(r);
 }
 
@@ -143,7 +142,7 @@ static void after_cb(uv_work_t *req, int status) {
   answer_lights(r);
   if (r->work_status != SYLVA_OK) {
     server_log(r->name, "failed: %s", r->work_error);
-    snprintf(r->status, sizeof r->status, "failed");
+    r->status = SYLVA_RUN_FAILED;
     persist_status(r, NULL);
     run_broadcast_status(r);
     return;
@@ -185,10 +184,10 @@ static void after_cb(uv_work_t *req, int status) {
   if (d->stopping) return;
   if (r->stop_after || sylva_world_finished(r->w) || sylva_world_iteration(r->w) >= r->limit) {
     r->stop_after = false;
-    run_set_status(r, "finished");
+    run_set_status(r, SYLVA_RUN_FINISHED);
     return;
   }
-  if (strcmp(r->status, "paused") == 0 && r->steps == 0) run_broadcast_status(r);
+  if (r->status == SYLVA_RUN_PAUSED && r->steps == 0) run_broadcast_status(r);
   run_schedule(r);
 }
 
@@ -226,7 +225,8 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
     send_snapshot(r, c, ref);
 }
 
-static run *run_new(server *d, int64_t id, const char *name, sylva_world *w, const char *status,
+static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
+                    sylva_run_status status,
                     int limit, int snapshot_every) {
   run *r = calloc(1, sizeof *r);
   if (!r || !(r->name = strdup(name))) {
@@ -238,7 +238,7 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w, con
   r->w = w;
   r->limit = limit;
   r->snapshot_every = snapshot_every;
-  snprintf(r->status, sizeof r->status, "%s", status);
+  r->status = status;
   run_note(r);
   /* append, so that runs stay in creation order */
   run **tail = &d->runs;
@@ -276,8 +276,9 @@ int runs_load(server *d) {
     /* one seq per delta and per edit since the run was planted, so that the numbers a
      * client holds keep their meaning across restarts of the daemon */
     r->seq = (int64_t)sr->last_iteration + edits;
-    server_log(r->name, "loaded at iteration %d (%s)", sr->last_iteration, sr->status);
-    if (strcmp(r->status, "running") == 0) run_schedule(r);
+    server_log(r->name, "loaded at iteration %d (%s)", sr->last_iteration,
+               sylva_run_status_name(sr->status));
+    if (r->status == SYLVA_RUN_RUNNING) run_schedule(r);
   }
   store_runs_free(stored, n);
   return 0;
@@ -339,7 +340,7 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
     if (!strstr(err, "exists already")) *code = "internal";
     return NULL;
   }
-  run *r = run_new(d, id, name, w, start ? "running" : "paused", s->iterations,
+  run *r = run_new(d, id, name, w, start ? SYLVA_RUN_RUNNING : SYLVA_RUN_PAUSED, s->iterations,
                    STORE_SNAPSHOT_EVERY);
   if (!r) {
     sylva_world_destroy(w);
@@ -350,7 +351,7 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
   uv_mutex_lock(&d->store_lock);
   store_set_status(d->st, id, r->status, NULL, 0);
   uv_mutex_unlock(&d->store_lock);
-  server_log(r->name, "created (%s)", r->status);
+  server_log(r->name, "created (%s)", sylva_run_status_name(r->status));
   run_schedule(r);
   return r;
 }
@@ -499,7 +500,7 @@ static void job_work(uv_work_t *req) {
     failed = store_run_scenario(d->st, j->run, &scenario) ||
              store_create_run(d->st, j->name, scenario, sylva_world_get_def(j->w)->seed, j->limit,
                               j->snapshot_every, j->w, &j->new_id);
-    if (!failed) failed = store_set_status(d->st, j->new_id, "paused", NULL, 0);
+    if (!failed) failed = store_set_status(d->st, j->new_id, SYLVA_RUN_PAUSED, NULL, 0);
   }
   if (failed) {
     snprintf(j->err, sizeof j->err, "%s", store_error(d->st));
@@ -523,7 +524,7 @@ static void job_done(uv_work_t *req, int status) {
   if (j->code) {
     if (c) client_send_text(c, sylva_msg_error(j->code, j->err, j->ref));
   } else if (j->fork) {
-    run *nr = run_new(j->d, j->new_id, j->name, j->w, "paused", j->limit, j->snapshot_every);
+    run *nr = run_new(j->d, j->new_id, j->name, j->w, SYLVA_RUN_PAUSED, j->limit, j->snapshot_every);
     if (nr) {
       nr->seq = j->iteration; /* a fork starts with no edits of its own */
       j->w = NULL; /* the run owns it */

@@ -25,7 +25,7 @@ void run_schedule(run *r);
  *  `since` when they are all still held. */
 void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref);
 /** Sets status (running, paused, finished) and tells the subscribers. */
-void run_set_status(run *r, const char *status);
+void run_set_status(run *r, sylva_run_status status);
 /** Sends a status message to every subscriber of the run. */
 void run_broadcast_status(run *r);
 /** Applies an edit between iterations (now, or after the iteration in flight):

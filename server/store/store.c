@@ -314,7 +314,10 @@ static int read_run(sqlite3_stmt *q, store_run *r) {
   r->seed = (uint64_t)sqlite3_column_int64(q, 3);
   r->iterations = sqlite3_column_int(q, 4);
   r->snapshot_every = sqlite3_column_int(q, 5);
-  copy_column(q, 6, r->status, sizeof r->status);
+  /* the schema's CHECK admits only the four names; anything else reads as failed */
+  char status[16];
+  copy_column(q, 6, status, sizeof status);
+  if (sylva_run_status_parse(status, &r->status)) r->status = SYLVA_RUN_FAILED;
   copy_column(q, 7, r->reason, sizeof r->reason);
   copy_column(q, 8, r->created, sizeof r->created);
   copy_column(q, 9, r->updated, sizeof r->updated);
@@ -471,7 +474,7 @@ int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_jo
   return store_save_iteration(st, run, w, j, last || j->iteration % every == 0);
 }
 
-int store_set_status(store *st, int64_t run, const char *status, const char *reason,
+int store_set_status(store *st, int64_t run, sylva_run_status status, const char *reason,
                      int iterations) {
   char now[32];
   utc_now(now);
@@ -481,7 +484,7 @@ int store_set_status(store *st, int64_t run, const char *status, const char *rea
                          " iterations = CASE WHEN ? > 0 THEN ? ELSE iterations END WHERE id = ?",
                          -1, &q, NULL) != SQLITE_OK)
     return fail(st, "setting the status of a run");
-  sqlite3_bind_text(q, 1, status, -1, SQLITE_STATIC);
+  sqlite3_bind_text(q, 1, sylva_run_status_name(status), -1, SQLITE_STATIC);
   if (reason)
     sqlite3_bind_text(q, 2, reason, -1, SQLITE_STATIC);
   else

@@ -13,6 +13,7 @@
 #define SYLVA_SERVER_STORE_H
 
 #include "server_error.h"
+#include "sylva/run_status.h"
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -37,7 +38,7 @@ typedef struct store_run {
   uint64_t seed;
   int iterations;     /**< the iteration limit */
   int snapshot_every; /**< iterations between full snapshots */
-  char status[16];    /**< running, paused, finished, failed */
+  sylva_run_status status;
   char reason[16];    /**< finished or limit once it ended, else empty */
   char created[32], updated[32]; /**< UTC, ISO 8601 */
   int last_iteration; /**< the last stored iteration (0: only the planted world) */
@@ -79,7 +80,7 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
 int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
                     int every, int limit);
 /** Sets a run's status (and reason, may be NULL) and iteration limit (> 0 to change). */
-int store_set_status(store *st, int64_t run, const char *status, const char *reason,
+int store_set_status(store *st, int64_t run, sylva_run_status status, const char *reason,
                      int iterations);
 /** The world hash stored for an iteration; *found false when there is no record. */
 int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, bool *found);

@@ -791,16 +791,20 @@ static void test_encoders(void) {
   cJSON_Delete(j);
   free(text);
 
-  text = sylva_msg_status(9007199254740992LL, "paused", 12, NULL);
+  text = sylva_msg_status(9007199254740992LL, SYLVA_RUN_PAUSED, 12, NULL);
   CHECK_STR(
       text,
       "{\"type\":\"status\",\"run\":9007199254740992,\"status\":\"paused\",\"iteration\":12}");
   j = VALID_JSON(text);
   cJSON_Delete(j);
   free(text);
-  static const char *const statuses[] = {"running", "paused", "finished", "failed"};
+  /* every status by its one name (sylva/run_status.h), and the names parse back */
+  static const char *const statuses[] = {"paused", "running", "finished", "failed"};
   for (int i = 0; i < 4; i++) {
-    text = sylva_msg_status(2, statuses[i], i, "5");
+    sylva_run_status parsed;
+    CHECK_INT(sylva_run_status_parse(statuses[i], &parsed), 0);
+    CHECK_INT(parsed, i);
+    text = sylva_msg_status(2, (sylva_run_status)i, i, "5");
     j = VALID_JSON(text);
     if (j) {
       CHECK_STR(str_of(j, "status"), statuses[i]);
@@ -810,11 +814,14 @@ static void test_encoders(void) {
     cJSON_Delete(j);
     free(text);
   }
+  sylva_run_status none;
+  CHECK_INT(sylva_run_status_parse("stopped", &none), -1);
+  CHECK_STR(sylva_run_status_name((sylva_run_status)99), "unknown");
 
   sylva_run_summary runs[] = {
-      {1, "wall", "running", 4, 5, 1234},
-      {2, "tab\there \xe2\x9c\x93", "finished", 40, 1, 9000000000LL},
-      {3, NULL, "failed", 0, 0, 0},
+      {1, "wall", SYLVA_RUN_RUNNING, 4, 5, 1234},
+      {2, "tab\there \xe2\x9c\x93", SYLVA_RUN_FINISHED, 40, 1, 9000000000LL},
+      {3, NULL, SYLVA_RUN_FAILED, 0, 0, 0},
   };
   text = sylva_msg_runs(runs, 3, "\"L\"");
   j = VALID_JSON(text);

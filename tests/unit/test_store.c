@@ -69,7 +69,7 @@ int main(void) {
   CHECK(found);
   CHECK_INT(r.last_iteration, 7);
   CHECK_INT(r.snapshot_every, 3);
-  CHECK(strcmp(r.status, "running") == 0);
+  CHECK_INT(r.status, SYLVA_RUN_RUNNING);
   CHECK_INT((long long)r.nodes, (long long)sylva_world_node_count(w));
   store_run_free(&r);
   CHECK_INT(store_find_run(st, "nope", &r, &found), 0);
@@ -105,7 +105,7 @@ int main(void) {
   CHECK_INT(store_command_count(st, run, &n), 0);
   CHECK_INT(n, 2);
 
-  CHECK_INT(store_set_status(st, run, "finished", "limit", 0), 0);
+  CHECK_INT(store_set_status(st, run, SYLVA_RUN_FINISHED, "limit", 0), 0);
   store_run *all;
   size_t count;
   CHECK_INT(store_list_runs(st, &all, &count), 0);

@@ -20,6 +20,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "sylva/run_status.h"
 #include "sylva/scenario.h"
 #include "sylva/world.h"
 
@@ -137,15 +138,15 @@ char *sylva_msg_error(const char *code, const char *message, const char *ref);
 /** {"type":"created","run":3,"name":"...","ref":...} */
 char *sylva_msg_created(int64_t run, const char *name, const char *ref);
 
-/** {"type":"status","run":3,"status":"running","iteration":7,"ref":...}; status is
- *  one of running, paused, finished, failed. */
-char *sylva_msg_status(int64_t run, const char *status, int iteration, const char *ref);
+/** {"type":"status","run":3,"status":"running","iteration":7,"ref":...}; the
+ *  status by its name (sylva/run_status.h). */
+char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, const char *ref);
 
 /** One run of a "runs" list. */
 typedef struct sylva_run_summary {
   int64_t run;
   const char *name;
-  const char *status;
+  sylva_run_status status;
   int iteration;
   int stems;
   int64_t nodes;
