@@ -411,7 +411,7 @@ static int read_world(reader *r, sylva_world **out) {
         lat < -1 || lat >= (int32_t)live || (lat >= 0 && lat <= (int32_t)i) || stem < 0 ||
         stem >= w->stem_count || birth < w->stems[stem].born || birth > iteration ||
         depth < 0 || !(flags & SYLVA__NODE_ALIVE) ||
-        (flags & ~(SYLVA__NODE_ALIVE | SYLVA__NODE_LATERAL | SYLVA__NODE_SCAR)) ||
+        (flags & ~SYLVA__NODE_STATE) ||
         !(radius > 0.0f) || !isfinite(radius) ||
         !sylva__grid_voxel(&w->grid, x, y, z, v))
       SYLVA__FAIL(SYLVA_EBADIMAGE);
