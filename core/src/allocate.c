@@ -51,7 +51,7 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
     /* Apical dominance: a free bud fewer than apical_zone internodes below the
      * axis's apex stays dormant and takes no share (docs/model.md, "Allocation"). */
     if (s->lateral_child[n] < 0 && i < nb - 1 && nb - 1 - i < d->apical_zone) rbh = 0.0;
-    w->ranked.data[i] = (sylva__ranked){rbh, i};
+    w->ranked.data[i] = (sylva__ranked){rbh, 0.0, i};
   }
   /* The trunk's apex continues the main flow: besides its own light it takes the
    * share apical_flow of what the BH shares of the other nodes leave of the axis's
@@ -77,12 +77,12 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
   double sum = 0.0;
   for (int rank = 0; rank < nb; rank++) {
     double wr = sylva__priority_weight(rank, nb, d->k, d->w1, d->w2, d->w3);
-    items[rank].rbh *= wr; /* now RBH_i * w_i */
-    sum += items[rank].rbh;
+    items[rank].weighted = items[rank].rbh * wr;
+    sum += items[rank].weighted;
   }
   for (int rank = 0; rank < nb; rank++) {
     int32_t n = w->axis.data[items[rank].pos];
-    double r_i = sum > 0.0 ? r_b * items[rank].rbh / sum : 0.0;
+    double r_i = sum > 0.0 ? r_b * items[rank].weighted / sum : 0.0;
     bool apex = s->axis_child[n] < 0;
     if (s->lateral_child[n] >= 0) {
       if (SYLVA__VEC_RESERVE(w->work, w->work.len + 1) ||
@@ -126,10 +126,11 @@ static int cmp_sprout(const void *a, const void *b) {
 int sylva__allocate(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   w->sprouts.len = 0;
-  /* caps of the stems that grow this iteration (0: does not grow); the array is
-   * reused for the sprout ranges at the end */
-  if (SYLVA__VEC_RESERVE(w->stem_first, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
-  int32_t *caps = w->stem_first.data;
+  /* caps of the stems that grow this iteration (0: does not grow) */
+  if (SYLVA__VEC_RESERVE(w->caps, (size_t)w->stem_count) ||
+      SYLVA__VEC_RESERVE(w->stem_first, (size_t)w->stem_count + 1))
+    return SYLVA_ENOMEM;
+  int32_t *caps = w->caps.data;
   bool any_none = false;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];

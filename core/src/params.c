@@ -1,45 +1,42 @@
 #include "sylva/params.h"
-#include "sylva/status.h"
 
 #include <math.h>
 
+#include "sylva/species_fields.h"
+#include "sylva/status.h"
+
+/* Each listed field has the type the list gives it. */
+#define SYLVA__TYPE_MATCHES(name, type, def, lo, hi, bounds, group, snap)                 \
+  _Static_assert(_Generic(((sylva_species_def *)0)->name, type: 1, default: 0),           \
+                 #name " is not a " #type " in sylva_species_def");
+SYLVA_SPECIES_FIELDS(SYLVA__TYPE_MATCHES)
+#undef SYLVA__TYPE_MATCHES
+
 sylva_species_def sylva_default_species_def(void) {
   sylva_species_def d = {
-      .rho = 0.1,
+#define SYLVA__DEFAULT(name, type, def, lo, hi, bounds, group, snap) .name = def,
+      SYLVA_SPECIES_FIELDS(SYLVA__DEFAULT)
+#undef SYLVA__DEFAULT
       .growth = {SYLVA_EQ_LOGISTIC, {2.0, 100.0, 0.34}},
       .allocation = SYLVA_ALLOC_LGTM,
-      .sprout_light = 0.5,
-      .lambda = 0.52,
-      .k = 0.5,
-      .w1 = 1.0, .w2 = 0.6, .w3 = 0.3,
-      .tau = 6,
-      .alpha = 4.0,
-      .leaf_age = 3,
-      .node_cost = 1.0,
-      .apical_zone = 12,
-      .apical_flow = 0.02,
-      .sigma = 0.5,
-      .mu = 1.5,
-      .gamma = 0.5,
       .tropism = {0.0, 0.0, 1.0},
-      .theta = 45.0,
-      .divergence = 137.5,
-      .b_min = 1.8, .b_max = 2.2,
-      .pyramid_depth = 20,
-      .shade_spread = 0.75,
-      .shade_column = 0.002,
-      .r_s = 0.35,
-      .r_tip = 0.012,
-      .pipe_exponent = 2.5,
-      .m0 = 20, .m_min = 4,
-      .cone_angle = 60.0,
-      .cone_radius = 4.0,
-      .initial_nodes = 2,
   };
   return d;
 }
 
 static bool finite_in(double v, double lo, double hi) { return isfinite(v) && v >= lo && v <= hi; }
+
+/* v within [lo, hi], either end left out as bounds says. */
+static bool in_bounds(double v, double lo, double hi, int bounds) {
+  if (!finite_in(v, lo, hi)) return false;
+  if ((bounds & SYLVA_FIELD_MIN_EXCLUSIVE) && v == lo) return false;
+  if ((bounds & SYLVA_FIELD_MAX_EXCLUSIVE) && v == hi) return false;
+  return true;
+}
+
+/* The name a failed check reports: the key, or "markers" for the marker keys. */
+#define SYLVA__CHECK_NAME_species(name) #name
+#define SYLVA__CHECK_NAME_markers(name) "markers"
 
 int sylva_species_check(const sylva_species_def *d, const char **field) {
 #define SYLVA__REQUIRE(cond, name)                                                         \
@@ -49,7 +46,13 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
       return SYLVA_ERANGE;                                                                 \
     }                                                                                      \
   } while (0)
-  SYLVA__REQUIRE(finite_in(d->rho, 1e-4, 100.0), "rho");
+#define SYLVA__RANGE(name, type, def, lo, hi, bounds, group, snap) \
+  SYLVA__REQUIRE(in_bounds((double)d->name, lo, hi, bounds), SYLVA__CHECK_NAME_##group(name));
+  SYLVA_SPECIES_FIELDS(SYLVA__RANGE)
+#undef SYLVA__RANGE
+  /* What the list does not hold (sylva/species_fields.h). */
+  SYLVA__REQUIRE(d->b_max >= d->b_min, "b_max");
+  SYLVA__REQUIRE(d->m_min <= d->m0, "markers");
   SYLVA__REQUIRE((unsigned)d->growth.kind < SYLVA_EQ_COUNT, "growth");
   for (int i = 0; i < 3; i++) SYLVA__REQUIRE(isfinite(d->growth.p[i]), "growth");
   switch (d->growth.kind) {
@@ -67,36 +70,7 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
   SYLVA__REQUIRE(sylva_equation_limit(&d->growth) <= 1e6, "growth");
   SYLVA__REQUIRE(d->allocation == SYLVA_ALLOC_LGTM || d->allocation == SYLVA_ALLOC_NONE,
                  "allocation");
-  SYLVA__REQUIRE(finite_in(d->sprout_light, 0.0, 1.0), "sprout_light");
-  SYLVA__REQUIRE(finite_in(d->lambda, 0.0, 1.0) && d->lambda > 0.0 && d->lambda < 1.0, "lambda");
-  SYLVA__REQUIRE(finite_in(d->k, 0.0, 1.0), "k");
-  SYLVA__REQUIRE(finite_in(d->w1, 0.0, 1e6), "w1");
-  SYLVA__REQUIRE(finite_in(d->w2, 0.0, 1e6), "w2");
-  SYLVA__REQUIRE(finite_in(d->w3, 0.0, 1e6), "w3");
-  SYLVA__REQUIRE(d->tau >= 0 && d->tau <= 100000, "tau");
-  SYLVA__REQUIRE(finite_in(d->alpha, 0.0, 1e6) && d->alpha > 0.0, "alpha");
-  SYLVA__REQUIRE(finite_in(d->sigma, 0.0, 1.0) && d->sigma > 0.0, "sigma");
-  SYLVA__REQUIRE(d->leaf_age >= 1 && d->leaf_age <= 100000, "leaf_age");
-  SYLVA__REQUIRE(finite_in(d->node_cost, 0.0, 1e6) && d->node_cost > 0.0, "node_cost");
-  SYLVA__REQUIRE(finite_in(d->apical_flow, 0.0, 1.0), "apical_flow");
-  SYLVA__REQUIRE(d->apical_zone >= 0 && d->apical_zone <= 100000, "apical_zone");
-  SYLVA__REQUIRE(finite_in(d->mu, 0.0, 1e3), "mu");
-  SYLVA__REQUIRE(finite_in(d->gamma, 0.0, 1e3), "gamma");
   for (int i = 0; i < 3; i++) SYLVA__REQUIRE(finite_in(d->tropism[i], -1e3, 1e3), "tropism");
-  SYLVA__REQUIRE(finite_in(d->theta, 0.0, 180.0), "theta");
-  SYLVA__REQUIRE(finite_in(d->divergence, -360.0, 360.0), "divergence");
-  SYLVA__REQUIRE(finite_in(d->b_min, 1.0, 1e3) && d->b_min > 1.0, "b_min");
-  SYLVA__REQUIRE(finite_in(d->b_max, d->b_min, 1e3), "b_max");
-  SYLVA__REQUIRE(d->pyramid_depth >= 1 && d->pyramid_depth <= 64, "pyramid_depth");
-  SYLVA__REQUIRE(finite_in(d->shade_spread, 0.0, 4.0), "shade_spread");
-  SYLVA__REQUIRE(finite_in(d->shade_column, 0.0, 1.0), "shade_column");
-  SYLVA__REQUIRE(finite_in(d->r_s, 0.0, 1e6), "r_s");
-  SYLVA__REQUIRE(finite_in(d->r_tip, 0.0, 10.0) && d->r_tip > 0.0, "r_tip");
-  SYLVA__REQUIRE(finite_in(d->pipe_exponent, 2.0, 3.5), "pipe_exponent");
-  SYLVA__REQUIRE(d->m_min >= 0 && d->m_min <= d->m0 && d->m0 <= 1000, "markers");
-  SYLVA__REQUIRE(finite_in(d->cone_angle, 0.0, 180.0) && d->cone_angle > 0.0, "markers");
-  SYLVA__REQUIRE(finite_in(d->cone_radius, 0.0, 1e3) && d->cone_radius > 0.0, "markers");
-  SYLVA__REQUIRE(d->initial_nodes >= 1 && d->initial_nodes <= 1000, "initial_nodes");
 #undef SYLVA__REQUIRE
   return SYLVA_OK;
 }

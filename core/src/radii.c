@@ -6,8 +6,8 @@
 
 int sylva__radii(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
-  double *acc = w->resource; /* sum of children's R^v, by slot */
-  memset(acc, 0, s->count * sizeof *acc);
+  double *pipe = w->pipe;
+  memset(pipe, 0, s->count * sizeof *pipe);
   int32_t cur_stem = -1;
   double v = 2.5, inv_v = 0.4, r_tip = 0.0;
   for (size_t i = s->count; i-- > 0;) {
@@ -20,7 +20,7 @@ int sylva__radii(sylva_world *w, int iteration) {
       r_tip = d->r_tip;
     }
     bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
-    double r = terminal ? r_tip : pow(acc[i], inv_v);
+    double r = terminal ? r_tip : pow(pipe[i], inv_v);
     if (r > (double)s->radius[i]) {
       float old = s->radius[i];
       s->radius[i] = (float)r;
@@ -29,7 +29,7 @@ int sylva__radii(sylva_world *w, int iteration) {
         w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
       }
     }
-    if (s->parent[i] >= 0) acc[s->parent[i]] += pow((double)s->radius[i], v);
+    if (s->parent[i] >= 0) pipe[s->parent[i]] += pow((double)s->radius[i], v);
   }
   /* the list was built apex to root; report it in id order */
   for (size_t a = 0, b = w->radii.len; a + 1 < b; a++, b--) {

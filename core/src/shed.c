@@ -4,15 +4,13 @@
 
 #include "world_impl.h"
 
-enum { SYLVA__NODE_DOOMED = 128 };
-
 int sylva__shed(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   /* E is judged on the light the nodes will collect next iteration (every node at
    * least one iteration old): a newborn node's l^0 = 1 would otherwise count full
    * light in any shade and hold up dark branches only while they still grow. */
   sylva__light_collect(w, iteration + 1, NULL);
-  int32_t *n = w->count; /* leaf-bearing nodes of each subtree */
+  int32_t *n = w->leaves;
   const sylva_species_def *d = NULL;
   for (size_t i = 0, stem = SIZE_MAX; i < s->count; i++) {
     if ((size_t)s->stem[i] != stem) { /* looked up again only when the stem changes */

@@ -113,26 +113,26 @@ static int build_index(sylva_world *w, index_ctx *ix) {
       SYLVA__VEC_RESERVE(w->cell_pos, 3 * n + 3) || SYLVA__VEC_RESERVE(w->cell_of, n + 1))
     return SYLVA_ENOMEM;
   int32_t *first = w->cell_first.data, *of = w->cell_of.data;
+  /* Counting sort: first[c] counts cell c's items, then (summed) marks the end of
+   * cell c; filling each cell from its end, last item first, keeps the items in order
+   * and leaves first[c] at the cell's start. */
   for (size_t c = 0; c <= ncells; c++) first[c] = 0;
   for (size_t i = 0; i < n; i++) {
     int32_t slot = w->sprouts.data[i].slot;
     int64_t c = (cell_of(ix, 2, s->z[slot]) * ix->dims[1] + cell_of(ix, 1, s->y[slot])) *
                     ix->dims[0] + cell_of(ix, 0, s->x[slot]);
     of[i] = (int32_t)c;
-    first[c + 1]++;
+    first[c]++;
   }
-  for (size_t c = 0; c < ncells; c++) first[c + 1] += first[c];
-  /* place items stably: cell_of doubles as the running fill position */
-  for (size_t i = 0; i < n; i++) {
-    int32_t at = first[of[i]]++;
+  for (size_t c = 1; c <= ncells; c++) first[c] += first[c - 1];
+  for (size_t i = n; i-- > 0;) {
+    int32_t at = --first[of[i]];
     int32_t slot = w->sprouts.data[i].slot;
     w->cell_items.data[at] = (int32_t)i;
     w->cell_pos.data[3 * at] = s->x[slot];
     w->cell_pos.data[3 * at + 1] = s->y[slot];
     w->cell_pos.data[3 * at + 2] = s->z[slot];
   }
-  for (size_t c = ncells; c > 0; c--) first[c] = first[c - 1];
-  first[0] = 0;
   return SYLVA_OK;
 }
 

@@ -3,10 +3,12 @@
  * then the payload, little-endian. The voxel grid is not stored: shade is an exact
  * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "sylva/snapshot.h"
+#include "sylva/species_fields.h"
 #include "world_impl.h"
 
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
@@ -69,14 +71,50 @@ static uint64_t fnv1a(const uint8_t *p, size_t n) {
   return h;
 }
 
-/* Species fields in one fixed order, shared by writer and reader. */
-#define SYLVA__SPECIES_F64(X)                                                             \
-  X(rho) X(growth.p[0]) X(growth.p[1]) X(growth.p[2]) X(sprout_light) X(lambda) X(k) X(w1) \
-  X(w2) X(w3) X(alpha) X(sigma) X(mu) X(gamma) X(tropism[0]) X(tropism[1]) X(tropism[2])   \
-  X(theta) X(divergence) X(b_min) X(b_max) X(r_s) X(r_tip) X(pipe_exponent) X(cone_angle)  \
-  X(cone_radius) X(node_cost) X(shade_spread) X(shade_column) X(apical_flow)
-#define SYLVA__SPECIES_I32(X) X(tau) X(pyramid_depth) X(m0) X(m_min) X(initial_nodes) X(leaf_age) \
-  X(apical_zone)
+/* The species record after growth.kind and allocation: every double of a species,
+ * then every int, each at its place in sylva/species_fields.h. */
+typedef struct species_slot {
+  size_t offset;
+  bool is_int;
+} species_slot;
+
+#define SYLVA__SLOT_double(name) {offsetof(sylva_species_def, name), false}
+#define SYLVA__SLOT_int(name) {offsetof(sylva_species_def, name), true}
+#define SYLVA__SLOT(name, type, def, lo, hi, bounds, group, snap) [snap] = SYLVA__SLOT_##type(name),
+static const species_slot species_record[SYLVA_SPECIES_SNAPSHOT_FIELDS] = {
+    SYLVA_SPECIES_FIELDS(SYLVA__SLOT)
+    /* not in the list: the equation's parameters and the tropism vector */
+    [1] = SYLVA__SLOT_double(growth.p[0]),
+    [2] = SYLVA__SLOT_double(growth.p[1]),
+    [3] = SYLVA__SLOT_double(growth.p[2]),
+    [14] = SYLVA__SLOT_double(tropism[0]),
+    [15] = SYLVA__SLOT_double(tropism[1]),
+    [16] = SYLVA__SLOT_double(tropism[2]),
+};
+#undef SYLVA__SLOT
+#undef SYLVA__SLOT_double
+#undef SYLVA__SLOT_int
+/* Every place is filled once: a place named twice is an error (-Woverride-init), so
+ * as many entries as places leave none empty. */
+#define SYLVA__COUNT(name, type, def, lo, hi, bounds, group, snap) +1
+_Static_assert(0 SYLVA_SPECIES_FIELDS(SYLVA__COUNT) + 6 == SYLVA_SPECIES_SNAPSHOT_FIELDS,
+               "a snapshot place of the species record is empty");
+#undef SYLVA__COUNT
+
+static void put_species(writer *o, const sylva_species_def *d) {
+  for (int i = 0; i < SYLVA_SPECIES_SNAPSHOT_FIELDS; i++) {
+    const char *at = (const char *)d + species_record[i].offset;
+    if (species_record[i].is_int) {
+      int v;
+      memcpy(&v, at, sizeof v);
+      put_i32(o, v);
+    } else {
+      double v;
+      memcpy(&v, at, sizeof v);
+      put_f64(o, v);
+    }
+  }
+}
 
 static void put_stats(writer *o, const sylva_stem_stats *s) {
   put_f64(o, s->height);
@@ -109,12 +147,7 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     put_str(&o, w->species[i].label);
     put_u32(&o, (uint32_t)d->growth.kind);
     put_u32(&o, (uint32_t)d->allocation);
-#define SYLVA__W64(f) put_f64(&o, d->f);
-#define SYLVA__W32(f) put_i32(&o, d->f);
-    SYLVA__SPECIES_F64(SYLVA__W64)
-    SYLVA__SPECIES_I32(SYLVA__W32)
-#undef SYLVA__W64
-#undef SYLVA__W32
+    put_species(&o, d);
   }
   put_i32(&o, w->grid.next_obstacle_id);
   put_u32(&o, (uint32_t)w->grid.obstacle_count);
@@ -252,6 +285,19 @@ static void get_stats(reader *r, sylva_stem_stats *s) {
   s->cap = get_i32(r);
 }
 
+static void get_species(reader *r, sylva_species_def *d) {
+  for (int i = 0; i < SYLVA_SPECIES_SNAPSHOT_FIELDS; i++) {
+    char *at = (char *)d + species_record[i].offset;
+    if (species_record[i].is_int) {
+      int v = get_i32(r);
+      memcpy(at, &v, sizeof v);
+    } else {
+      double v = get_f64(r);
+      memcpy(at, &v, sizeof v);
+    }
+  }
+}
+
 #define SYLVA__FAIL(code) \
   do {                    \
     rc = (code);          \
@@ -281,12 +327,7 @@ static int read_world(reader *r, sylva_world **out) {
     sylva_species_def d = sylva_default_species_def();
     d.growth.kind = (sylva_equation_kind)get_u32(r);
     d.allocation = (sylva_allocation)get_u32(r);
-#define SYLVA__R64(f) d.f = get_f64(r);
-#define SYLVA__R32(f) d.f = get_i32(r);
-    SYLVA__SPECIES_F64(SYLVA__R64)
-    SYLVA__SPECIES_I32(SYLVA__R32)
-#undef SYLVA__R64
-#undef SYLVA__R32
+    get_species(r, &d);
     if (r->bad) break;
     if (sylva_world_add_species(w, &d, label) < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
   }
@@ -370,7 +411,7 @@ static int read_world(reader *r, sylva_world **out) {
         lat < -1 || lat >= (int32_t)live || (lat >= 0 && lat <= (int32_t)i) || stem < 0 ||
         stem >= w->stem_count || birth < w->stems[stem].born || birth > iteration ||
         depth < 0 || !(flags & SYLVA__NODE_ALIVE) ||
-        (flags & ~(SYLVA__NODE_ALIVE | SYLVA__NODE_LATERAL | SYLVA__NODE_SCAR)) ||
+        (flags & ~SYLVA__NODE_STATE) ||
         !(radius > 0.0f) || !isfinite(radius) ||
         !sylva__grid_voxel(&w->grid, x, y, z, v))
       SYLVA__FAIL(SYLVA_EBADIMAGE);

@@ -61,8 +61,9 @@ void sylva_world_destroy(sylva_world *w) {
   free(w->stems);
   free(w->light);
   free(w->q);
-  free(w->resource);
-  free(w->count);
+  free(w->pipe);
+  free(w->leaves);
+  free(w->remap);
   free(w->sprouts.data);
   free(w->order.data);
   free(w->axis.data);
@@ -74,6 +75,7 @@ void sylva_world_destroy(sylva_world *w) {
   free(w->radii.data);
   free(w->shed.data);
   free(w->stats.data);
+  free(w->caps.data);
   free(w->stem_first.data);
   free(w->cells.data);
   free(w->cell_first.data);
@@ -341,12 +343,15 @@ static int reserve_scratch(sylva_world *w) {
   double *q = realloc(w->q, n * sizeof *q);
   if (!q) return SYLVA_ENOMEM;
   w->q = q;
-  double *r = realloc(w->resource, n * sizeof *r);
-  if (!r) return SYLVA_ENOMEM;
-  w->resource = r;
-  int32_t *c = realloc(w->count, n * sizeof *c);
-  if (!c) return SYLVA_ENOMEM;
-  w->count = c;
+  double *p = realloc(w->pipe, n * sizeof *p);
+  if (!p) return SYLVA_ENOMEM;
+  w->pipe = p;
+  int32_t *leaves = realloc(w->leaves, n * sizeof *leaves);
+  if (!leaves) return SYLVA_ENOMEM;
+  w->leaves = leaves;
+  int32_t *remap = realloc(w->remap, n * sizeof *remap);
+  if (!remap) return SYLVA_ENOMEM;
+  w->remap = remap;
   w->scratch_cap = n;
   return SYLVA_OK;
 }
@@ -437,8 +442,8 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
   /* Keep the skeleton dense after every step: slots are node order, so queries
    * index live nodes directly. */
   if (w->nodes.count != w->nodes.live) {
-    sylva__skeleton_compact(&w->nodes, w->count);
-    for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->count[w->stems[s].root_slot];
+    sylva__skeleton_compact(&w->nodes, w->remap);
+    for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
   }
   j->phase_seconds[SYLVA_PHASE_STATS] = now(w) - t5;
 
@@ -516,7 +521,7 @@ void sylva_world_dims(const sylva_world *w, int dims[3]) { memcpy(dims, w->grid.
 void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (3 * sizeof(double) + sizeof(int32_t)) +
+  out->other = w->scratch_cap * (3 * sizeof(double) + 2 * sizeof(int32_t)) +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->radii.cap * sizeof(sylva_radius_change) +
                w->cells.cap * sizeof(sylva__keyed) +

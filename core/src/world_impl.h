@@ -43,8 +43,9 @@ typedef struct sylva__sprout {
 
 /** One node of an axis being ranked by its BH share. */
 typedef struct sylva__ranked {
-  double rbh;
-  int32_t pos; /* position along the axis, base = 0 */
+  double rbh;      /* RBH_i, the key of the ranking */
+  double weighted; /* RBH_i * w_i, once ranked */
+  int32_t pos;     /* position along the axis, base = 0 */
 } sylva__ranked;
 
 /** A sprout filed under its cell of the competition index. */
@@ -80,17 +81,24 @@ struct sylva_world {
   sylva__stem *stems;
   int stem_count, stem_cap;
 
-  /* Per-step scratch, reused across steps. */
-  double *light;         /* L_i by slot */
-  double *q;             /* Q_i by slot: light of the node and its subtree (last light pass) */
-  double *resource;      /* R_i by slot */
-  int32_t *count;        /* subtree node count / remap, by slot */
+  /* Per-step scratch, reused across steps. Each buffer has one meaning, named by the
+   * phase that fills it; none is reused by a later phase for something else. */
+  /* by slot, sized to the skeleton's capacity (sylva__reserve_scratch) */
+  double *light;         /* light: L_i of the pass at T, read by allocation */
+  double *q;             /* light: Q_i, the light of the node and its subtree, of the
+                            last light pass (T for allocation, T + 1 after shoots) */
+  double *pipe;          /* radii: sum over the node's children of r^v */
+  int32_t *leaves;       /* shedding: leaf-bearing nodes of the node's subtree */
+  int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped */
   size_t scratch_cap;
+  /* by stem */
+  SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0 */
+  SYLVA__VEC(int32_t) stem_first; /* allocation: first sprout of each stem, stem_count + 1 */
+  /* the rest as the phases need them */
   SYLVA__VEC(sylva__sprout) sprouts;
   SYLVA__VEC(int32_t) order;
   SYLVA__VEC(int32_t) axis;      /* nodes of one axis */
   SYLVA__VEC(sylva__ranked) ranked; /* ranking of one axis */
-  SYLVA__VEC(int32_t) stem_first; /* first sprout of each stem, stem_count + 1 entries */
   SYLVA__VEC(int32_t) work;      /* pending (slot) stack for axes */
   SYLVA__VEC(double) work_r;     /* resource for pending axes */
   SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */

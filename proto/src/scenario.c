@@ -12,6 +12,7 @@
 
 #include "sylva/encode.h"
 #include "sylva/json_check.h"
+#include "sylva/species_fields.h"
 #include "sylva/status.h"
 #include "scenario_parts.h"
 #include "strbuf.h"
@@ -279,58 +280,42 @@ typedef struct species_field {
   range r;
 } species_field;
 
-#define DBL(name, lo, hi, lo_open, hi_open)                                                     \
-  { #name, offsetof(sylva_species_def, name), false, {lo, hi, lo_open, hi_open} }
-#define INT(name, lo, hi) { #name, offsetof(sylva_species_def, name), true, {lo, hi, false, false} }
+/* The scalar fields of a species, in sylva/species_fields.h's order: top-level keys
+ * of a species object, and keys of its "markers" object. IN(group, wanted, ...)
+ * keeps its arguments for a field of the wanted group. */
+#define IN_species_species(...) __VA_ARGS__
+#define IN_species_markers(...)
+#define IN_markers_species(...)
+#define IN_markers_markers(...) __VA_ARGS__
+#define IN(group, wanted, ...) IN_##group##_##wanted(__VA_ARGS__)
+#define IS_INT_double false
+#define IS_INT_int true
+#define FIELD(name, type, lo, hi, bounds)                                                     \
+  {#name, offsetof(sylva_species_def, name), IS_INT_##type,                                   \
+   {lo, hi, ((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE) != 0, ((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE) != 0}},
+#define SPECIES_FIELD(name, type, def, lo, hi, bounds, group, snap) \
+  IN(group, species, FIELD(name, type, lo, hi, bounds))
+#define MARKER_FIELD(name, type, def, lo, hi, bounds, group, snap) \
+  IN(group, markers, FIELD(name, type, lo, hi, bounds))
+#define SPECIES_KEY(name, type, def, lo, hi, bounds, group, snap) IN(group, species, #name, )
 
-/* Ranges as scenario.md and sylva_species_check() want them. */
-static const species_field species_fields[] = {
-    DBL(rho, 1e-4, 100, false, false),
-    DBL(sprout_light, 0, 1, false, false),
-    DBL(lambda, 0, 1, true, true),
-    DBL(k, 0, 1, false, false),
-    DBL(w1, 0, 1e6, false, false),
-    DBL(w2, 0, 1e6, false, false),
-    DBL(w3, 0, 1e6, false, false),
-    INT(tau, 0, 100000),
-    DBL(alpha, 0, 1e6, true, false),
-    INT(leaf_age, 1, 100000),
-    DBL(node_cost, 0, 1e6, true, false),
-    DBL(apical_flow, 0, 1, false, false),
-    INT(apical_zone, 0, 100000),
-    DBL(sigma, 0, 1, true, false),
-    DBL(mu, 0, 1000, false, false),
-    DBL(gamma, 0, 1000, false, false),
-    DBL(theta, 0, 180, false, false),
-    DBL(divergence, -360, 360, false, false),
-    DBL(b_min, 1, 1000, true, false),
-    DBL(b_max, 1, 1000, true, false),
-    INT(pyramid_depth, 1, 64),
-    DBL(shade_spread, 0, 4, false, false),
-    DBL(shade_column, 0, 1, false, false),
-    DBL(r_s, 0, 1e6, false, false),
-    DBL(r_tip, 0, 10, true, false),
-    DBL(pipe_exponent, 2, 3.5, false, false),
-    INT(initial_nodes, 1, 1000),
-};
+static const species_field species_fields[] = {SYLVA_SPECIES_FIELDS(SPECIES_FIELD)};
+static const species_field marker_fields[] = {SYLVA_SPECIES_FIELDS(MARKER_FIELD)};
+/* Every key of a species object: the ones the list does not hold, then the list's. */
+static const char *const species_keys[] = {"preset", "growth", "allocation", "tropism",
+                                           "markers", SYLVA_SPECIES_FIELDS(SPECIES_KEY)};
 
-static const species_field marker_fields[] = {
-    INT(m0, 0, 1000),
-    INT(m_min, 0, 1000),
-    DBL(cone_angle, 0, 180, true, false),
-    DBL(cone_radius, 0, 1000, true, false),
-};
-
-#undef DBL
-#undef INT
-
-static const char *const species_keys[] = {
-    "preset", "rho",   "growth", "allocation", "sprout_light", "lambda",        "k",
-    "w1",     "w2",    "w3",     "tau",        "alpha",        "sigma",         "mu",
-    "gamma",  "tropism", "theta", "divergence", "b_min",       "b_max",         "pyramid_depth",
-    "r_s",    "r_tip", "pipe_exponent", "markers", "initial_nodes", "leaf_age", "node_cost",
-    "shade_spread", "shade_column", "apical_flow", "apical_zone",
-};
+#undef IN_species_species
+#undef IN_species_markers
+#undef IN_markers_species
+#undef IN_markers_markers
+#undef IN
+#undef IS_INT_double
+#undef IS_INT_int
+#undef FIELD
+#undef SPECIES_FIELD
+#undef MARKER_FIELD
+#undef SPECIES_KEY
 
 static int set_fields(sylva__parser *p, const cJSON *obj, const species_field *fields, size_t count,
                       sylva_species_def *def) {

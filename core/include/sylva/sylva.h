@@ -3,6 +3,7 @@
 #define SYLVA_SYLVA_H
 #include "equations.h"
 #include "params.h"
+#include "species_fields.h"
 #include "snapshot.h"
 #include "status.h"
 #include "world.h"

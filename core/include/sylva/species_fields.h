@@ -1,0 +1,80 @@
+/* sylva: the scalar fields of sylva_species_def in one list.
+ *
+ * SYLVA_SPECIES_FIELDS(X) calls X(name, type, default, min, max, bounds, group, snapshot)
+ * once per field:
+ *
+ *   name      the member of sylva_species_def, also its scenario key
+ *   type      double or int, the member's type
+ *   default   the value of sylva_default_species_def()
+ *   min, max  the range sylva_species_check() and the scenario parser accept
+ *   bounds    SYLVA_FIELD_CLOSED, or SYLVA_FIELD_MIN_EXCLUSIVE and/or
+ *             SYLVA_FIELD_MAX_EXCLUSIVE (or-ed) where min or max itself is refused
+ *   group     species: a key of the scenario's species object; markers: a key of
+ *             its "markers" object (sylva_species_check() names it "markers")
+ *   snapshot  the field's place in a snapshot's species record (SYLVA_SNAPSHOT_VERSION):
+ *             doubles first, then ints, as version 4 wrote them
+ *
+ * Generated from the list: the defaults (core/src/params.c), the range checks
+ * (sylva_species_check), the snapshot's species record (core/src/snapshot.c), and
+ * the species keys, ranges and canonical JSON order of scenarios
+ * (proto/src/scenario.c). The list's order is the order in which the scenario
+ * parser checks the keys and writes them back; keep it.
+ *
+ * Not in the list, written by hand where they are used: the growth equation
+ * (growth.kind and growth.p[3], whose parameters depend on the kind), the
+ * allocation enum, the tropism vector (three doubles in [-1000, 1000]), and the
+ * two rules between fields: b_max >= b_min and m_min <= m0. In a snapshot,
+ * growth.kind and allocation come first as u32, growth.p[] takes places 1-3 and
+ * tropism[] places 14-16.
+ *
+ * Adding a field: add it to sylva_species_def, here (at the end of its group, with
+ * the next free snapshot place), bump SYLVA_SNAPSHOT_VERSION, and document its key
+ * in docs/scenario.md. */
+#ifndef SYLVA_SPECIES_FIELDS_H
+#define SYLVA_SPECIES_FIELDS_H
+
+#define SYLVA_FIELD_CLOSED 0
+#define SYLVA_FIELD_MIN_EXCLUSIVE 1
+#define SYLVA_FIELD_MAX_EXCLUSIVE 2
+
+/* clang-format off */
+#define SYLVA_SPECIES_FIELDS(X)                                                                  \
+  X(rho,           double, 0.1,   1e-4, 100,    SYLVA_FIELD_CLOSED,        species, 0)           \
+  X(sprout_light,  double, 0.5,   0,    1,      SYLVA_FIELD_CLOSED,        species, 4)           \
+  X(lambda,        double, 0.52,  0,    1,      SYLVA_FIELD_MIN_EXCLUSIVE | SYLVA_FIELD_MAX_EXCLUSIVE, \
+                                                                           species, 5)           \
+  X(k,             double, 0.5,   0,    1,      SYLVA_FIELD_CLOSED,        species, 6)           \
+  X(w1,            double, 1.0,   0,    1e6,    SYLVA_FIELD_CLOSED,        species, 7)           \
+  X(w2,            double, 0.6,   0,    1e6,    SYLVA_FIELD_CLOSED,        species, 8)           \
+  X(w3,            double, 0.3,   0,    1e6,    SYLVA_FIELD_CLOSED,        species, 9)           \
+  X(tau,           int,    6,     0,    100000, SYLVA_FIELD_CLOSED,        species, 30)          \
+  X(alpha,         double, 4.0,   0,    1e6,    SYLVA_FIELD_MIN_EXCLUSIVE, species, 10)          \
+  X(leaf_age,      int,    3,     1,    100000, SYLVA_FIELD_CLOSED,        species, 35)          \
+  X(node_cost,     double, 1.0,   0,    1e6,    SYLVA_FIELD_MIN_EXCLUSIVE, species, 26)          \
+  X(apical_flow,   double, 0.02,  0,    1,      SYLVA_FIELD_CLOSED,        species, 29)          \
+  X(apical_zone,   int,    12,    0,    100000, SYLVA_FIELD_CLOSED,        species, 36)          \
+  X(sigma,         double, 0.5,   0,    1,      SYLVA_FIELD_MIN_EXCLUSIVE, species, 11)          \
+  X(mu,            double, 1.5,   0,    1000,   SYLVA_FIELD_CLOSED,        species, 12)          \
+  X(gamma,         double, 0.5,   0,    1000,   SYLVA_FIELD_CLOSED,        species, 13)          \
+  X(theta,         double, 45.0,  0,    180,    SYLVA_FIELD_CLOSED,        species, 17)          \
+  X(divergence,    double, 137.5, -360, 360,    SYLVA_FIELD_CLOSED,        species, 18)          \
+  X(b_min,         double, 1.8,   1,    1000,   SYLVA_FIELD_MIN_EXCLUSIVE, species, 19)          \
+  X(b_max,         double, 2.2,   1,    1000,   SYLVA_FIELD_MIN_EXCLUSIVE, species, 20)          \
+  X(pyramid_depth, int,    20,    1,    64,     SYLVA_FIELD_CLOSED,        species, 31)          \
+  X(shade_spread,  double, 0.75,  0,    4,      SYLVA_FIELD_CLOSED,        species, 27)          \
+  X(shade_column,  double, 0.002, 0,    1,      SYLVA_FIELD_CLOSED,        species, 28)          \
+  X(r_s,           double, 0.35,  0,    1e6,    SYLVA_FIELD_CLOSED,        species, 21)          \
+  X(r_tip,         double, 0.012, 0,    10,     SYLVA_FIELD_MIN_EXCLUSIVE, species, 22)          \
+  X(pipe_exponent, double, 2.5,   2,    3.5,    SYLVA_FIELD_CLOSED,        species, 23)          \
+  X(initial_nodes, int,    2,     1,    1000,   SYLVA_FIELD_CLOSED,        species, 34)          \
+  X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
+  X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
+  X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
+  X(cone_radius,   double, 4.0,   0,    1000,   SYLVA_FIELD_MIN_EXCLUSIVE, markers, 25)
+/* clang-format on */
+
+/** Places in a snapshot's species record: the list's fields and the hand-written
+ *  growth.p[3] and tropism[3]. */
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 37
+
+#endif
