@@ -142,8 +142,10 @@ def grow_killed(env, c, ref, ch, scenario, db):
             if after_line is None:
                 # not longer than the process is likely to live: the kills must happen
                 delay = min(delay, 0.8 * ref.remaining(k, snaps))
+        # unbuffered: readline() below must not read ahead, because communicate()
+        # reads the pipe itself and would never see what a buffer held (a lost line)
         p = subprocess.Popen([env.exe] + [str(a) for a in cmd], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE)
+                             stderr=subprocess.PIPE, bufsize=0)
         head = b""
         if after_line is not None:
             while True:
