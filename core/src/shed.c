@@ -6,7 +6,7 @@
 
 int sylva__shed(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
-  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.shed = 0;
+  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.shed = 0; /* counted anew at T */
   /* E is judged on the light the nodes will collect next iteration (every node at
    * least one iteration old): a newborn node's l^0 = 1 would otherwise count full
    * light in any shade and hold up dark branches only while they still grow. */

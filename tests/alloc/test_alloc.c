@@ -37,7 +37,8 @@ typedef struct faults {
 
 static bool refuse(faults *f) {
   f->calls++;
-  bool fail = f->fail_at > 0 && (f->calls == f->fail_at || (f->persistent && f->calls > f->fail_at));
+  bool fail =
+      f->fail_at > 0 && (f->calls == f->fail_at || (f->persistent && f->calls > f->fail_at));
   f->failed += fail;
   return fail;
 }
@@ -52,12 +53,12 @@ static void f_free(void *p, void *ctx) {
 /* ---- what a run produced -------------------------------------------------------- */
 
 typedef struct outcome {
-  uint64_t digest;       /* every journal and the final stats */
-  uint8_t *image;        /* the final snapshot (sylva_free) */
+  uint64_t digest; /* every journal and the final stats */
+  uint8_t *image;  /* the final snapshot (sylva_free) */
   size_t image_size;
   int iteration;
-  bool stopped;          /* persistent failure: the run ended at its first failure */
-  long enomem;           /* calls that returned SYLVA_ENOMEM */
+  bool stopped; /* persistent failure: the run ended at its first failure */
+  long enomem;  /* calls that returned SYLVA_ENOMEM */
 } outcome;
 
 static uint64_t fnv(uint64_t h, const void *data, size_t n) {
@@ -160,8 +161,10 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
   const sylva_world_def *d = sylva_world_get_def(w);
   double span[3], lo[3];
   for (int a = 0; a < 3; a++) span[a] = d->max[a] - d->min[a], lo[a] = d->min[a];
-  sylva_obstacle_def board = {"board", {lo[0] + 0.05 * span[0], lo[1] + 0.05 * span[1], lo[2] + 0.8 * span[2]},
-                              {lo[0] + 0.15 * span[0], lo[1] + 0.15 * span[1], lo[2] + 0.82 * span[2]}};
+  sylva_obstacle_def board = {
+      "board",
+      {lo[0] + 0.05 * span[0], lo[1] + 0.05 * span[1], lo[2] + 0.8 * span[2]},
+      {lo[0] + 0.15 * span[0], lo[1] + 0.15 * span[1], lo[2] + 0.82 * span[2]}};
   double root[1][3] = {{lo[0] + 0.25 * span[0], lo[1] + 0.25 * span[1], lo[2]}};
   sylva_plant_def tree = {0, "late", (const double(*)[3])root, 1};
   for (int k = 0; k < 2;) {
@@ -183,8 +186,7 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
 /* The run: build, grow, save, load, edit and grow the loaded world, save it. A run that gives
  * up (persistent failures, or a failure of the test) destroys what it holds and is
  * marked stopped. */
-static void run(const sylva_scenario *sc, int before_save, int after_load, faults *f,
-                outcome *o) {
+static void run(const sylva_scenario *sc, int before_save, int after_load, faults *f, outcome *o) {
   memset(o, 0, sizeof *o);
   o->digest = 0xcbf29ce484222325ULL;
   sylva_world *w = NULL, *loaded = NULL;
@@ -262,8 +264,8 @@ static long sweep(const sylva_scenario *sc, int before_save, int after_load, boo
     }
     sylva_free(o.image);
     if (check_failed > failed_before) {
-      fprintf(stderr, "%s failure at allocation %ld of %ld\n", persistent ? "persistent" : "transient",
-              n, f.calls);
+      fprintf(stderr, "%s failure at allocation %ld of %ld\n",
+              persistent ? "persistent" : "transient", n, f.calls);
       if (check_failed > 20) break;
     }
   }
@@ -299,8 +301,10 @@ int main(int argc, char **argv) {
   double t1 = seconds();
   long persistent = sweep(sc, before_save, after_load, true, &ref, &persistent_absorbed);
   double t2 = seconds();
-  printf("alloc: transient failures at %ld points (%ld absorbed, the rest SYLVA_ENOMEM and "
-         "retried), %.1f s\n", transient, absorbed, t1 - t0);
+  printf(
+      "alloc: transient failures at %ld points (%ld absorbed, the rest SYLVA_ENOMEM and "
+      "retried), %.1f s\n",
+      transient, absorbed, t1 - t0);
   printf("alloc: persistent failures from %ld points, %.1f s\n", persistent, t2 - t1);
   CHECK_INT(transient, none.calls);
   CHECK_INT(persistent, none.calls);

@@ -107,17 +107,19 @@ static void test_species_fields(void) {
   /* the rules between fields (b_max >= b_min, m_min <= m0) kept out of the way */
   sylva_species_def base = def;
   base.b_max = 1000, base.m0 = 1000, base.m_min = 0;
-#define FIELD(name, type, dflt, lo, hi, bounds, group, snap)                                   \
-  {                                                                                            \
-    CHECK(def.name == (type)(dflt));                                                           \
-    bool is_int = IS_INT_##type;                                                               \
-    double step = is_int ? 1.0 : 1e-9 * (1.0 + fabs((double)(hi)));                            \
-    size_t at = offsetof(sylva_species_def, name);                                             \
-    const char *reported = REPORTED_##group(name);                                             \
-    check_value(#name, reported, base, at, is_int, lo, !((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE)); \
-    check_value(#name, reported, base, at, is_int, hi, !((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE)); \
-    check_value(#name, reported, base, at, is_int, (double)(lo) - step, false);                \
-    check_value(#name, reported, base, at, is_int, (double)(hi) + step, false);                \
+#define FIELD(name, type, dflt, lo, hi, bounds, group, snap)                            \
+  {                                                                                     \
+    CHECK(def.name == (type)(dflt));                                                    \
+    bool is_int = IS_INT_##type;                                                        \
+    bool lo_in = !((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE);                               \
+    bool hi_in = !((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE);                               \
+    double step = is_int ? 1.0 : 1e-9 * (1.0 + fabs((double)(hi)));                     \
+    size_t at = offsetof(sylva_species_def, name);                                      \
+    const char *reported = REPORTED_##group(name);                                      \
+    check_value(#name, reported, base, at, is_int, lo, lo_in);                          \
+    check_value(#name, reported, base, at, is_int, hi, hi_in);                          \
+    check_value(#name, reported, base, at, is_int, (double)(lo) - step, false);         \
+    check_value(#name, reported, base, at, is_int, (double)(hi) + step, false);         \
   }
   SYLVA_SPECIES_FIELDS(FIELD)
 #undef FIELD
