@@ -1,11 +1,16 @@
 /* The public API's contract for bad ids (a negative status or NULL, and nothing
- * changes) and the species field list (sylva/species_fields.h): its defaults, its
- * ranges as sylva_species_check applies them, and a snapshot that keeps every field. */
+ * changes), the species field list (sylva/species_fields.h): its defaults, its
+ * ranges as sylva_species_check applies them, and a snapshot that keeps every field;
+ * and, in debug builds, the phase checks that stop a step on a broken invariant. */
+#include <signal.h>
 #include <stddef.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "../check.h"
 #include "sylva/sylva.h"
+#include "world_impl.h"
 
 static sylva_world *small_world(void) {
   sylva_world_def wd = sylva_default_world_def();
@@ -180,7 +185,50 @@ static void test_species_snapshot(void) {
   sylva_world_destroy(w);
 }
 
+#ifndef NDEBUG
+/* Breaks one invariant of a grown world in a child process and steps it: the phase
+ * checks must abort the child. */
+static void expect_abort(const char *what, void (*breaks)(sylva_world *)) {
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid == 0) {
+    freopen("/dev/null", "w", stderr);
+    sylva_world *w = small_world();
+    if (!w || sylva_world_step(w, NULL) != 0) _exit(2);
+    breaks(w);
+    sylva_world_step(w, NULL);
+    _exit(0);
+  }
+  int status = 0;
+  CHECK(pid > 0 && waitpid(pid, &status, 0) == pid);
+  bool aborted = WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT;
+  if (!aborted) fprintf(stderr, "%s: the step was not stopped (status %d)\n", what, status);
+  CHECK(aborted);
+}
+
+static void parent_after_child(sylva_world *w) { w->nodes.parent[1] = 2; }
+static void live_count_off(sylva_world *w) { w->nodes.live--; }
+static void doomed_left_on(sylva_world *w) { w->nodes.flags[2] |= SYLVA__NODE_DOOMED; }
+static void link_one_way(sylva_world *w) { w->nodes.axis_child[0] = -1; }
+static void occupancy_lost(sylva_world *w) {
+  int v[3];
+  sylva__node_voxel(w, 1, v);
+  sylva__grid_vacate(&w->grid, v);
+}
+
+static void test_phase_checks(void) {
+  expect_abort("a parent after its child", parent_after_child);
+  expect_abort("a live count off by one", live_count_off);
+  expect_abort("a transient flag left on", doomed_left_on);
+  expect_abort("a link one way", link_one_way);
+  expect_abort("a node without its voxel", occupancy_lost);
+}
+#endif
+
 int main(void) {
+#ifndef NDEBUG
+  test_phase_checks();
+#endif
   test_bad_ids();
   test_species_fields();
   test_species_snapshot();
