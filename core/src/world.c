@@ -425,12 +425,12 @@ int sylva__reserve_scratch(sylva_world *w) { return reserve_scratch(w); }
 
 /* Room for everything the phases after the shoots write, so that from there on a
  * step cannot fail: per-slot scratch for the grown skeleton, radius changes (at most
- * one per node born before T), shed roots and the nodes to remove (at most every
- * node), the nodes added and the stats. */
+ * one per node born before T), shed roots (at most every node), the nodes added and
+ * the stats. (Shedding can do without its removal order, sylva__shed.) */
 static int reserve_rest(sylva_world *w) {
   size_t count = w->nodes.count;
   if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
-      SYLVA__VEC_RESERVE(w->shed, count) || SYLVA__VEC_RESERVE(w->cells, count) ||
+      SYLVA__VEC_RESERVE(w->shed, count) ||
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
       SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count))
     return SYLVA_ENOMEM;
@@ -649,7 +649,8 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->radii.cap * sizeof(sylva_radius_change) +
                w->cells.cap * sizeof(sylva__keyed) +
-               (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap) * sizeof(int32_t) +
+               (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
+                w->finishing.cap + w->caps.cap + w->stem_first.cap) * sizeof(int32_t) +
                w->cell_pos.cap * sizeof(float) +
                (size_t)w->stem_cap * sizeof(sylva__stem);
 }
