@@ -136,8 +136,12 @@ int sylva__allocate(sylva_world *w, int iteration) {
     const sylva__stem *st = &w->stems[k];
     int local = sylva__stem_local(st, iteration);
     caps[k] = st->finished ? 0 : sylva_equation_cap(&w->species[st->species].def.growth, local);
-    if (caps[k] > 0 && w->species[st->species].def.allocation == SYLVA_ALLOC_NONE) any_none = true;
   }
+  /* stems that stop at this iteration (phase 2) grow nothing */
+  for (size_t i = 0; i < w->finishing.len; i++) caps[w->finishing.data[i]] = 0;
+  for (int k = 0; k < w->stem_count; k++)
+    if (caps[k] > 0 && w->species[w->stems[k].species].def.allocation == SYLVA_ALLOC_NONE)
+      any_none = true;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
     if (caps[k] <= 0 || w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM) continue;

@@ -1,8 +1,9 @@
 #include "grid.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
+
+#include "alloc.h"
 
 int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], double voxel) {
   memset(g, 0, sizeof *g);
@@ -24,8 +25,8 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
   g->inv_voxel = 1.0 / voxel;
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
-  g->chunks = calloc(nchunks, sizeof *g->chunks);
-  g->colsum = calloc(ncols, sizeof *g->colsum);
+  g->chunks = sylva__calloc(nchunks, sizeof *g->chunks);
+  g->colsum = sylva__calloc(ncols, sizeof *g->colsum);
   if (!g->chunks || !g->colsum) {
     sylva__grid_free(g);
     return SYLVA_ENOMEM;
@@ -37,17 +38,17 @@ void sylva__grid_free(sylva__grid *g) {
   if (g->chunks) {
     size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
     for (size_t i = 0; i < nchunks; i++) {
-      if (g->chunks[i]) free(g->chunks[i]->column);
-      free(g->chunks[i]);
+      if (g->chunks[i]) sylva__free(g->chunks[i]->column);
+      sylva__free(g->chunks[i]);
     }
   }
   if (g->colsum) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
-    for (size_t i = 0; i < ncols; i++) free(g->colsum[i]);
+    for (size_t i = 0; i < ncols; i++) sylva__free(g->colsum[i]);
   }
-  free(g->chunks);
-  free(g->colsum);
-  free(g->obstacles);
+  sylva__free(g->chunks);
+  sylva__free(g->colsum);
+  sylva__free(g->obstacles);
   memset(g, 0, sizeof *g);
 }
 
@@ -86,7 +87,7 @@ static inline const sylva__chunk *chunk_at(const sylva__grid *g, const int v[3])
 static sylva__chunk *chunk_get(sylva__grid *g, int cx, int cy, int cz) {
   sylva__chunk **slot = &g->chunks[chunk_index(g, cx, cy, cz)];
   if (!*slot) {
-    *slot = calloc(1, sizeof **slot);
+    *slot = sylva__calloc(1, sizeof **slot);
     if (!*slot) return NULL;
     g->chunk_count++;
   }
@@ -96,7 +97,7 @@ static sylva__chunk *chunk_get(sylva__grid *g, int cx, int cy, int cz) {
 static int64_t *colsum_get(sylva__grid *g, int cx, int cy) {
   int64_t **slot = &g->colsum[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
   if (!*slot) {
-    *slot = calloc((size_t)g->c[2] * 256, sizeof **slot);
+    *slot = sylva__calloc((size_t)g->c[2] * 256, sizeof **slot);
     if (!*slot) return NULL;
     g->colsum_count++;
   }
@@ -198,7 +199,9 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }
 static int clip_hi(int v, int hi) { return v < hi ? v : hi; }
 
-int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
+/* One pass of a stamp: sign +1 or -1 writes it; sign 0 only makes every chunk,
+ * column block and block sum the writes will touch. */
+static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
   /* Pyramid: q = 1..depth voxels below, half-width half[q - 1]; walked chunk by
    * chunk so that each chunk is looked up once per stamp. */
   int depth = p->depth;
@@ -218,6 +221,7 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, i
           continue;
         sylva__chunk *c = chunk_get(g, cx, cy, cz);
         if (!c) return SYLVA_ENOMEM;
+        if (!sign) continue;
         for (int z = z0; z <= z1; z++) {
           int q = v[2] - z, hq = p->half[q - 1];
           int x0 = clip_lo(clip_lo(v[0] - hq, cx << 4), 0);
@@ -249,7 +253,7 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, i
       sylva__chunk *c = chunk_get(g, cx, cy, bz);
       if (!c) return SYLVA_ENOMEM;
       if (!c->column) {
-        c->column = calloc(SYLVA__CHUNK_VOXELS, sizeof *c->column);
+        c->column = sylva__calloc(SYLVA__CHUNK_VOXELS, sizeof *c->column);
         if (!c->column) return SYLVA_ENOMEM;
         g->column_count++;
       }
@@ -259,6 +263,7 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, i
         if (!sum) return SYLVA_ENOMEM;
         sum += (size_t)bz * 256;
       }
+      if (!sign) continue;
       int y0 = clip_lo(ylo, cy << 4), y1 = clip_hi(yhi, (cy << 4) + 15);
       int x0 = clip_lo(xlo, cx << 4), x1 = clip_hi(xhi, (cx << 4) + 15);
       for (int y = y0; y <= y1; y++)
@@ -269,6 +274,13 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, i
         }
     }
   return SYLVA_OK;
+}
+
+int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
+  /* Every block first, then the writes: a stamp that runs out of memory has written
+   * nothing, and the blocks it made hold zeros, so the shade is as it was. */
+  int rc = stamp(g, v, p, 0);
+  return rc ? rc : stamp(g, v, p, sign);
 }
 
 static void obstacle_voxels(const sylva__grid *g, sylva__obstacle *o) {
@@ -300,7 +312,7 @@ int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min
   if (sylva__grid_find_obstacle(g, label) >= 0) return SYLVA_EINVAL;
   if (g->obstacle_count == g->obstacle_cap) {
     int cap = g->obstacle_cap ? g->obstacle_cap * 2 : 8;
-    sylva__obstacle *o = realloc(g->obstacles, (size_t)cap * sizeof *o);
+    sylva__obstacle *o = sylva__realloc(g->obstacles, (size_t)cap * sizeof *o);
     if (!o) return SYLVA_ENOMEM;
     g->obstacles = o;
     g->obstacle_cap = cap;

@@ -88,7 +88,8 @@ typedef struct sylva__pyramid {
   int64_t column;
 } sylva__pyramid;
 
-/** Adds (sign +1) or removes (-1) the shade of one node at voxel v. */
+/** Adds (sign +1) or removes (-1) the shade of one node at voxel v. SYLVA_ENOMEM
+ *  leaves the shade as it was. */
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
 
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],

@@ -4,8 +4,23 @@
 
 #include "world_impl.h"
 
+/* Removes doomed node i: its shade, its voxel, its slot. */
+static int remove_node(sylva_world *w, int32_t i) {
+  sylva__skeleton *s = &w->nodes;
+  int rc = sylva__shade_node(w, i, -1);
+  if (rc) return rc;
+  int v[3];
+  sylva__node_voxel(w, i, v);
+  sylva__grid_vacate(&w->grid, v);
+  s->flags[i] = 0;
+  s->live--;
+  w->stems[s->stem[i]].stats.shed++;
+  return SYLVA_OK;
+}
+
 int sylva__shed(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
+  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.shed = 0; /* counted anew at T */
   /* E is judged on the light the nodes will collect next iteration (every node at
    * least one iteration old): a newborn node's l^0 = 1 would otherwise count full
    * light in any shade and hold up dark branches only while they still grow. */
@@ -49,27 +64,28 @@ int sylva__shed(sylva_world *w, int iteration) {
   if (!doomed) return SYLVA_OK;
   /* Shade sums are exact integers, so the removals may run in any order: take them
    * chunk by chunk (z, y, x of 16-voxel chunks) so that neighbouring pyramids share
-   * the cache. */
-  if (SYLVA__VEC_RESERVE(w->cells, doomed)) return SYLVA_ENOMEM;
-  w->cells.len = 0;
-  for (size_t i = 0; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-    int v[3];
-    sylva__node_voxel(w, (int32_t)i, v);
-    int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
-    w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
-  }
-  qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
-  for (size_t k = 0; k < w->cells.len; k++) {
-    int32_t i = w->cells.data[k].item;
-    int rc = sylva__shade_node(w, i, -1);
-    if (rc) return rc;
-    int v[3];
-    sylva__node_voxel(w, i, v);
-    sylva__grid_vacate(&w->grid, v);
-    s->flags[i] = 0;
-    s->live--;
-    w->stems[s->stem[i]].stats.shed++;
+   * the cache. Without memory for that order they run in slot order, to the same
+   * grid, so this phase never fails for want of it. */
+  if (SYLVA__VEC_RESERVE(w->cells, doomed)) {
+    for (size_t i = 0; i < s->count; i++) {
+      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+      int rc = remove_node(w, (int32_t)i);
+      if (rc) return rc;
+    }
+  } else {
+    w->cells.len = 0;
+    for (size_t i = 0; i < s->count; i++) {
+      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+      int v[3];
+      sylva__node_voxel(w, (int32_t)i, v);
+      int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
+      w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
+    }
+    qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
+    for (size_t k = 0; k < w->cells.len; k++) {
+      int rc = remove_node(w, w->cells.data[k].item);
+      if (rc) return rc;
+    }
   }
   /* the removed subtrees no longer send light to their parents */
   sylva__light_collect(w, iteration + 1, NULL);

@@ -248,6 +248,7 @@ int sylva__shoots(sylva_world *w, int iteration) {
       for (size_t k = 0; k < w->shoot.len; k++) {
         rc = sylva__shade_node(w, w->shoot.data[k], +1);
         if (rc) return rc;
+        w->mark.shaded = (size_t)w->shoot.data[k] + 1;
       }
       if (w->def.clock) shade_time += w->def.clock(w->def.clock_ctx) - t0;
     }

@@ -1,14 +1,16 @@
 #include "skeleton.h"
 
-#include <stdlib.h>
 #include <string.h>
+
+#include "alloc.h"
+#include "debug.h"
 
 #define SYLVA__SKELETON_FIELDS(X)                                                          \
   X(id) X(x) X(y) X(z) X(radius) X(parent) X(axis_child) X(lateral_child) X(birth) X(stem) \
   X(depth) X(flags)
 
 void sylva__skeleton_free(sylva__skeleton *s) {
-#define SYLVA__FREE(f) free(s->f);
+#define SYLVA__FREE(f) sylva__free(s->f);
   SYLVA__SKELETON_FIELDS(SYLVA__FREE)
 #undef SYLVA__FREE
   memset(s, 0, sizeof *s);
@@ -23,7 +25,7 @@ int sylva__skeleton_reserve(sylva__skeleton *s, size_t n) {
    * larger, which is harmless because cap is only raised when all succeeded. */
 #define SYLVA__GROW(f)                                          \
   {                                                             \
-    void *p = realloc(s->f, cap * sizeof *s->f);                \
+    void *p = sylva__realloc(s->f, cap * sizeof *s->f);                \
     if (!p) return -1;                                          \
     s->f = p;                                                   \
   }
@@ -36,6 +38,9 @@ int sylva__skeleton_reserve(sylva__skeleton *s, size_t n) {
 int32_t sylva__skeleton_append(sylva__skeleton *s, int32_t id, int32_t parent, float x, float y,
                                float z, float radius, int32_t birth, int32_t stem, int32_t depth,
                                uint8_t flags) {
+  SYLVA_ASSERT(s->count < s->cap); /* room was reserved */
+  SYLVA_ASSERT(s->count == 0 || id > s->id[s->count - 1]); /* ids rise with slots */
+  SYLVA_ASSERT(parent < (int32_t)s->count);
   size_t i = s->count++;
   s->id[i] = id;
   s->x[i] = x;
@@ -81,7 +86,7 @@ void sylva__skeleton_compact(sylva__skeleton *s, int32_t *remap) {
      * capacity of all, which is what appends may rely on */
 #define SYLVA__SHRINK(f)                                    \
   {                                                         \
-    void *p = realloc(s->f, cap * sizeof *s->f);            \
+    void *p = sylva__realloc(s->f, cap * sizeof *s->f);            \
     if (p) s->f = p;                                        \
   }
     SYLVA__SKELETON_FIELDS(SYLVA__SHRINK)

@@ -25,7 +25,7 @@ static void put(writer *o, const void *p, size_t n) {
   if (o->len + n > o->cap) {
     size_t cap = o->cap ? o->cap : 4096;
     while (cap < o->len + n) cap *= 2;
-    uint8_t *b = realloc(o->buf, cap);
+    uint8_t *b = sylva__realloc(o->buf, cap);
     if (!b) {
       o->failed = true;
       return;
@@ -173,9 +173,9 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   }
   /* live nodes, links as indices among live nodes */
   const sylva__skeleton *s = &w->nodes;
-  int32_t *index = malloc((s->count + 1) * sizeof *index);
+  int32_t *index = sylva__malloc((s->count + 1) * sizeof *index);
   if (!index) {
-    free(o.buf);
+    sylva__free(o.buf);
     return SYLVA_ENOMEM;
   }
   int32_t live = 0;
@@ -196,9 +196,9 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     put_i32(&o, s->depth[i]);
     put_u8(&o, s->flags[i]);
   }
-  free(index);
+  sylva__free(index);
   if (o.failed) {
-    free(o.buf);
+    sylva__free(o.buf);
     return SYLVA_ENOMEM;
   }
   uint64_t payload = o.len - HEADER;
@@ -313,7 +313,8 @@ static int read_world(reader *r, sylva_world **out) {
   def.voxel = get_f64(r);
   def.seed = get_u64(r);
   if (r->bad) return SYLVA_ETRUNCATED;
-  if (sylva_world_create(&def, &w)) return SYLVA_EBADIMAGE;
+  rc = sylva_world_create(&def, &w);
+  if (rc) return rc == SYLVA_ENOMEM ? rc : SYLVA_EBADIMAGE;
   int32_t iteration = get_i32(r);
   for (int i = 0; i < 4; i++) w->rng.s[i] = get_u64(r);
   int32_t next_id = get_i32(r);
@@ -329,7 +330,8 @@ static int read_world(reader *r, sylva_world **out) {
     d.allocation = (sylva_allocation)get_u32(r);
     get_species(r, &d);
     if (r->bad) break;
-    if (sylva_world_add_species(w, &d, label) < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    int id = sylva_world_add_species(w, &d, label);
+    if (id < 0) SYLVA__FAIL(id == SYLVA_ENOMEM ? id : SYLVA_EBADIMAGE);
   }
   int32_t next_obstacle = get_i32(r);
   uint32_t nobst = get_u32(r);
@@ -345,14 +347,15 @@ static int read_world(reader *r, sylva_world **out) {
     if (r->bad) break;
     if (id < 0 || id >= next_obstacle || (i > 0 && id <= w->grid.obstacles[i - 1].id))
       SYLVA__FAIL(SYLVA_EBADIMAGE);
-    if (sylva__grid_add_obstacle(&w->grid, label, mn, mx) < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    int added = sylva__grid_add_obstacle(&w->grid, label, mn, mx);
+    if (added < 0) SYLVA__FAIL(added == SYLVA_ENOMEM ? added : SYLVA_EBADIMAGE);
     w->grid.obstacles[i].id = id;
   }
   w->grid.next_obstacle_id = next_obstacle;
   uint32_t nplants = get_u32(r);
   if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
   if (nplants > SYLVA_MAX_STEMS) SYLVA__FAIL(SYLVA_EBADIMAGE);
-  w->plants = calloc(nplants + 1, sizeof *w->plants);
+  w->plants = sylva__calloc(nplants + 1, sizeof *w->plants);
   if (!w->plants) SYLVA__FAIL(SYLVA_ENOMEM);
   w->plant_cap = (int)nplants + 1;
   int64_t nstems = 0;
@@ -371,7 +374,7 @@ static int read_world(reader *r, sylva_world **out) {
     w->plant_count++;
   }
   if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
-  w->stems = calloc((size_t)nstems + 1, sizeof *w->stems);
+  w->stems = sylva__calloc((size_t)nstems + 1, sizeof *w->stems);
   if (!w->stems) SYLVA__FAIL(SYLVA_ENOMEM);
   w->stem_cap = (int)nstems + 1;
   for (int i = 0; i < w->plant_count; i++)
@@ -420,7 +423,9 @@ static int read_world(reader *r, sylva_world **out) {
     s->axis_child[slot] = axis;
     s->lateral_child[slot] = lat;
     if (parent < 0) {
-      if (w->stems[stem].root_slot >= 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+      /* one root per stem, at depth 0, on no axis of another node */
+      if (w->stems[stem].root_slot >= 0 || depth != 0 || (flags & SYLVA__NODE_LATERAL))
+        SYLVA__FAIL(SYLVA_EBADIMAGE);
       w->stems[stem].root_slot = slot;
     } else {
       /* a child must be named by its parent, with the matching kind of link */
@@ -457,6 +462,7 @@ static int read_world(reader *r, sylva_world **out) {
     orc = sylva__shade_node(w, (int32_t)i, +1);
     if (orc) SYLVA__FAIL(orc);
   }
+  SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   *out = w;
   return SYLVA_OK;
 fail:

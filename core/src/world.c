@@ -10,7 +10,7 @@ int sylva__vec_reserve(void **data, size_t *cap, size_t n, size_t elem) {
   if (n <= *cap) return SYLVA_OK;
   size_t c = *cap ? *cap : 16;
   while (c < n) c += c / 2 + 1;
-  void *p = realloc(*data, c * elem);
+  void *p = sylva__realloc(*data, c * elem);
   if (!p) return SYLVA_ENOMEM;
   *data = p;
   *cap = c;
@@ -37,12 +37,12 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
   *out = NULL;
   int rc = sylva_world_def_check(def);
   if (rc) return rc;
-  sylva_world *w = calloc(1, sizeof *w);
+  sylva_world *w = sylva__calloc(1, sizeof *w);
   if (!w) return SYLVA_ENOMEM;
   w->def = *def;
   rc = sylva__grid_init(&w->grid, def->min, def->max, def->voxel);
   if (rc) {
-    free(w);
+    sylva__free(w);
     return rc;
   }
   sylva__rng_seed(&w->rng, def->seed);
@@ -54,35 +54,36 @@ void sylva_world_destroy(sylva_world *w) {
   if (!w) return;
   sylva__grid_free(&w->grid);
   sylva__skeleton_free(&w->nodes);
-  for (int i = 0; i < w->species_count; i++) free(w->species[i].age_pow);
-  free(w->species);
-  free(w->plants);
-  free(w->plant_index);
-  free(w->stems);
-  free(w->light);
-  free(w->q);
-  free(w->pipe);
-  free(w->leaves);
-  free(w->remap);
-  free(w->sprouts.data);
-  free(w->order.data);
-  free(w->axis.data);
-  free(w->ranked.data);
-  free(w->work.data);
-  free(w->work_r.data);
-  free(w->shoot.data);
-  free(w->added.data);
-  free(w->radii.data);
-  free(w->shed.data);
-  free(w->stats.data);
-  free(w->caps.data);
-  free(w->stem_first.data);
-  free(w->cells.data);
-  free(w->cell_first.data);
-  free(w->cell_items.data);
-  free(w->cell_pos.data);
-  free(w->cell_of.data);
-  free(w);
+  for (int i = 0; i < w->species_count; i++) sylva__free(w->species[i].age_pow);
+  sylva__free(w->species);
+  sylva__free(w->plants);
+  sylva__free(w->plant_index);
+  sylva__free(w->stems);
+  sylva__free(w->light);
+  sylva__free(w->q);
+  sylva__free(w->pipe);
+  sylva__free(w->leaves);
+  sylva__free(w->remap);
+  sylva__free(w->sprouts.data);
+  sylva__free(w->order.data);
+  sylva__free(w->axis.data);
+  sylva__free(w->ranked.data);
+  sylva__free(w->work.data);
+  sylva__free(w->work_r.data);
+  sylva__free(w->shoot.data);
+  sylva__free(w->added.data);
+  sylva__free(w->radii.data);
+  sylva__free(w->shed.data);
+  sylva__free(w->stats.data);
+  sylva__free(w->finishing.data);
+  sylva__free(w->caps.data);
+  sylva__free(w->stem_first.data);
+  sylva__free(w->cells.data);
+  sylva__free(w->cell_first.data);
+  sylva__free(w->cell_items.data);
+  sylva__free(w->cell_pos.data);
+  sylva__free(w->cell_of.data);
+  sylva__free(w);
 }
 
 /* ---- species ---------------------------------------------------------------- */
@@ -99,7 +100,7 @@ int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const 
   if (sylva_species_check(def, NULL)) return SYLVA_ERANGE;
   if (w->species_count == w->species_cap) {
     int cap = w->species_cap ? 2 * w->species_cap : 4;
-    sylva__species *p = realloc(w->species, (size_t)cap * sizeof *p);
+    sylva__species *p = sylva__realloc(w->species, (size_t)cap * sizeof *p);
     if (!p) return SYLVA_ENOMEM;
     w->species = p;
     w->species_cap = cap;
@@ -138,7 +139,7 @@ const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
 double sylva__species_age_pow(sylva__species *sp, int age) {
   if (age >= sp->age_pow_n) {
     int n = age + 64;
-    double *p = realloc(sp->age_pow, (size_t)n * sizeof *p);
+    double *p = sylva__realloc(sp->age_pow, (size_t)n * sizeof *p);
     if (!p) return pow((double)age, sp->def.sigma);
     for (int i = sp->age_pow_n; i < n; i++) p[i] = pow((double)i, sp->def.sigma);
     sp->age_pow = p;
@@ -157,7 +158,8 @@ bool sylva__voxel_of(const sylva_world *w, const double p[3], float f[3], int v[
 void sylva__node_voxel(const sylva_world *w, int32_t slot, int v[3]) {
   const sylva__skeleton *s = &w->nodes;
   bool inside = sylva__grid_voxel(&w->grid, s->x[slot], s->y[slot], s->z[slot], v);
-  (void)inside; /* nodes are only stored at positions whose voxel is inside */
+  SYLVA_ASSERT(inside); /* nodes are only stored at positions whose voxel is inside */
+  (void)inside;
 }
 
 int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const double p[3],
@@ -175,10 +177,10 @@ int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const doub
                                         (float)sp->def.r_tip, iteration, stem, depth,
                                         lateral ? SYLVA__NODE_LATERAL : 0);
   if (parent >= 0) {
-    if (lateral)
-      w->nodes.lateral_child[parent] = slot;
-    else
-      w->nodes.axis_child[parent] = slot;
+    /* only a free bud or an apex sprouts: the link is still empty */
+    int32_t *link = lateral ? &w->nodes.lateral_child[parent] : &w->nodes.axis_child[parent];
+    SYLVA_ASSERT(*link < 0);
+    *link = slot;
   }
   return slot;
 }
@@ -199,23 +201,77 @@ int sylva__find_plant(const sylva_world *w, const char *label) {
   return -1;
 }
 
-int sylva__index_plant(sylva_world *w, int p) {
-  if (2 * (size_t)(w->plant_count + 1) > w->plant_index_cap) {
-    size_t cap = w->plant_index_cap ? 2 * w->plant_index_cap : 16;
-    while (cap < 2 * (size_t)(w->plant_count + 1)) cap *= 2;
-    int32_t *idx = malloc(cap * sizeof *idx);
-    if (!idx) return SYLVA_ENOMEM;
-    for (size_t i = 0; i < cap; i++) idx[i] = -1;
-    free(w->plant_index);
-    w->plant_index = idx;
-    w->plant_index_cap = cap;
-    for (int i = 0; i < w->plant_count; i++)
-      if (i != p) sylva__index_plant(w, i); /* cannot fail: the table is large enough */
-  }
+/* Files plant p, for which the table has room. */
+static void file_plant(sylva_world *w, int p) {
   size_t mask = w->plant_index_cap - 1, h = label_hash(w->plants[p].label) & mask;
   while (w->plant_index[h] >= 0) h = (h + 1) & mask;
   w->plant_index[h] = p;
+}
+
+/* Makes room in the label index for n plants (at most half full). */
+static int reserve_plant_index(sylva_world *w, size_t n) {
+  if (2 * n <= w->plant_index_cap) return SYLVA_OK;
+  size_t cap = w->plant_index_cap ? 2 * w->plant_index_cap : 16;
+  while (cap < 2 * n) cap *= 2;
+  int32_t *idx = sylva__malloc(cap * sizeof *idx);
+  if (!idx) return SYLVA_ENOMEM;
+  for (size_t i = 0; i < cap; i++) idx[i] = -1;
+  sylva__free(w->plant_index);
+  w->plant_index = idx;
+  w->plant_index_cap = cap;
+  for (int i = 0; i < w->plant_count; i++) file_plant(w, i);
   return SYLVA_OK;
+}
+
+int sylva__index_plant(sylva_world *w, int p) {
+  SYLVA_ASSERT(p == w->plant_count);
+  int rc = reserve_plant_index(w, (size_t)w->plant_count + 1);
+  if (rc) return rc;
+  file_plant(w, p);
+  return SYLVA_OK;
+}
+
+/* ---- taking back a call that failed -------------------------------------------- */
+
+/* Notes the state a step or a new plant starts from (sylva__mark). */
+static void set_mark(sylva_world *w) {
+  w->mark = (sylva__mark){.iteration = w->iteration,
+                          .rng = w->rng,
+                          .count = w->nodes.count,
+                          .shaded = w->nodes.count,
+                          .next_id = w->nodes.next_id,
+                          .stem_count = w->stem_count};
+}
+
+/* Puts the world back to its mark: the nodes appended since lose their shade,
+ * occupancy and links, the stems planted since are dropped, the generator and the
+ * iteration are restored. */
+static void take_back(sylva_world *w) {
+  const sylva__mark *m = &w->mark;
+  sylva__skeleton *s = &w->nodes;
+  for (size_t i = s->count; i-- > m->count;) {
+    if (i < m->shaded) {
+      int rc = sylva__shade_node(w, (int32_t)i, -1);
+      SYLVA_ASSERT(rc == SYLVA_OK); /* its blocks exist: removing allocates nothing */
+      (void)rc;
+    }
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    sylva__grid_vacate(&w->grid, v);
+    int32_t parent = s->parent[i];
+    if (parent >= 0) {
+      if (s->flags[i] & SYLVA__NODE_LATERAL)
+        s->lateral_child[parent] = -1;
+      else
+        s->axis_child[parent] = -1;
+    }
+    s->live--;
+  }
+  s->count = m->count;
+  s->next_id = m->next_id;
+  w->stem_count = m->stem_count;
+  w->rng = m->rng;
+  w->iteration = m->iteration;
 }
 
 static int check_trunk(const sylva_world *w, const sylva_species_def *sp, const double root[3],
@@ -248,23 +304,25 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   /* Check every trunk before changing anything: the voxels of earlier roots of the
    * same plant count as taken by another stem. */
   size_t per = (size_t)sp->initial_nodes + 1;
-  int(*taken)[3] = malloc((size_t)def->root_count * per * sizeof *taken);
+  int(*taken)[3] = sylva__malloc((size_t)def->root_count * per * sizeof *taken);
   if (!taken) return SYLVA_ENOMEM;
   int ntaken = 0;
   for (int r = 0; r < def->root_count; r++) {
     int n = 0;
     int rc = check_trunk(w, sp, def->roots[r], taken, ntaken, &n, taken + ntaken);
     if (rc) {
-      free(taken);
+      sylva__free(taken);
       if (bad_root) *bad_root = r;
       return rc;
     }
     ntaken += n;
   }
-  free(taken);
+  sylva__free(taken);
+  /* Room for everything first; then only placing the trunks can fail (a voxel chunk
+   * for their occupancy or shade), and that is taken back. */
   if (w->plant_count == w->plant_cap) {
     int cap = w->plant_cap ? 2 * w->plant_cap : 8;
-    sylva__plant *p = realloc(w->plants, (size_t)cap * sizeof *p);
+    sylva__plant *p = sylva__realloc(w->plants, (size_t)cap * sizeof *p);
     if (!p) return SYLVA_ENOMEM;
     w->plants = p;
     w->plant_cap = cap;
@@ -272,21 +330,16 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   if (w->stem_count + def->root_count > w->stem_cap) {
     int cap = w->stem_cap ? w->stem_cap : 8;
     while (cap < w->stem_count + def->root_count) cap *= 2;
-    sylva__stem *p = realloc(w->stems, (size_t)cap * sizeof *p);
+    sylva__stem *p = sylva__realloc(w->stems, (size_t)cap * sizeof *p);
     if (!p) return SYLVA_ENOMEM;
     w->stems = p;
     w->stem_cap = cap;
   }
-  if (sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per)) return SYLVA_ENOMEM;
+  if (sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per) ||
+      reserve_plant_index(w, (size_t)w->plant_count + 1))
+    return SYLVA_ENOMEM;
   int pid = w->plant_count;
-  sylva__plant *pl = &w->plants[pid];
-  memset(pl, 0, sizeof *pl);
-  strcpy(pl->label, def->label);
-  if (sylva__index_plant(w, pid)) return SYLVA_ENOMEM;
-  w->plant_count++;
-  pl->species = def->species;
-  pl->first_stem = w->stem_count;
-  pl->stem_count = def->root_count;
+  set_mark(w);
   for (int r = 0; r < def->root_count; r++) {
     int s = w->stem_count++;
     sylva__stem *st = &w->stems[s];
@@ -300,14 +353,27 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
     for (int k = 0; k <= sp->initial_nodes; k++) {
       double p[3] = {st->root[0], st->root[1], st->root[2] + sp->rho * k};
       int32_t slot = sylva__add_node(w, prev, false, p, s, w->iteration);
-      if (slot < 0) return w->status = slot; /* checked above: only memory can fail */
+      int rc = slot < 0 ? slot : sylva__shade_node(w, slot, +1);
+      if (rc) {
+        SYLVA_ASSERT(rc == SYLVA_ENOMEM); /* the trunks were checked above */
+        take_back(w);
+        return rc;
+      }
+      w->mark.shaded = (size_t)slot + 1;
       if (k == 0) st->root_slot = slot;
-      int rc = sylva__shade_node(w, slot, +1);
-      if (rc) return w->status = rc;
       prev = slot;
     }
   }
+  sylva__plant *pl = &w->plants[pid];
+  memset(pl, 0, sizeof *pl);
+  strcpy(pl->label, def->label);
+  pl->species = def->species;
+  pl->first_stem = w->mark.stem_count;
+  pl->stem_count = def->root_count;
+  file_plant(w, pid);
+  w->plant_count++;
   for (int r = 0; r < def->root_count; r++) sylva__stats_planted(w, pl->first_stem + r);
+  SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   return pid;
 }
 
@@ -334,29 +400,42 @@ void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx
 
 static double now(const sylva_world *w) { return w->def.clock ? w->def.clock(w->def.clock_ctx) : 0.0; }
 
+/* Grows one per-slot scratch array to n entries. */
+static int grow_scratch(void **data, size_t n, size_t elem) {
+  void *p = sylva__realloc(*data, n * elem);
+  if (!p) return SYLVA_ENOMEM;
+  *data = p;
+  return SYLVA_OK;
+}
+
 static int reserve_scratch(sylva_world *w) {
   size_t n = w->nodes.cap;
   if (n <= w->scratch_cap) return SYLVA_OK;
-  double *l = realloc(w->light, n * sizeof *l);
-  if (!l) return SYLVA_ENOMEM;
-  w->light = l;
-  double *q = realloc(w->q, n * sizeof *q);
-  if (!q) return SYLVA_ENOMEM;
-  w->q = q;
-  double *p = realloc(w->pipe, n * sizeof *p);
-  if (!p) return SYLVA_ENOMEM;
-  w->pipe = p;
-  int32_t *leaves = realloc(w->leaves, n * sizeof *leaves);
-  if (!leaves) return SYLVA_ENOMEM;
-  w->leaves = leaves;
-  int32_t *remap = realloc(w->remap, n * sizeof *remap);
-  if (!remap) return SYLVA_ENOMEM;
-  w->remap = remap;
+  if (grow_scratch((void **)&w->light, n, sizeof *w->light) ||
+      grow_scratch((void **)&w->q, n, sizeof *w->q) ||
+      grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
+      grow_scratch((void **)&w->leaves, n, sizeof *w->leaves) ||
+      grow_scratch((void **)&w->remap, n, sizeof *w->remap))
+    return SYLVA_ENOMEM;
   w->scratch_cap = n;
   return SYLVA_OK;
 }
 
 int sylva__reserve_scratch(sylva_world *w) { return reserve_scratch(w); }
+
+/* Room for everything the phases after the shoots write, so that from there on a
+ * step cannot fail: per-slot scratch for the grown skeleton, radius changes (at most
+ * one per node born before T), shed roots (at most every node), the nodes added and
+ * the stats. (Shedding can do without its removal order, sylva__shed.) */
+static int reserve_rest(sylva_world *w) {
+  size_t count = w->nodes.count;
+  if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
+      SYLVA__VEC_RESERVE(w->shed, count) ||
+      SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
+      SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count))
+    return SYLVA_ENOMEM;
+  return SYLVA_OK;
+}
 
 static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {
   const sylva__skeleton *s = &w->nodes;
@@ -372,12 +451,13 @@ static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {
   out->radius = s->radius[slot];
 }
 
-static int collect_journal(sylva_world *w, int T) {
+/* The nodes born at T and the radius changes of nodes still alive (room reserved). */
+static void collect_journal(sylva_world *w, int T) {
   sylva__skeleton *s = &w->nodes;
   w->added.len = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->birth[i] != T) continue;
-    if (SYLVA__VEC_RESERVE(w->added, w->added.len + 1)) return SYLVA_ENOMEM;
+    SYLVA_ASSERT(w->added.len < w->added.cap);
     node_info(w, i, &w->added.data[w->added.len++]);
   }
   /* radii changes of nodes shed later in the same iteration are dropped */
@@ -385,59 +465,40 @@ static int collect_journal(sylva_world *w, int T) {
   for (size_t i = 0; i < w->radii.len; i++)
     if (sylva__skeleton_find(s, w->radii.data[i].id) >= 0) w->radii.data[k++] = w->radii.data[i];
   w->radii.len = k;
-  return SYLVA_OK;
 }
 
-int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
-  if (journal) *journal = NULL;
-  if (w->status) return w->status;
-  if (sylva_world_finished(w)) return SYLVA_EFINISHED;
-  int T = ++w->iteration;
-  sylva_journal *j = &w->journal;
-  memset(j, 0, sizeof *j);
-  j->iteration = T;
-  w->radii.len = w->shed.len = 0;
-  int rc = reserve_scratch(w);
-  if (rc) return w->status = rc;
-
-  double t0 = now(w);
-  sylva__light_collect(w, T, w->light);
-  double t1 = now(w);
-  j->phase_seconds[SYLVA_PHASE_LIGHT] = t1 - t0;
-
+/* Phase 2: the stems whose growth equation stops at T, into finishing (room
+ * reserved). Allocation gives them nothing; they are marked finished once the step
+ * can no longer fail. */
+static void stop_phase(sylva_world *w, int T) {
+  w->finishing.len = 0;
   for (int s = 0; s < w->stem_count; s++) {
-    sylva__stem *st = &w->stems[s];
-    st->stats.shed = 0;
+    const sylva__stem *st = &w->stems[s];
     if (!st->finished &&
         sylva_equation_stops(&w->species[st->species].def.growth, sylva__stem_local(st, T)))
-      st->finished = true;
+      w->finishing.data[w->finishing.len++] = s;
   }
-  rc = sylva__allocate(w, T);
-  if (rc) return w->status = rc;
-  double t2 = now(w);
-  j->phase_seconds[SYLVA_PHASE_ALLOCATION] = t2 - t1;
+}
 
-  rc = sylva__shoots(w, T); /* records its shade time in the journal */
-  if (rc) return w->status = rc;
+/* The phases after the shoots, which cannot fail once reserve_rest has succeeded. */
+static int finish_step(sylva_world *w, int T) {
+  sylva_journal *j = &w->journal;
+  for (size_t k = 0; k < w->finishing.len; k++) w->stems[w->finishing.data[k]].finished = true;
   double t3 = now(w);
-  j->phase_seconds[SYLVA_PHASE_SHOOTS] = t3 - t2 - j->phase_seconds[SYLVA_PHASE_SHADE];
-
-  rc = reserve_scratch(w);
-  if (rc) return w->status = rc;
-  rc = sylva__radii(w, T);
-  if (rc) return w->status = rc;
+  int rc = sylva__radii(w, T);
+  if (rc) return rc;
+  SYLVA__CHECK_WORLD(w, SYLVA__AFTER_RADII);
   double t4 = now(w);
   j->phase_seconds[SYLVA_PHASE_RADII] = t4 - t3;
 
   rc = sylva__shed(w, T);
-  if (rc) return w->status = rc;
+  if (rc) return rc;
+  SYLVA__CHECK_WORLD(w, SYLVA__AFTER_SHEDDING);
   double t5 = now(w);
   j->phase_seconds[SYLVA_PHASE_SHEDDING] = t5 - t4;
 
-  rc = collect_journal(w, T);
-  if (rc) return w->status = rc;
+  collect_journal(w, T);
   sylva__stats(w, T);
-  if (SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count)) return w->status = SYLVA_ENOMEM;
   for (int s = 0; s < w->stem_count; s++) w->stats.data[s] = w->stems[s].stats;
   /* Keep the skeleton dense after every step: slots are node order, so queries
    * index live nodes directly. */
@@ -446,6 +507,50 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
     for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
   }
   j->phase_seconds[SYLVA_PHASE_STATS] = now(w) - t5;
+  return SYLVA_OK;
+}
+
+int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
+  if (journal) *journal = NULL;
+  if (w->status) return w->status;
+  if (sylva_world_finished(w)) return SYLVA_EFINISHED;
+  /* Until the shoots are grown and room is made for the rest, a failure takes the
+   * step back (take_back); after that nothing can fail. */
+  if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->finishing, (size_t)w->stem_count))
+    return SYLVA_ENOMEM;
+  set_mark(w);
+  int T = ++w->iteration;
+  sylva_journal *j = &w->journal;
+  memset(j, 0, sizeof *j);
+  j->iteration = T;
+  w->radii.len = w->shed.len = 0;
+
+  double t0 = now(w);
+  sylva__light_collect(w, T, w->light);
+  SYLVA__CHECK_WORLD(w, SYLVA__AFTER_LIGHT);
+  double t1 = now(w);
+  j->phase_seconds[SYLVA_PHASE_LIGHT] = t1 - t0;
+
+  stop_phase(w, T);
+  int rc = sylva__allocate(w, T);
+  if (!rc) SYLVA__CHECK_WORLD(w, SYLVA__AFTER_ALLOCATION);
+  double t2 = now(w);
+  j->phase_seconds[SYLVA_PHASE_ALLOCATION] = t2 - t1;
+
+  if (!rc) rc = sylva__shoots(w, T); /* records its shade time in the journal */
+  if (!rc) rc = reserve_rest(w);
+  if (rc) {
+    take_back(w);
+    SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
+    return rc;
+  }
+  SYLVA__CHECK_WORLD(w, SYLVA__AFTER_SHOOTS);
+  j->phase_seconds[SYLVA_PHASE_SHOOTS] = now(w) - t2 - j->phase_seconds[SYLVA_PHASE_SHADE];
+
+  rc = finish_step(w, T);
+  SYLVA_ASSERT(rc == SYLVA_OK); /* everything it needs was reserved */
+  if (rc) return w->status = rc;
+  SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
 
   j->added = w->added.data;
   j->added_count = w->added.len;
@@ -471,42 +576,61 @@ bool sylva_world_finished(const sylva_world *w) {
   return true;
 }
 
+/* Ids and indices from the caller are checked: a bad one is answered with NULL or
+ * SYLVA_ENOTFOUND and nothing is read or written. */
+static bool in_range(int i, int n) { return i >= 0 && i < n; }
+
 int sylva_world_species_count(const sylva_world *w) { return w->species_count; }
 const sylva_species_def *sylva_world_species(const sylva_world *w, int species) {
-  return &w->species[species].def;
+  return in_range(species, w->species_count) ? &w->species[species].def : NULL;
 }
 const char *sylva_world_species_label(const sylva_world *w, int species) {
-  return w->species[species].label;
+  return in_range(species, w->species_count) ? w->species[species].label : NULL;
 }
 int sylva_world_plant_count(const sylva_world *w) { return w->plant_count; }
-const char *sylva_world_plant_label(const sylva_world *w, int plant) { return w->plants[plant].label; }
-int sylva_world_plant_species(const sylva_world *w, int plant) { return w->plants[plant].species; }
+const char *sylva_world_plant_label(const sylva_world *w, int plant) {
+  return in_range(plant, w->plant_count) ? w->plants[plant].label : NULL;
+}
+int sylva_world_plant_species(const sylva_world *w, int plant) {
+  return in_range(plant, w->plant_count) ? w->plants[plant].species : SYLVA_ENOTFOUND;
+}
 int sylva_world_plant_stem_count(const sylva_world *w, int plant) {
-  return w->plants[plant].stem_count;
+  return in_range(plant, w->plant_count) ? w->plants[plant].stem_count : SYLVA_ENOTFOUND;
 }
 int sylva_world_stem_index(const sylva_world *w, int plant, int stem) {
+  if (!in_range(plant, w->plant_count) || !in_range(stem, w->plants[plant].stem_count))
+    return SYLVA_ENOTFOUND;
   return w->plants[plant].first_stem + stem;
 }
 int sylva_world_stem_count(const sylva_world *w) { return w->stem_count; }
-void sylva_world_stem_root(const sylva_world *w, int stem, double root[3]) {
+int sylva_world_stem_root(const sylva_world *w, int stem, double root[3]) {
+  if (!in_range(stem, w->stem_count)) return SYLVA_ENOTFOUND;
   memcpy(root, w->stems[stem].root, 3 * sizeof *root);
+  return SYLVA_OK;
 }
-void sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out) {
+int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out) {
+  if (!in_range(stem, w->stem_count)) return SYLVA_ENOTFOUND;
   *out = w->stems[stem].stats;
+  return SYLVA_OK;
 }
 int sylva_world_obstacle_count(const sylva_world *w) { return w->grid.obstacle_count; }
-void sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
+int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
+  if (!in_range(i, w->grid.obstacle_count)) return SYLVA_ENOTFOUND;
   const sylva__obstacle *o = &w->grid.obstacles[i];
   if (id) *id = o->id;
   out->label = o->label;
   memcpy(out->min, o->min, sizeof out->min);
   memcpy(out->max, o->max, sizeof out->max);
+  return SYLVA_OK;
 }
 
 size_t sylva_world_node_count(const sylva_world *w) { return w->nodes.live; }
 
-void sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
+int sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
+  if (i >= w->nodes.live) return SYLVA_ENOTFOUND;
+  SYLVA_ASSERT(w->nodes.count == w->nodes.live);
   node_info(w, i, out); /* the skeleton is dense between steps: slot i is node i */
+  return SYLVA_OK;
 }
 
 double sylva_world_light_at(const sylva_world *w, const double p[3]) {
@@ -525,7 +649,8 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->radii.cap * sizeof(sylva_radius_change) +
                w->cells.cap * sizeof(sylva__keyed) +
-               (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap) * sizeof(int32_t) +
+               (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
+                w->finishing.cap + w->caps.cap + w->stem_first.cap) * sizeof(int32_t) +
                w->cell_pos.cap * sizeof(float) +
                (size_t)w->stem_cap * sizeof(sylva__stem);
 }

@@ -2,6 +2,8 @@
 #ifndef SYLVA_WORLD_IMPL_H
 #define SYLVA_WORLD_IMPL_H
 
+#include "alloc.h"
+#include "debug.h"
 #include "grid.h"
 #include "rng.h"
 #include "skeleton.h"
@@ -57,6 +59,19 @@ typedef struct sylva__keyed {
 /** Orders keyed items by key, then item. */
 int sylva__keyed_cmp(const void *a, const void *b);
 
+/** Where a step or a new plant started from. Until the point after which it cannot
+ *  fail, such a call only appends nodes (casting their shade), draws from the
+ *  generator and plants stems; a failure takes all of it back to the mark, so the
+ *  call changes nothing. */
+typedef struct sylva__mark {
+  int iteration;
+  sylva__rng rng;
+  size_t count;    /* skeleton slots at the mark: the call's nodes are above */
+  size_t shaded;   /* the call's nodes below this slot have cast their shade */
+  int32_t next_id;
+  int stem_count;
+} sylva__mark;
+
 /** Growable scratch array of one element type. */
 #define SYLVA__VEC(T)   \
   struct {              \
@@ -70,7 +85,9 @@ struct sylva_world {
   sylva__skeleton nodes;
   sylva__rng rng;
   int iteration;
-  int status; /* sticky failure of a step (out of memory), 0 when healthy */
+  int status; /* sticky failure of a step past the point where it cannot fail (never
+                 expected: everything it needs is reserved before), 0 when healthy */
+  sylva__mark mark; /* the step or plant being made */
 
   sylva__species *species;
   int species_count, species_cap;
@@ -92,6 +109,9 @@ struct sylva_world {
   int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped */
   size_t scratch_cap;
   /* by stem */
+  SYLVA__VEC(int32_t) finishing;  /* stop: the stems whose equation stops at this step;
+                                     they grow nothing and are marked finished once the
+                                     step can no longer fail */
   SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0 */
   SYLVA__VEC(int32_t) stem_first; /* allocation: first sprout of each stem, stem_count + 1 */
   /* the rest as the phases need them */
@@ -150,6 +170,26 @@ int sylva__index_plant(sylva_world *w, int p);
 
 /** Sizes the per-slot scratch arrays to the skeleton's capacity. */
 int sylva__reserve_scratch(sylva_world *w);
+
+/** Boundaries at which debug builds check the world's invariants. */
+typedef enum sylva__boundary {
+  SYLVA__BETWEEN_STEPS,    /* after a step, a failed step, a new plant or a load */
+  SYLVA__AFTER_LIGHT,      /* phase 1 */
+  SYLVA__AFTER_ALLOCATION, /* phases 2-3: the sprouts */
+  SYLVA__AFTER_SHOOTS,     /* phase 4 and the room for the rest of the step */
+  SYLVA__AFTER_RADII,      /* phase 5 */
+  SYLVA__AFTER_SHEDDING    /* phase 6 */
+} sylva__boundary;
+
+/** Checks, in O(nodes + stems + plants), what must hold at a boundary: skeleton
+ *  slots in order (parent below child) with links both ways, live counts, roots,
+ *  occupancy, scratch sizes and the sprouts; aborts on the first broken one. */
+void sylva__check_world(const sylva_world *w, sylva__boundary at);
+#ifdef NDEBUG
+#define SYLVA__CHECK_WORLD(w, at) ((void)0)
+#else
+#define SYLVA__CHECK_WORLD(w, at) sylva__check_world((w), (at))
+#endif
 
 /* Phases (one module each). */
 /** Light pass: L by slot (if light != NULL) and Q of every node, at iteration T. */

@@ -290,9 +290,12 @@ typedef struct species_field {
 #define IN(group, wanted, ...) IN_##group##_##wanted(__VA_ARGS__)
 #define IS_INT_double false
 #define IS_INT_int true
-#define FIELD(name, type, lo, hi, bounds)                                                     \
-  {#name, offsetof(sylva_species_def, name), IS_INT_##type,                                   \
-   {lo, hi, ((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE) != 0, ((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE) != 0}},
+#define FIELD(name, type, lo, hi, bounds)                                  \
+  {#name,                                                                  \
+   offsetof(sylva_species_def, name),                                      \
+   IS_INT_##type,                                                          \
+   {lo, hi, ((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE) != 0,                   \
+    ((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE) != 0}},
 #define SPECIES_FIELD(name, type, def, lo, hi, bounds, group, snap) \
   IN(group, species, FIELD(name, type, lo, hi, bounds))
 #define MARKER_FIELD(name, type, def, lo, hi, bounds, group, snap) \

@@ -7,12 +7,12 @@
  *   type      double or int, the member's type
  *   default   the value of sylva_default_species_def()
  *   min, max  the range sylva_species_check() and the scenario parser accept
- *   bounds    SYLVA_FIELD_CLOSED, or SYLVA_FIELD_MIN_EXCLUSIVE and/or
- *             SYLVA_FIELD_MAX_EXCLUSIVE (or-ed) where min or max itself is refused
+ *   bounds    SYLVA_FIELD_CLOSED [min, max], SYLVA_FIELD_MIN_EXCLUSIVE (min, max],
+ *             SYLVA_FIELD_MAX_EXCLUSIVE [min, max) or SYLVA_FIELD_OPEN (min, max)
  *   group     species: a key of the scenario's species object; markers: a key of
  *             its "markers" object (sylva_species_check() names it "markers")
- *   snapshot  the field's place in a snapshot's species record (SYLVA_SNAPSHOT_VERSION):
- *             doubles first, then ints, as version 4 wrote them
+ *   snapshot  the field's place in a snapshot's species record, written as its type
+ *             (f64 or i32); format 4 has every double before every int
  *
  * Generated from the list: the defaults (core/src/params.c), the range checks
  * (sylva_species_check), the snapshot's species record (core/src/snapshot.c), and
@@ -27,22 +27,22 @@
  * growth.kind and allocation come first as u32, growth.p[] takes places 1-3 and
  * tropism[] places 14-16.
  *
- * Adding a field: add it to sylva_species_def, here (at the end of its group, with
- * the next free snapshot place), bump SYLVA_SNAPSHOT_VERSION, and document its key
- * in docs/scenario.md. */
+ * Adding a field: add it to sylva_species_def and here (at the end of its group,
+ * with the next place, 37 for the first), raise SYLVA_SPECIES_SNAPSHOT_FIELDS and
+ * SYLVA_SNAPSHOT_VERSION, and document its key in docs/scenario.md. */
 #ifndef SYLVA_SPECIES_FIELDS_H
 #define SYLVA_SPECIES_FIELDS_H
 
 #define SYLVA_FIELD_CLOSED 0
 #define SYLVA_FIELD_MIN_EXCLUSIVE 1
 #define SYLVA_FIELD_MAX_EXCLUSIVE 2
+#define SYLVA_FIELD_OPEN (SYLVA_FIELD_MIN_EXCLUSIVE | SYLVA_FIELD_MAX_EXCLUSIVE)
 
 /* clang-format off */
 #define SYLVA_SPECIES_FIELDS(X)                                                                  \
   X(rho,           double, 0.1,   1e-4, 100,    SYLVA_FIELD_CLOSED,        species, 0)           \
   X(sprout_light,  double, 0.5,   0,    1,      SYLVA_FIELD_CLOSED,        species, 4)           \
-  X(lambda,        double, 0.52,  0,    1,      SYLVA_FIELD_MIN_EXCLUSIVE | SYLVA_FIELD_MAX_EXCLUSIVE, \
-                                                                           species, 5)           \
+  X(lambda,        double, 0.52,  0,    1,      SYLVA_FIELD_OPEN,          species, 5)           \
   X(k,             double, 0.5,   0,    1,      SYLVA_FIELD_CLOSED,        species, 6)           \
   X(w1,            double, 1.0,   0,    1e6,    SYLVA_FIELD_CLOSED,        species, 7)           \
   X(w2,            double, 0.6,   0,    1e6,    SYLVA_FIELD_CLOSED,        species, 8)           \

@@ -9,7 +9,8 @@
  *   sylva_world_destroy(w);
  *
  * Plants, stems, species and obstacles are referred to by integer ids. Every
- * function that can fail returns a negative sylva_status and changes nothing. */
+ * function that can fail returns a negative sylva_status and changes nothing; every
+ * allocation goes through the allocator of sylva/alloc.h. */
 #ifndef SYLVA_WORLD_H
 #define SYLVA_WORLD_H
 
@@ -17,6 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "alloc.h"
 #include "params.h"
 #include "status.h"
 
@@ -121,21 +123,24 @@ int sylva_world_find_obstacle(const sylva_world *w, const char *label);
 /** Sets (or clears, with NULL) the clock that times the phases of each step. */
 void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx);
 
-/** Grows one iteration. SYLVA_EFINISHED when every stem has finished. */
+/** Grows one iteration. SYLVA_EFINISHED when every stem has finished. SYLVA_ENOMEM
+ *  when memory ran out: the world is as it was before the call (the previous
+ *  journal is no longer valid) and may step again. */
 int sylva_world_step(sylva_world *w, const sylva_journal **journal);
 
-/* Queries. */
+/* Queries. A bad id or index gets NULL (for a pointer) or SYLVA_ENOTFOUND. */
 /** The def the world was created with. */
 const sylva_world_def *sylva_world_get_def(const sylva_world *w);
 /** Iterations grown so far (0 before the first step). */
 int sylva_world_iteration(const sylva_world *w);
 /** True when every stem has finished by its growth equation (or there are none). */
 bool sylva_world_finished(const sylva_world *w);
-/** Number of species, and a species' parameters and label by id. */
+/** Number of species, and a species' parameters and label by id (NULL for a bad id). */
 int sylva_world_species_count(const sylva_world *w);
 const sylva_species_def *sylva_world_species(const sylva_world *w, int species);
 const char *sylva_world_species_label(const sylva_world *w, int species);
-/** Number of plants, and a plant's label, species and stem count by id. */
+/** Number of plants, and a plant's label (NULL for a bad id), species and stem count
+ *  by id. */
 int sylva_world_plant_count(const sylva_world *w);
 const char *sylva_world_plant_label(const sylva_world *w, int plant);
 int sylva_world_plant_species(const sylva_world *w, int plant);
@@ -144,19 +149,22 @@ int sylva_world_plant_stem_count(const sylva_world *w, int plant);
 int sylva_world_stem_index(const sylva_world *w, int plant, int stem);
 /** Number of stems of all plants. */
 int sylva_world_stem_count(const sylva_world *w);
-/** Root position of a global stem. */
-void sylva_world_stem_root(const sylva_world *w, int stem, double root[3]);
-/** Current measures of a global stem (as after the last iteration). */
-void sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out);
+/** Root position of a global stem; 0 or SYLVA_ENOTFOUND (root untouched). */
+int sylva_world_stem_root(const sylva_world *w, int stem, double root[3]);
+/** Current measures of a global stem (as after the last iteration); 0 or
+ *  SYLVA_ENOTFOUND (out untouched). */
+int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out);
 /** Number of obstacles. */
 int sylva_world_obstacle_count(const sylva_world *w);
 /** The i-th obstacle (0 <= i < count), in the order they were added; the label
- *  points into the world and is valid until the obstacle is removed. */
-void sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out);
+ *  points into the world and is valid until the obstacle is removed. 0 or
+ *  SYLVA_ENOTFOUND (nothing written). */
+int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out);
 /** Number of live nodes. */
 size_t sylva_world_node_count(const sylva_world *w);
-/** The i-th live node (0 <= i < count), in id order: parents before children. */
-void sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out);
+/** The i-th live node (0 <= i < count), in id order: parents before children. 0 or
+ *  SYLVA_ENOTFOUND (out untouched). */
+int sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out);
 /** Light (0..1) of the voxel holding point p; 0 outside the world. */
 double sylva_world_light_at(const sylva_world *w, const double p[3]);
 /** Voxels per axis. */

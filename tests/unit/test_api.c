@@ -1,0 +1,236 @@
+/* The public API's contract for bad ids (a negative status or NULL, and nothing
+ * changes), the species field list (sylva/species_fields.h): its defaults, its
+ * ranges as sylva_species_check applies them, and a snapshot that keeps every field;
+ * and, in debug builds, the phase checks that stop a step on a broken invariant. */
+#include <signal.h>
+#include <stddef.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "../check.h"
+#include "sylva/sylva.h"
+#include "world_impl.h"
+
+static sylva_world *small_world(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w = NULL;
+  if (sylva_world_create(&wd, &w)) return NULL;
+  sylva_species_def sp = sylva_default_species_def();
+  int s = sylva_world_add_species(w, &sp, "oak");
+  double roots[2][3] = {{0, 0, 0}, {1, 0, 0}};
+  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2};
+  sylva_obstacle_def wall = {"wall", {2, -1, 0}, {2.2, 1, 2}};
+  if (s < 0 || sylva_world_add_plant(w, &pd, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {
+    sylva_world_destroy(w);
+    return NULL;
+  }
+  return w;
+}
+
+static void test_bad_ids(void) {
+  sylva_world *w = small_world();
+  CHECK(w != NULL);
+  if (!w) return;
+  CHECK_INT(sylva_world_step(w, NULL), 0);
+  uint64_t h = sylva_world_hash(w);
+  int bad[] = {-1, 1, 2, 1000000, -2147483647 - 1};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    int id = bad[i];
+    CHECK(sylva_world_species(w, id) == NULL);
+    CHECK(sylva_world_species_label(w, id) == NULL);
+    CHECK(sylva_world_plant_label(w, id) == NULL);
+    CHECK_INT(sylva_world_plant_species(w, id), SYLVA_ENOTFOUND);
+    CHECK_INT(sylva_world_plant_stem_count(w, id), SYLVA_ENOTFOUND);
+    CHECK_INT(sylva_world_stem_index(w, id, 0), SYLVA_ENOTFOUND);
+    CHECK_INT(sylva_world_remove_obstacle(w, id), SYLVA_ENOTFOUND);
+    sylva_obstacle_def o = {0};
+    int oid = 77;
+    CHECK_INT(sylva_world_obstacle_at(w, id, &oid, &o), SYLVA_ENOTFOUND);
+    CHECK(oid == 77 && o.label == NULL);
+    double plant_root[1][3] = {{-2, -2, 0}};
+    sylva_plant_def pd = {id, "late", (const double(*)[3])plant_root, 1};
+    CHECK_INT(sylva_world_add_plant(w, &pd, NULL), SYLVA_EINVAL);
+  }
+  /* stems: 0 and 1 exist (the shrub's two roots) */
+  int bad_stems[] = {-1, 2, 99};
+  for (size_t i = 0; i < sizeof bad_stems / sizeof bad_stems[0]; i++) {
+    int stem = bad_stems[i];
+    CHECK_INT(sylva_world_stem_index(w, 0, stem), SYLVA_ENOTFOUND);
+    double root[3] = {7, 7, 7};
+    CHECK_INT(sylva_world_stem_root(w, stem, root), SYLVA_ENOTFOUND);
+    CHECK(root[0] == 7 && root[1] == 7 && root[2] == 7);
+    sylva_stem_stats st = {.plant = 42};
+    CHECK_INT(sylva_world_stem_stats(w, stem, &st), SYLVA_ENOTFOUND);
+    CHECK_INT(st.plant, 42);
+  }
+  sylva_node_info ni = {.id = 42};
+  CHECK_INT(sylva_world_node_at(w, sylva_world_node_count(w), &ni), SYLVA_ENOTFOUND);
+  CHECK_INT(sylva_world_node_at(w, (size_t)-1, &ni), SYLVA_ENOTFOUND);
+  CHECK_INT(ni.id, 42);
+  /* the good ones still answer */
+  CHECK(sylva_world_species(w, 0) != NULL && strcmp(sylva_world_species_label(w, 0), "oak") == 0);
+  CHECK_INT(sylva_world_stem_index(w, 0, 1), 1);
+  double root[3];
+  CHECK_INT(sylva_world_stem_root(w, 1, root), 0);
+  CHECK(root[0] == 1);
+  CHECK_INT(sylva_world_node_at(w, 0, &ni), 0);
+  CHECK_INT(ni.parent, -1);
+  CHECK(sylva_world_hash(w) == h); /* nothing changed */
+  sylva_world_destroy(w);
+}
+
+/* Checks def with one field set to v (an int field when is_int): accepted when ok,
+ * else refused with the name reported. */
+static void check_value(const char *name, const char *reported, sylva_species_def def,
+                        size_t offset, bool is_int, double v, bool ok) {
+  char *at = (char *)&def + offset;
+  if (is_int) {
+    int iv = (int)v;
+    memcpy(at, &iv, sizeof iv);
+  } else {
+    memcpy(at, &v, sizeof v);
+  }
+  const char *field = NULL;
+  int rc = sylva_species_check(&def, &field);
+  bool as_expected = ok ? rc == 0 : rc == SYLVA_ERANGE && field && strcmp(field, reported) == 0;
+  if (!as_expected)
+    fprintf(stderr, "%s = %.17g: status %d, field %s\n", name, v, rc, field ? field : "(none)");
+  CHECK(as_expected);
+}
+
+/* Each listed field: the default is the list's; the check takes min and max unless
+ * they are excluded, refuses what lies just outside, and names the field (markers
+ * for the marker keys). */
+#define IS_INT_double false
+#define IS_INT_int true
+#define REPORTED_species(name) #name
+#define REPORTED_markers(name) "markers"
+static void test_species_fields(void) {
+  const sylva_species_def def = sylva_default_species_def();
+  CHECK_INT(sylva_species_check(&def, NULL), 0);
+  /* the rules between fields (b_max >= b_min, m_min <= m0) kept out of the way */
+  sylva_species_def base = def;
+  base.b_max = 1000, base.m0 = 1000, base.m_min = 0;
+#define FIELD(name, type, dflt, lo, hi, bounds, group, snap)                            \
+  {                                                                                     \
+    CHECK(def.name == (type)(dflt));                                                    \
+    bool is_int = IS_INT_##type;                                                        \
+    bool lo_in = !((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE);                               \
+    bool hi_in = !((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE);                               \
+    double step = is_int ? 1.0 : 1e-9 * (1.0 + fabs((double)(hi)));                     \
+    size_t at = offsetof(sylva_species_def, name);                                      \
+    const char *reported = REPORTED_##group(name);                                      \
+    check_value(#name, reported, base, at, is_int, lo, lo_in);                          \
+    check_value(#name, reported, base, at, is_int, hi, hi_in);                          \
+    check_value(#name, reported, base, at, is_int, (double)(lo) - step, false);         \
+    check_value(#name, reported, base, at, is_int, (double)(hi) + step, false);         \
+  }
+  SYLVA_SPECIES_FIELDS(FIELD)
+#undef FIELD
+  /* doubles must be finite */
+  check_value("rho", "rho", def, offsetof(sylva_species_def, rho), false, NAN, false);
+  check_value("shade_column", "shade_column", def, offsetof(sylva_species_def, shade_column),
+              false, INFINITY, false);
+  /* the rules the list leaves to hand-written checks */
+  check_value("b_max", "b_max", def, offsetof(sylva_species_def, b_max), false, def.b_min - 0.1,
+              false);
+  check_value("m_min", "markers", def, offsetof(sylva_species_def, m_min), true, def.m0 + 1,
+              false);
+  check_value("tropism", "tropism", def, offsetof(sylva_species_def, tropism[1]), false, 1001,
+              false);
+}
+#undef IS_INT_double
+#undef IS_INT_int
+#undef REPORTED_species
+#undef REPORTED_markers
+
+/* A species whose every field differs from the default survives a snapshot. */
+static void test_species_snapshot(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  sylva_species_def d = sylva_default_species_def();
+#define SHIFT(name, type, dflt, lo, hi, bounds, group, snap) \
+  d.name = (type)((lo) + ((hi) - (lo)) * (0.25 + 0.01 * (snap)));
+  SYLVA_SPECIES_FIELDS(SHIFT)
+#undef SHIFT
+  d.b_max = d.b_min + 0.5;
+  d.m0 = d.m_min + 3;
+  d.growth = (sylva_equation){SYLVA_EQ_GOMPERTZ, {50.0, 3.5, 0.25}};
+  d.allocation = SYLVA_ALLOC_NONE;
+  d.tropism[0] = 0.1, d.tropism[1] = -0.2, d.tropism[2] = 0.7;
+  CHECK_INT(sylva_species_check(&d, NULL), 0);
+  CHECK_INT(sylva_world_add_species(w, &d, "odd"), 0);
+  uint8_t *img = NULL;
+  size_t n = 0;
+  CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
+  sylva_world *r = NULL;
+  CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
+  if (r) {
+    const sylva_species_def *e = sylva_world_species(r, 0);
+    CHECK(e != NULL);
+#define SAME(name, type, dflt, lo, hi, bounds, group, snap) \
+  if (e) CHECK(e->name == d.name);
+    SYLVA_SPECIES_FIELDS(SAME)
+#undef SAME
+    if (e) {
+      CHECK(e->growth.kind == d.growth.kind && e->allocation == d.allocation);
+      CHECK(memcmp(e->growth.p, d.growth.p, sizeof d.growth.p) == 0);
+      CHECK(memcmp(e->tropism, d.tropism, sizeof d.tropism) == 0);
+    }
+  }
+  sylva_free(img);
+  sylva_world_destroy(r);
+  sylva_world_destroy(w);
+}
+
+#ifndef NDEBUG
+/* Breaks one invariant of a grown world in a child process and steps it: the phase
+ * checks must abort the child. */
+static void expect_abort(const char *what, void (*breaks)(sylva_world *)) {
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid == 0) {
+    freopen("/dev/null", "w", stderr);
+    sylva_world *w = small_world();
+    if (!w || sylva_world_step(w, NULL) != 0) _exit(2);
+    breaks(w);
+    sylva_world_step(w, NULL);
+    _exit(0);
+  }
+  int status = 0;
+  CHECK(pid > 0 && waitpid(pid, &status, 0) == pid);
+  bool aborted = WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT;
+  if (!aborted) fprintf(stderr, "%s: the step was not stopped (status %d)\n", what, status);
+  CHECK(aborted);
+}
+
+static void parent_after_child(sylva_world *w) { w->nodes.parent[1] = 2; }
+static void live_count_off(sylva_world *w) { w->nodes.live--; }
+static void doomed_left_on(sylva_world *w) { w->nodes.flags[2] |= SYLVA__NODE_DOOMED; }
+static void link_one_way(sylva_world *w) { w->nodes.axis_child[0] = -1; }
+static void occupancy_lost(sylva_world *w) {
+  int v[3];
+  sylva__node_voxel(w, 1, v);
+  sylva__grid_vacate(&w->grid, v);
+}
+
+static void test_phase_checks(void) {
+  expect_abort("a parent after its child", parent_after_child);
+  expect_abort("a live count off by one", live_count_off);
+  expect_abort("a transient flag left on", doomed_left_on);
+  expect_abort("a link one way", link_one_way);
+  expect_abort("a node without its voxel", occupancy_lost);
+}
+#endif
+
+int main(void) {
+#ifndef NDEBUG
+  test_phase_checks();
+#endif
+  test_bad_ids();
+  test_species_fields();
+  test_species_snapshot();
+  return check_summary("api");
+}
