@@ -131,8 +131,9 @@ def main():
     for name in sorted(set(expect) - set(bad_files)):
         failures.append(("bad/" + name, "listed in EXPECT.tsv but missing"))
 
-    suite_files = sorted(os.listdir(args.suite))
-    if not suite_files:
+    # without a JSONTestSuite copy (meson option jsontestsuite) that part is left out
+    suite_files = sorted(os.listdir(args.suite)) if os.path.isdir(args.suite) else []
+    if not suite_files and os.path.isdir(args.suite):
         failures.append(("JSONTestSuite", "no files in " + args.suite))
     for name in suite_files:
         jobs.append(("JSONTestSuite/" + name, check_not_scenario, (os.path.join(args.suite, name),)))

@@ -1,7 +1,9 @@
 /* sylva_json_check against JSONTestSuite (y_* accepted, n_* rejected, i_* pinned)
  * and against hand-written cases for each leniency of cJSON 1.7.15. */
-#include "../read_file.h"
 #include <dirent.h>
+
+#include "../list_dir.h"
+#include "../read_file.h"
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,33 +39,18 @@ static void record(bool ok, const char *what, const char *detail) {
   }
 }
 
-static int cmp_names(const void *a, const void *b) {
-  return strcmp(*(char *const *)a, *(char *const *)b);
+/* JSONTestSuite's y_ (accept), n_ (reject) and i_ (either) files */
+static bool suite_file(const char *name) {
+  return name[0] == 'y' || name[0] == 'n' || name[0] == 'i';
 }
 
-
 static void run_suite(const char *dir) {
-  DIR *d = opendir(dir);
-  if (!d) {
-    record(false, dir, "cannot open the JSONTestSuite directory");
+  size_t count;
+  char **names = list_dir(dir, suite_file, &count);
+  if (!names) {
+    record(false, dir, "cannot list the JSONTestSuite directory");
     return;
   }
-  char **names = NULL;
-  size_t count = 0, cap = 0;
-  struct dirent *e;
-  while ((e = readdir(d))) {
-    if (e->d_name[0] != 'y' && e->d_name[0] != 'n' && e->d_name[0] != 'i') continue;
-    if (count == cap) {
-      cap = cap ? cap * 2 : 256;
-      char **bigger = realloc(names, cap * sizeof *names);
-      if (!bigger) break;
-      names = bigger;
-    }
-    if (!(names[count] = strdup(e->d_name))) break;
-    count++;
-  }
-  closedir(d);
-  if (names) qsort(names, count, sizeof *names, cmp_names);
   int i_accepted = 0, i_rejected = 0;
   for (size_t i = 0; i < count; i++) {
     char path[4096], err[256];
@@ -72,7 +59,6 @@ static void run_suite(const char *dir) {
     char *text = read_file(path, &len);
     if (!text) {
       record(false, names[i], "cannot read");
-      free(names[i]);
       continue;
     }
     int rc = sylva_json_check(text, len, 64, err, sizeof err);
@@ -94,9 +80,8 @@ static void run_suite(const char *dir) {
       record((rc == 0) == pinned_accept(names[i]), names[i], detail);
       break;
     }
-    free(names[i]);
   }
-  free(names);
+  list_dir_free(names, count);
   printf("JSONTestSuite: %zu files (i_*: %d accepted, %d rejected)\n", count, i_accepted,
          i_rejected);
 }
@@ -194,6 +179,13 @@ int main(int argc, char **argv) {
     return 2;
   }
   run_cases();
+  DIR *d = opendir(argv[1]);
+  if (!d) { /* the fixed cases ran; without a JSONTestSuite copy the rest is skipped */
+    printf("%d passed, %d failed; skip: no JSONTestSuite at %s (meson option jsontestsuite)\n",
+           passed, failed, argv[1]);
+    return failed ? 1 : 77;
+  }
+  closedir(d);
   run_suite(argv[1]);
   printf("%d passed, %d failed\n", passed, failed);
   return failed ? 1 : 0;

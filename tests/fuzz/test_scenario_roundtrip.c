@@ -1,8 +1,8 @@
 /* Replays the shipped scenarios through parse -> canonical JSON -> parse, and
  * checks that both forms build the same world and grow it identically; then a
  * few fixed cases of the scenario rules and of the encoders. */
+#include "../list_dir.h"
 #include "../read_file.h"
-#include <dirent.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -93,31 +93,18 @@ static void roundtrip(const char *path) {
   sylva_scenario_free(b);
 }
 
-static int cmp_names(const void *x, const void *y) {
-  return strcmp(*(char *const *)x, *(char *const *)y);
-}
-
 static void replay_dir(const char *dir) {
-  DIR *d = opendir(dir);
-  EXPECT(d != NULL, "cannot open %s", dir);
-  if (!d) return;
-  char *names[256];
-  int count = 0;
-  struct dirent *e;
-  while ((e = readdir(d)) && count < 256) {
-    size_t n = strlen(e->d_name);
-    if (n > 5 && strcmp(e->d_name + n - 5, ".json") == 0 && (names[count] = strdup(e->d_name)))
-      count++;
-  }
-  closedir(d);
-  qsort(names, (size_t)count, sizeof names[0], cmp_names);
+  size_t count;
+  char **names = list_dir(dir, list_dir_json, &count);
+  EXPECT(names != NULL, "cannot list %s", dir);
+  if (!names) return;
   EXPECT(count > 0, "no scenarios in %s", dir);
-  for (int i = 0; i < count; i++) {
+  for (size_t i = 0; i < count; i++) {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[i]);
     roundtrip(path);
-    free(names[i]);
   }
+  list_dir_free(names, count);
 }
 
 #define MINIMAL_WORLD "\"world\": {\"min\": [-2, -2, 0], \"max\": [2, 2, 4]}"

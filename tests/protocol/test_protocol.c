@@ -7,7 +7,6 @@
  * skipped, when DIR is missing). */
 #include "../read_file.h"
 #include <cjson/cJSON.h>
-#include <dirent.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -16,6 +15,7 @@
 #include <string.h>
 
 #include "../check.h"
+#include "../list_dir.h"
 #include "sylva/encode.h"
 #include "sylva/json_check.h"
 #include "sylva/protocol.h"
@@ -622,32 +622,14 @@ static void test_depth(void) {
 
 /* ---- JSONTestSuite, raw and wrapped ---- */
 
-static int cmp_names(const void *a, const void *b) {
-  return strcmp(*(char *const *)a, *(char *const *)b);
-}
-
 static void test_suite(const char *dir) {
-  DIR *d = opendir(dir);
-  if (!d) {
+  size_t count;
+  char **names = list_dir(dir, list_dir_json, &count);
+  if (!names) {
     check_failed++;
-    fprintf(stderr, "cannot open the JSONTestSuite directory %s\n", dir);
+    fprintf(stderr, "cannot list the JSONTestSuite directory %s\n", dir);
     return;
   }
-  char **names = NULL;
-  size_t count = 0, cap = 0;
-  for (struct dirent *e; (e = readdir(d));) {
-    size_t len = strlen(e->d_name);
-    if (len < 6 || strcmp(e->d_name + len - 5, ".json") != 0) continue;
-    if (count == cap) {
-      cap = cap ? cap * 2 : 512;
-      char **bigger = realloc(names, cap * sizeof *names);
-      if (!bigger) break;
-      names = bigger;
-    }
-    names[count++] = strdup(e->d_name);
-  }
-  closedir(d);
-  qsort(names, count, sizeof *names, cmp_names);
   CHECK(count >= 300);
 
   static const char *const wraps[][2] = {
@@ -718,8 +700,7 @@ static void test_suite(const char *dir) {
   }
   CHECK_INT(raw_errors, count);
   CHECK_INT(wrapped_runs, count * (sizeof wraps / sizeof wraps[0]));
-  for (size_t f = 0; f < count; f++) free(names[f]);
-  free(names);
+  list_dir_free(names, count);
 }
 
 /* ---- encoders ---- */
