@@ -101,7 +101,7 @@ int cmd_export(int argc, char **argv) {
       fprintf(stderr, "sylva: %s: %s\n", out, err);
     else if (failed)
       fprintf(stderr, "sylva: %s\n", err);
-    rc = cli_outfile_close(&o, failed ? CLI_EXIT_FAILURE : CLI_EXIT_OK);
+    rc = cli_outfile_close(&o, server_exit_status(failed));
   }
   store_run_free(&r);
   store_close(st);

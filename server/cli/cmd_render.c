@@ -132,7 +132,7 @@ static int render_to(cli_outfile *o, const sylva_world *w, const render_options 
     fprintf(stderr, "sylva: %s: %s\n", o->path, err);
   else if (failed)
     fprintf(stderr, "sylva: render: %s\n", err);
-  return failed ? CLI_EXIT_FAILURE : CLI_EXIT_OK;
+  return server_exit_status(failed);
 }
 
 /* The stored form: --db FILE --name NAME [--iteration T]. */
