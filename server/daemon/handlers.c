@@ -172,7 +172,7 @@ void handle_message(client *c, const char *text, size_t len) {
     if (r->status == SYLVA_RUN_FAILED)
       reply_error(c, "bad_request", "/run: the run has failed", m.ref);
     else
-      run_edit(r, c, &m, text, len);
+      run_edit(r, c, &m);
     break;
   case SYLVA_MSG_FORK: run_fork(r, c, m.iteration, m.name, m.ref); break;
   case SYLVA_MSG_GET: run_get(r, c, m.iteration, m.ref); break;

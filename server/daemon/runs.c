@@ -12,7 +12,6 @@
 /** An edit waiting for the iteration in flight. */
 typedef struct pending_edit {
   sylva_msg msg;
-  char *json;
   uint64_t client;
   struct pending_edit *next;
 } pending_edit;
@@ -292,7 +291,6 @@ void runs_free(server *d) {
       pending_edit *e = r->edits;
       r->edits = e->next;
       sylva_msg_free(&e->msg);
-      free(e->json);
       free(e);
     }
     while (r->lights) {
@@ -358,21 +356,52 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
 
 /* ---- edits, forks, history ------------------------------------------------------ */
 
+/* The store's edit of a protocol `edit` message (copies; SYLVA_ENOMEM or 0). */
+static int edit_from_msg(const sylva_msg *m, edit *e) {
+  *e = (edit){0};
+  if (edit_reserve(e, m->remove_obstacle_count, m->add_obstacle_count, m->add_plant_count))
+    return SYLVA_ENOMEM;
+  for (int i = 0; i < m->remove_obstacle_count; i++)
+    if (!(e->removals[i] = strdup(m->remove_obstacles[i]))) return SYLVA_ENOMEM;
+  for (int i = 0; i < m->add_obstacle_count; i++) {
+    const sylva_scenario_obstacle *o = &m->add_obstacles[i];
+    edit_obstacle *eo = &e->obstacles[i];
+    memcpy(eo->min, o->min, sizeof eo->min);
+    memcpy(eo->max, o->max, sizeof eo->max);
+    if (!(eo->id = strdup(o->id))) return SYLVA_ENOMEM;
+  }
+  for (int i = 0; i < m->add_plant_count; i++) {
+    const sylva_scenario_plant *p = &m->add_plants[i];
+    edit_plant *ep = &e->plants[i];
+    size_t roots = (size_t)p->root_count * sizeof *p->roots;
+    if (!(ep->id = strdup(p->id)) || !(ep->species = strdup(m->add_plant_species[i])) ||
+        !(ep->roots = malloc(roots)))
+      return SYLVA_ENOMEM;
+    memcpy(ep->roots, p->roots, roots);
+    ep->root_count = p->root_count;
+  }
+  return SYLVA_OK;
+}
+
 /* Applies one edit to the idle run; answers the client when it is still there. */
-static void edit_now(run *r, client *c, const sylva_msg *m, const char *json) {
+static void edit_now(run *r, client *c, const sylva_msg *m) {
   server *d = r->d;
-  char err[512];
-  sylva_world *edited;
-  int rc = edit_apply(r->w, m, &edited, err, sizeof err);
+  char err[512] = "out of memory";
+  sylva_world *edited = NULL;
+  edit e;
+  int rc = edit_from_msg(m, &e);
+  if (rc == SYLVA_OK) rc = edit_apply(r->w, &e, &edited, err, sizeof err);
   if (rc != SYLVA_OK) {
+    edit_free(&e);
     if (c) client_send_text(c, sylva_msg_error(rc == SYLVA_ENOMEM ? "internal" : "bad_request",
                                                err, m->ref));
     return;
   }
   uv_mutex_lock(&d->store_lock);
-  int failed = store_apply_edit(d->st, r->id, edited, json);
+  int failed = store_apply_edit(d->st, r->id, edited, &e);
   if (failed) snprintf(err, sizeof err, "%s", store_error(d->st));
   uv_mutex_unlock(&d->store_lock);
+  edit_free(&e);
   if (failed) {
     sylva_world_destroy(edited);
     server_log(r->name, "edit not stored: %s", err);
@@ -404,33 +433,24 @@ static void apply_pending_edits(run *r) {
   while (r->edits) {
     pending_edit *e = r->edits;
     r->edits = e->next;
-    if (!r->d->stopping) edit_now(r, client_find(r->d, e->client), &e->msg, e->json);
+    if (!r->d->stopping) edit_now(r, client_find(r->d, e->client), &e->msg);
     sylva_msg_free(&e->msg);
-    free(e->json);
     free(e);
   }
 }
 
-void run_edit(run *r, client *c, sylva_msg *m, const char *json, size_t len) {
-  char *text = strndup(json, len);
-  if (!text) {
-    client_send_text(c, sylva_msg_error("internal", "out of memory", m->ref));
-    return;
-  }
+void run_edit(run *r, client *c, sylva_msg *m) {
   if (!r->busy) {
-    edit_now(r, c, m, text);
-    free(text);
+    edit_now(r, c, m);
     return;
   }
   pending_edit *e = calloc(1, sizeof *e);
   if (!e) {
-    free(text);
     client_send_text(c, sylva_msg_error("internal", "out of memory", m->ref));
     return;
   }
   e->msg = *m;
   memset(m, 0, sizeof *m); /* the queue owns the message now */
-  e->json = text;
   e->client = c->serial;
   pending_edit **tail = &r->edits;
   while (*tail) tail = &(*tail)->next;
@@ -494,7 +514,7 @@ static void job_work(uv_work_t *req) {
   server *d = j->d;
   j->code = NULL;
   uv_mutex_lock(&d->store_lock);
-  int failed = store_world_at(d->st, j->run, j->iteration, NULL, edit_replay, &j->w);
+  int failed = store_world_at(d->st, j->run, j->iteration, NULL, &j->w);
   char *scenario = NULL;
   if (!failed && j->fork) {
     failed = store_run_scenario(d->st, j->run, &scenario) ||

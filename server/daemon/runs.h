@@ -29,8 +29,9 @@ void run_set_status(run *r, sylva_run_status status);
 /** Sends a status message to every subscriber of the run. */
 void run_broadcast_status(run *r);
 /** Applies an edit between iterations (now, or after the iteration in flight):
- *  takes the parsed message (m is emptied) and its JSON text for the log. */
-void run_edit(run *r, client *c, sylva_msg *m, const char *json, size_t len);
+ *  takes the parsed message (m is emptied); the store logs it in the command log's
+ *  own format. */
+void run_edit(run *r, client *c, sylva_msg *m);
 /** Forks run r at its stored iteration into a new paused run named `name`, off the
  *  loop; the client gets `created` (or an error). */
 void run_fork(run *r, client *c, int iteration, const char *name, const char *ref);

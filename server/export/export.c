@@ -54,7 +54,7 @@ int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,
   }
   sylva_world *w = NULL;
   lock_store(lock);
-  int failed = store_world_at(st, spec->run, spec->iteration, warn, edit_replay, &w);
+  int failed = store_world_at(st, spec->run, spec->iteration, warn, &w);
   if (failed) snprintf(err, errlen, "run \"%s\": %s", spec->name, store_error(st));
   unlock_store(lock);
   if (failed) return -1;

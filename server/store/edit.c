@@ -7,13 +7,38 @@
 #include "sylva/snapshot.h"
 #include "sylva/status.h"
 
+int edit_reserve(edit *e, int removals, int obstacles, int plants) {
+  if ((removals && !(e->removals = calloc((size_t)removals, sizeof *e->removals))) ||
+      (obstacles && !(e->obstacles = calloc((size_t)obstacles, sizeof *e->obstacles))) ||
+      (plants && !(e->plants = calloc((size_t)plants, sizeof *e->plants))))
+    return SYLVA_ENOMEM;
+  e->removal_count = removals;
+  e->obstacle_count = obstacles;
+  e->plant_count = plants;
+  return SYLVA_OK;
+}
+
+void edit_free(edit *e) {
+  for (int i = 0; e->removals && i < e->removal_count; i++) free(e->removals[i]);
+  for (int i = 0; e->obstacles && i < e->obstacle_count; i++) free(e->obstacles[i].id);
+  for (int i = 0; e->plants && i < e->plant_count; i++) {
+    free(e->plants[i].id);
+    free(e->plants[i].species);
+    free(e->plants[i].roots);
+  }
+  free(e->removals);
+  free(e->obstacles);
+  free(e->plants);
+  *e = (edit){0};
+}
+
 static int species_by_label(const sylva_world *w, const char *label) {
   for (int i = 0; i < sylva_world_species_count(w); i++)
     if (strcmp(sylva_world_species_label(w, i), label) == 0) return i;
   return -1;
 }
 
-int edit_apply(const sylva_world *w, const sylva_msg *m, sylva_world **out, char *err,
+int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err,
                size_t errlen) {
   /* edit a copy, so that a failure part way changes nothing */
   *out = NULL;
@@ -31,16 +56,16 @@ int edit_apply(const sylva_world *w, const sylva_msg *m, sylva_world **out, char
     snprintf(err, errlen, "%s", sylva_strerror(rc));
     return rc;
   }
-  for (int i = 0; i < m->remove_obstacle_count; i++) {
-    int id = sylva_world_find_obstacle(copy, m->remove_obstacles[i]);
+  for (int i = 0; i < e->removal_count; i++) {
+    int id = sylva_world_find_obstacle(copy, e->removals[i]);
     if (id < 0 || (rc = sylva_world_remove_obstacle(copy, id)) != 0) {
-      snprintf(err, errlen, "/remove_obstacles/%d: no obstacle \"%s\"", i, m->remove_obstacles[i]);
+      snprintf(err, errlen, "/remove_obstacles/%d: no obstacle \"%s\"", i, e->removals[i]);
       sylva_world_destroy(copy);
       return SYLVA_EINVAL;
     }
   }
-  for (int i = 0; i < m->add_obstacle_count; i++) {
-    const sylva_scenario_obstacle *o = &m->add_obstacles[i];
+  for (int i = 0; i < e->obstacle_count; i++) {
+    const edit_obstacle *o = &e->obstacles[i];
     sylva_obstacle_def def = {o->id, {o->min[0], o->min[1], o->min[2]},
                               {o->max[0], o->max[1], o->max[2]}};
     rc = sylva_world_add_obstacle(copy, &def);
@@ -51,12 +76,12 @@ int edit_apply(const sylva_world *w, const sylva_msg *m, sylva_world **out, char
       return rc == SYLVA_ENOMEM ? rc : SYLVA_EINVAL;
     }
   }
-  for (int i = 0; i < m->add_plant_count; i++) {
-    const sylva_scenario_plant *p = &m->add_plants[i];
-    int species = species_by_label(copy, m->add_plant_species[i]);
+  for (int i = 0; i < e->plant_count; i++) {
+    const edit_plant *p = &e->plants[i];
+    int species = species_by_label(copy, p->species);
     if (species < 0) {
       snprintf(err, errlen, "/add_plants/%d/species: the run has no species \"%s\"", i,
-               m->add_plant_species[i]);
+               p->species);
       sylva_world_destroy(copy);
       return SYLVA_EINVAL;
     }
@@ -75,20 +100,4 @@ int edit_apply(const sylva_world *w, const sylva_msg *m, sylva_world **out, char
   }
   *out = copy;
   return SYLVA_OK;
-}
-
-int edit_replay(sylva_world **w, const char *json, char *err, size_t errlen) {
-  sylva_msg m;
-  int rc = sylva_msg_parse(json, strlen(json), &m, err, errlen);
-  if (rc == SYLVA_OK) {
-    sylva_world *edited = NULL;
-    rc = m.type == SYLVA_MSG_EDIT ? edit_apply(*w, &m, &edited, err, errlen) : SYLVA_EINVAL;
-    if (m.type != SYLVA_MSG_EDIT) snprintf(err, errlen, "logged command is not an edit");
-    if (rc == SYLVA_OK) {
-      sylva_world_destroy(*w);
-      *w = edited;
-    }
-  }
-  sylva_msg_free(&m);
-  return rc;
 }

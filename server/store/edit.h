@@ -1,20 +1,48 @@
-/* sylva server: edits of a run's world between iterations (protocol `edit`): add
- * plants, add and remove obstacles. An edit is all or nothing. */
+/* sylva server: an edit of a run's world between iterations (add plants, add and
+ * remove obstacles), as the store keeps it: the daemon makes one from a protocol
+ * `edit` message, the command log (command_log.h) stores and reads it back. An
+ * edit is applied all or nothing. */
 #ifndef SYLVA_SERVER_EDIT_H
 #define SYLVA_SERVER_EDIT_H
 
 #include <stddef.h>
 
-#include "sylva/protocol.h"
 #include "sylva/world.h"
 
-/** Makes *out, a copy of w with a parsed edit applied, and returns 0. On failure w
- *  is untouched, err names what and where ("/add_plants/1/roots/0: root inside an
- *  obstacle") and the status is negative (SYLVA_ENOMEM when memory ran out,
- *  SYLVA_EINVAL for a bad edit). */
-int edit_apply(const sylva_world *w, const sylva_msg *m, sylva_world **out, char *err,
-               size_t errlen);
+/** A plant to add: its label, its species' label and its roots. */
+typedef struct edit_plant {
+  char *id, *species;
+  double (*roots)[3];
+  int root_count;
+} edit_plant;
 
-/** Replays a logged edit message (its JSON text) on *w; for restoring runs. */
-int edit_replay(sylva_world **w, const char *json, char *err, size_t errlen);
+/** A box obstacle to add. */
+typedef struct edit_obstacle {
+  char *id;
+  double min[3], max[3];
+} edit_obstacle;
+
+/** One edit; every string and array is owned (edit_free). Applied in this order:
+ *  removals, then obstacles, then plants. */
+typedef struct edit {
+  char **removals; /**< ids of obstacles to remove */
+  int removal_count;
+  edit_obstacle *obstacles;
+  int obstacle_count;
+  edit_plant *plants;
+  int plant_count;
+} edit;
+
+/** Sizes the arrays of a zeroed edit (their elements zeroed); SYLVA_ENOMEM or 0.
+ *  On failure what was allocated stays for edit_free. */
+int edit_reserve(edit *e, int removals, int obstacles, int plants);
+/** Frees what an edit owns and zeroes it. */
+void edit_free(edit *e);
+
+/** Makes *out, a copy of w with the edit applied, and returns 0. On failure w is
+ *  untouched, err names what and where ("/add_plants/1/roots/0: root inside an
+ *  obstacle") and the status is negative (SYLVA_ENOMEM when memory ran out,
+ *  SYLVA_EINVAL for an edit that does not fit the world). */
+int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err,
+               size_t errlen);
 #endif

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "command_log.h"
 #include "sylva/snapshot.h"
 
 struct store {
@@ -573,9 +574,22 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
   return -1;
 }
 
+/* Replays one logged record on *w. */
+static int replay_record(const char *json, sylva_world **w, char *why, size_t whylen) {
+  edit e;
+  int rc = command_log_decode(json, &e, why, whylen);
+  sylva_world *edited = NULL;
+  if (rc == SERVER_OK && edit_apply(*w, &e, &edited, why, whylen) != SYLVA_OK) rc = SERVER_EINPUT;
+  edit_free(&e);
+  if (rc == SERVER_OK) {
+    sylva_world_destroy(*w);
+    *w = edited;
+  }
+  return rc;
+}
+
 /* Replays the commands logged at iteration `it` on *w. */
-static int replay_commands(store *st, int64_t run, int it, store_replay_fn replay,
-                           sylva_world **w) {
+static int replay_commands(store *st, int64_t run, int it, sylva_world **w) {
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "SELECT seq, command FROM commands WHERE run = ? AND iteration = ?"
@@ -587,31 +601,31 @@ static int replay_commands(store *st, int64_t run, int it, store_replay_fn repla
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     const char *json = (const char *)sqlite3_column_text(q, 1);
-    char why[400];
-    if (!replay || !json || replay(w, json, why, sizeof why)) {
+    char why[400] = "not text";
+    if (!json || replay_record(json, w, why, sizeof why)) {
       snprintf(st->error, sizeof st->error, "%s: replaying command %lld after iteration %d: %s",
-               st->path, (long long)sqlite3_column_int64(q, 0), it,
-               replay && json ? why : "cannot replay it here");
+               st->path, (long long)sqlite3_column_int64(q, 0), it, why);
       sqlite3_finalize(q);
-      return -1;
+      return SERVER_EFAIL;
     }
   }
   sqlite3_finalize(q);
-  return rc == SQLITE_DONE ? 0 : fail(st, "reading the command log");
+  return rc == SQLITE_DONE ? SERVER_OK : fail(st, "reading the command log");
 }
 
-int store_apply_edit(store *st, int64_t run, const sylva_world *w, const char *command_json) {
+int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e) {
   int it = sylva_world_iteration(w);
-  char what[64], now[32];
+  char what[64];
   snprintf(what, sizeof what, "storing an edit after iteration %d", it);
-  utc_now(now);
+  char *record = command_log_encode(e);
+  if (!record) return fail(st, "%s: out of memory", what);
   uint8_t *img;
   size_t size;
   int rc = sylva_snapshot_save(w, &img, &size);
-  if (rc) return fail(st, "%s: %s", what, sylva_strerror(rc));
-  if (exec(st, "BEGIN IMMEDIATE", what)) {
+  if (rc || exec(st, "BEGIN IMMEDIATE", what)) {
+    free(record);
     free(img);
-    return -1;
+    return rc ? fail(st, "%s: %s", what, sylva_strerror(rc)) : SERVER_EFAIL;
   }
   sqlite3_stmt *q;
   rc = sqlite3_prepare_v2(st->db,
@@ -629,16 +643,18 @@ int store_apply_edit(store *st, int64_t run, const sylva_world *w, const char *c
   }
   free(img);
   if (rc != SQLITE_DONE || sqlite3_changes(st->db) != 1 ||
-      store_log_command(st, run, it, command_json, NULL) || exec(st, "COMMIT", what)) {
+      store_log_command(st, run, it, record, NULL) || exec(st, "COMMIT", what)) {
     if (rc != SQLITE_DONE) fail(st, "%s", what);
     rollback(st);
-    return -1;
+    free(record);
+    return SERVER_EFAIL;
   }
-  return 0;
+  free(record);
+  return SERVER_OK;
 }
 
 int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg),
-                   store_replay_fn replay, sylva_world **world_out) {
+                   sylva_world **world_out) {
   sylva_world *w;
   int from;
   *world_out = NULL;
@@ -649,7 +665,7 @@ int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg)
     uint64_t hash;
     bool found = false;
     if (status == SYLVA_OK &&
-        (replay_commands(st, run, it, replay, &w) || store_iteration_hash(st, run, it, &hash, &found))) {
+        (replay_commands(st, run, it, &w) || store_iteration_hash(st, run, it, &hash, &found))) {
       sylva_world_destroy(w);
       return -1;
     }

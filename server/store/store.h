@@ -12,6 +12,7 @@
 #ifndef SYLVA_SERVER_STORE_H
 #define SYLVA_SERVER_STORE_H
 
+#include "edit.h"
 #include "server_error.h"
 #include "sylva/run_status.h"
 
@@ -91,20 +92,16 @@ int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, 
 int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
                      sylva_world **world_out, int *from);
 
-/** Replays a logged command (JSON) on *w; returns 0 or fills err. */
-typedef int (*store_replay_fn)(sylva_world **w, const char *json, char *err, size_t errlen);
-
 /** The world of a run at iteration `at`: the newest good snapshot at or before it,
  *  regrown to `at`. After each regrown iteration the commands logged at it are
- *  replayed (replay may be NULL when a run has none) and the world is checked
- *  against the stored hash. */
+ *  replayed (command_log.h) and the world is checked against the stored hash. */
 int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg),
-                   store_replay_fn replay, sylva_world **world_out);
+                   sylva_world **world_out);
 
 /** Records an edit applied to a run's world after its current iteration, in one
  *  transaction: the command is logged and that iteration's record (snapshot,
  *  hash) becomes the edited world, so restoring it needs no replay. */
-int store_apply_edit(store *st, int64_t run, const sylva_world *w, const char *command_json);
+int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e);
 
 /** The scenario JSON of a run (malloc'd), for forks. */
 int store_run_scenario(store *st, int64_t run, char **json);
@@ -123,7 +120,8 @@ typedef struct store_stats_row {
 int store_each_stats(store *st, int64_t run, int to,
                      int (*fn)(const store_stats_row *row, void *ctx), void *ctx);
 
-/** Appends a command (JSON) applied to a run after iteration `iteration`. */
+/** Appends a command record (command_log.h) applied to a run after iteration
+ *  `iteration`. */
 int store_log_command(store *st, int64_t run, int iteration, const char *command_json,
                       int64_t *seq);
 /** Number of logged commands of a run. */

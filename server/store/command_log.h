@@ -1,0 +1,33 @@
+/* sylva server: the command log's own record format. Every command applied to a
+ * run between iterations is stored as one JSON record, versioned apart from the
+ * wire protocol, so that a later protocol still replays old stores
+ * (docs/store.md, "The command log"):
+ *
+ *   {"format": 1, "command": "edit",
+ *    "remove_obstacles": ["wall"],
+ *    "add_obstacles": [{"id": "box", "kind": "box", "min": [x, y, z], "max": [x, y, z]}],
+ *    "add_plants": [{"id": "oak2", "species": "oak", "roots": [[x, y, z]]}]}
+ *
+ * Records without "format" are read as format 0: the protocol-1 `edit` message
+ * that stores written before the format existed hold (the same three arrays,
+ * beside "type", "run" and "id"). */
+#ifndef SYLVA_SERVER_COMMAND_LOG_H
+#define SYLVA_SERVER_COMMAND_LOG_H
+
+#include <stddef.h>
+
+#include "edit.h"
+
+/** The format this build writes; it reads every format up to it. */
+#define COMMAND_LOG_FORMAT 1
+
+/** The record of an edit (malloc'd, no newline), or NULL when memory ran out. The
+ *  same edit always gives the same bytes; numbers round-trip exactly. */
+char *command_log_encode(const edit *e);
+
+/** Reads a record into *out (zeroed first; edit_free it in every case). Returns
+ *  SERVER_OK, SERVER_EINPUT (err names the JSON pointer and the problem: "/format:
+ *  format 2 is newer than this sylva reads (up to 1)") or SERVER_ENOMEM. */
+int command_log_decode(const char *json, edit *out, char *err, size_t errlen);
+
+#endif
