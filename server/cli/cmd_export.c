@@ -96,7 +96,7 @@ int cmd_export(int argc, char **argv) {
   if (rc == CLI_EXIT_OK) rc = cli_outfile_open(&o, "-o", out, true);
   if (rc == CLI_EXIT_OK) {
     char err[512];
-    int failed = export_write(o.f, st, NULL, &spec, store_warn_stderr, err, sizeof err);
+    int failed = export_write(o.f, st, &spec, store_warn_stderr, err, sizeof err);
     if (failed == SERVER_EWRITE)
       fprintf(stderr, "sylva: %s: %s\n", out, err);
     else if (failed)

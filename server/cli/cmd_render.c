@@ -65,7 +65,7 @@ typedef struct render_args {
   render_options ro;
 } render_args;
 
-/* Parses argv into a; returns -1 to go on, or the exit status to end with. */
+/* Parses argv into a; returns CLI_PARSED to go on, or the exit status to end with. */
 static int parse_args(int argc, char **argv, render_args *a) {
   cli_parser p;
   cli_parser_init(&p, "render", render_cli_options, OPT_COUNT, argc, argv);
@@ -121,7 +121,7 @@ static int parse_args(int argc, char **argv, render_args *a) {
   if (!a->out || !a->out[0]) return cli_usage_error("render", "-o OUT is required");
   if (!render_format_from_path(a->out, &a->ro.format))
     return cli_usage_error("render", "-o: '%s' does not end in " RENDER_FORMAT_NAMES, a->out);
-  return -1;
+  return CLI_PARSED;
 }
 
 /* Draws w into the already opened output. */
@@ -182,7 +182,7 @@ static int render_scenario(render_args *a) {
 int cmd_render(int argc, char **argv) {
   render_args a = {.ro = {.format = RENDER_PNG, .view = RENDER_ALL, .width = 0, .name = NULL}};
   int rc = parse_args(argc, argv, &a);
-  if (rc >= 0) return rc;
+  if (rc != CLI_PARSED) return rc;
   rc = a.scenario ? render_scenario(&a) : render_stored(&a);
   /* cairo's font caches and fontconfig's hold memory until the process ends;
    * free them so that leak checkers see none */

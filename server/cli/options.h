@@ -10,6 +10,9 @@
 
 /** Exit statuses of the binary (cli.md). */
 enum { CLI_EXIT_OK = 0, CLI_EXIT_FAILURE = 1, CLI_EXIT_USAGE = 2 };
+/** What an argument parser returns when the command should go on (not an exit
+ *  status). */
+enum { CLI_PARSED = -1 };
 
 /** Most options one subcommand may declare. */
 #define CLI_MAX_OPTIONS 16

@@ -5,34 +5,142 @@
 
 #include "sylva/protocol.h"
 
-msgbuf *msgbuf_new(const char *text, size_t len) {
-  msgbuf *m = malloc(sizeof *m + LWS_PRE + len);
-  if (!m) return NULL;
-  m->refs = 1;
-  m->len = len;
-  memcpy(m->data + LWS_PRE, text, len);
-  return m;
+/* ---- the set ------------------------------------------------------------------- */
+
+/* Applies the closes asked for; from the set's timer, outside lws callbacks. */
+static void on_closer(uv_timer_t *t) {
+  client_set *s = t->data;
+  for (client *c = s->head; c; c = c->next) {
+    if (c->close_code <= 0) continue;
+    lws_close_reason(c->wsi, (enum lws_close_status)c->close_code,
+                     (unsigned char *)c->close_reason, strlen(c->close_reason));
+    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_SYNC);
+    c->close_code = -1; /* asked; lws reports CLOSED later */
+  }
 }
 
-msgbuf *msgbuf_ref(msgbuf *m) {
-  m->refs++;
-  return m;
+int client_set_init(client_set *s, uv_loop_t *loop, size_t max_message, size_t max_pending,
+                    int rate_limit) {
+  *s = (client_set){.max_message = max_message, .max_pending = max_pending,
+                    .rate_limit = rate_limit};
+  s->closer.data = s;
+  return uv_timer_init(loop, &s->closer);
 }
 
-void msgbuf_unref(msgbuf *m) {
-  if (m && --m->refs == 0) free(m);
+void client_set_close_all(client_set *s, int code, const char *reason) {
+  for (client *c = s->head; c; c = c->next) client_close(c, code, reason);
+}
+
+void client_set_close(client_set *s) { uv_close((uv_handle_t *)&s->closer, NULL); }
+
+client *client_find(client_set *s, uint64_t serial) {
+  for (client *c = s->head; c; c = c->next)
+    if (c->serial == serial) return c;
+  return NULL;
+}
+
+/* ---- one client ----------------------------------------------------------------- */
+
+void client_open(client_set *s, client *c, struct lws *wsi, server *d, bool authed) {
+  static uint64_t serial;
+  memset(c, 0, sizeof *c);
+  c->set = s;
+  c->d = d;
+  c->wsi = wsi;
+  c->serial = ++serial;
+  c->authed = authed;
+  c->window_start = uv_now(s->closer.loop);
+  c->next = s->head;
+  if (s->head) s->head->prev = c;
+  s->head = c;
+  s->count++;
+}
+
+static void release(client *c) {
+  for (size_t i = 0; i < c->qlen; i++) msgbuf_unref(c->queue[(c->qhead + i) % c->qcap]);
+  free(c->queue);
+  free(c->rx);
+  free(c->subs);
+  c->queue = NULL;
+  c->rx = NULL;
+  c->subs = NULL;
+  c->qlen = c->nsubs = 0;
+}
+
+void client_closed(client *c) {
+  client_set *s = c->set;
+  if (c->prev)
+    c->prev->next = c->next;
+  else
+    s->head = c->next;
+  if (c->next) c->next->prev = c->prev;
+  s->count--;
+  release(c);
+  c->set = NULL;
+  c->d = NULL;
+}
+
+static void rx_append(client *c, const char *in, size_t len) {
+  if (c->rx_too_large) return;
+  if (c->rx_len + len > c->set->max_message) {
+    c->rx_too_large = true;
+    return;
+  }
+  if (c->rx_len + len + 1 > c->rx_cap) {
+    size_t cap = c->rx_cap ? c->rx_cap : 4096;
+    while (cap < c->rx_len + len + 1) cap *= 2;
+    char *p = realloc(c->rx, cap);
+    if (!p) {
+      c->rx_too_large = true;
+      return;
+    }
+    c->rx = p;
+    c->rx_cap = cap;
+  }
+  memcpy(c->rx + c->rx_len, in, len);
+  c->rx_len += len;
+}
+
+bool client_receive(client *c, const void *in, size_t len) {
+  client_set *s = c->set;
+  if (lws_is_first_fragment(c->wsi)) {
+    c->rx_len = 0;
+    c->rx_too_large = false;
+    c->rx_binary = lws_frame_is_binary(c->wsi);
+  }
+  rx_append(c, in, len);
+  if (!lws_is_final_fragment(c->wsi) || lws_remaining_packet_payload(c->wsi)) return false;
+  s->messages_received++;
+  uint64_t now = uv_now(s->closer.loop);
+  if (now - c->window_start >= 1000) {
+    c->window_start = now;
+    c->window_count = 0;
+  }
+  if (++c->window_count > s->rate_limit) {
+    client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "rate limit exceeded");
+    return false;
+  }
+  if (c->rx_too_large) {
+    client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+    return false;
+  }
+  if (c->rx_binary) {
+    client_send_text(c, sylva_msg_error("bad_request", "binary frames are not accepted", NULL));
+    return false;
+  }
+  return true;
 }
 
 void client_close(client *c, int code, const char *reason) {
   if (c->close_code) return;
   c->close_code = code;
   snprintf(c->close_reason, sizeof c->close_reason, "%s", reason);
-  server_schedule_closes(c->d);
+  if (!uv_is_closing((uv_handle_t *)&c->set->closer)) uv_timer_start(&c->set->closer, on_closer, 0, 0);
 }
 
 void client_send(client *c, msgbuf *m) {
   if (c->close_code) return;
-  if (c->pending + m->len > c->d->opt.max_pending) {
+  if (c->pending + m->len > c->set->max_pending) {
     client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "client too slow: output backlog");
     return;
   }
@@ -90,7 +198,7 @@ int client_writable(client *c) {
   if (!first) memcpy(p - LWS_PRE, saved, LWS_PRE);
   if (w < (int)n) return -1;
   c->sent += n;
-  c->d->bytes_sent += (int64_t)n;
+  c->set->bytes_sent += (int64_t)n;
   if (last) {
     c->sent = 0;
     c->qhead = (c->qhead + 1) % c->qcap;
@@ -130,31 +238,4 @@ void client_unsubscribe(client *c, int64_t run) {
       c->subs[i] = c->subs[--c->nsubs];
       return;
     }
-}
-
-void client_release(client *c) {
-  for (size_t i = 0; i < c->qlen; i++) msgbuf_unref(c->queue[(c->qhead + i) % c->qcap]);
-  free(c->queue);
-  free(c->rx);
-  free(c->subs);
-  c->queue = NULL;
-  c->rx = NULL;
-  c->subs = NULL;
-  c->qlen = c->nsubs = 0;
-}
-
-void clients_close_pending(server *d) {
-  for (client *c = d->clients; c; c = c->next) {
-    if (c->close_code <= 0) continue;
-    lws_close_reason(c->wsi, (enum lws_close_status)c->close_code,
-                     (unsigned char *)c->close_reason, strlen(c->close_reason));
-    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_SYNC);
-    c->close_code = -1; /* asked; lws reports CLOSED later */
-  }
-}
-
-client *client_find(server *d, uint64_t serial) {
-  for (client *c = d->clients; c; c = c->next)
-    if (c->serial == serial) return c;
-  return NULL;
 }

@@ -1,9 +1,39 @@
-/* sylva server: one WebSocket client: its outgoing queue of shared buffers (capped),
- * the reassembly of its incoming message, its rate window, its subscriptions. */
+/* sylva server: the WebSocket clients. The set of connected clients (its list, its
+ * limits, its counters and the timer that applies closes), and each client: its
+ * outgoing queue of shared buffers (capped), the reassembly of its incoming
+ * message, its rate window, its subscriptions. Loop thread only. */
 #ifndef SYLVA_SERVER_CLIENT_H
 #define SYLVA_SERVER_CLIENT_H
 
-#include "daemon.h"
+#include <libwebsockets.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <uv.h>
+
+#include "msgbuf.h"
+
+typedef struct server server;
+typedef struct client client;
+
+/** Every connected client, the limits they share and their counters. */
+typedef struct client_set {
+  client *head;
+  int64_t count;                  /**< clients connected now */
+  int64_t bytes_sent, messages_received;
+  size_t max_message, max_pending; /**< bytes */
+  int rate_limit;                 /**< messages per second */
+  uv_timer_t closer; /**< applies the closes asked for, outside lws callbacks */
+} client_set;
+
+/** Starts an empty set on the loop. */
+int client_set_init(client_set *s, uv_loop_t *loop, size_t max_message, size_t max_pending,
+                    int rate_limit);
+/** Asks every client to close (code and reason). */
+void client_set_close_all(client_set *s, int code, const char *reason);
+/** Closes the set's handle (when the loop winds down; the clients are gone). */
+void client_set_close(client_set *s);
+/** The client with this serial, or NULL. */
+client *client_find(client_set *s, uint64_t serial);
 
 /** A client's subscription to a run. */
 typedef struct subscription {
@@ -12,7 +42,8 @@ typedef struct subscription {
 } subscription;
 
 struct client {
-  server *d;
+  client_set *set;
+  server *d;            /**< the daemon it talks to, for the message handlers */
   struct lws *wsi;
   uint64_t serial;      /**< unique for the daemon's life; finds a client again later */
   bool authed;
@@ -31,6 +62,16 @@ struct client {
   client *next, *prev;
 };
 
+/** Starts client c (lws's per-session memory) in the set: zeroed, linked, a new
+ *  serial. */
+void client_open(client_set *s, client *c, struct lws *wsi, server *d, bool authed);
+/** Unlinks a closed client and frees what it holds (not c: lws owns it). */
+void client_closed(client *c);
+/** Takes one received fragment. Returns true when it completes a text message
+ *  within the limits (then c->rx holds it, c->rx_len bytes); a message too large,
+ *  too frequent or binary is answered here (closed, or an error) and gives false. */
+bool client_receive(client *c, const void *in, size_t len);
+
 /** Queues a shared message for the client (takes a reference). A client whose
  *  pending output passes the cap is closed (1008, too slow). */
 void client_send(client *c, msgbuf *m);
@@ -47,10 +88,4 @@ subscription *client_subscription(client *c, int64_t run);
 subscription *client_subscribe(client *c, int64_t run);
 /** Removes a subscription if there is one. */
 void client_unsubscribe(client *c, int64_t run);
-/** Frees everything the client holds (not the client: lws owns it). */
-void client_release(client *c);
-/** Applies pending closes; called from a libuv callback. */
-void clients_close_pending(server *d);
-/** The client with this serial, or NULL. */
-client *client_find(server *d, uint64_t serial);
 #endif

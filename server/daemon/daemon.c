@@ -28,14 +28,6 @@ void server_log(const char *run_name, const char *fmt, ...) {
     fprintf(stderr, "sylva: %s\n", msg);
 }
 
-uint64_t server_now_ms(server *d) { return uv_now(&d->loop); }
-
-static void on_closer(uv_timer_t *t) { clients_close_pending(t->data); }
-
-void server_schedule_closes(server *d) {
-  if (!uv_is_closing((uv_handle_t *)&d->closer)) uv_timer_start(&d->closer, on_closer, 0, 0);
-}
-
 /* ---- WebSocket sessions --------------------------------------------------------- */
 
 /* Origin must be the daemon's own (the Host it was reached at) or allowed. */
@@ -49,27 +41,6 @@ static bool origin_allowed(server *d, struct lws *wsi) {
   char self[300];
   snprintf(self, sizeof self, "http://%s", host);
   return strcmp(origin, self) == 0;
-}
-
-static void rx_append(client *c, const char *in, size_t len) {
-  if (c->rx_too_large) return;
-  if (c->rx_len + len > c->d->opt.max_message) {
-    c->rx_too_large = true;
-    return;
-  }
-  if (c->rx_len + len + 1 > c->rx_cap) {
-    size_t cap = c->rx_cap ? c->rx_cap : 4096;
-    while (cap < c->rx_len + len + 1) cap *= 2;
-    char *p = realloc(c->rx, cap);
-    if (!p) {
-      c->rx_too_large = true;
-      return;
-    }
-    c->rx = p;
-    c->rx_cap = cap;
-  }
-  memcpy(c->rx + c->rx_len, in, len);
-  c->rx_len += len;
 }
 
 static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
@@ -88,64 +59,19 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
     }
     return 0;
   }
-  case LWS_CALLBACK_ESTABLISHED: {
-    static uint64_t serial;
-    memset(c, 0, sizeof *c);
-    c->d = d;
-    c->wsi = wsi;
-    c->serial = ++serial;
-    c->authed = d->opt.token == NULL;
-    c->window_start = server_now_ms(d);
-    c->next = d->clients;
-    if (d->clients) d->clients->prev = c;
-    d->clients = c;
-    d->clients_now++;
+  case LWS_CALLBACK_ESTABLISHED:
+    client_open(&d->clients, c, wsi, d, d->opt.token == NULL);
     client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL, NULL));
     break;
-  }
   case LWS_CALLBACK_CLOSED:
-    if (!c || !c->d) break;
-    if (c->prev)
-      c->prev->next = c->next;
-    else
-      d->clients = c->next;
-    if (c->next) c->next->prev = c->prev;
-    d->clients_now--;
-    client_release(c);
-    c->d = NULL;
+    if (c && c->set) client_closed(c);
     break;
-  case LWS_CALLBACK_RECEIVE: {
-    if (!c || !c->d || c->close_code) break;
-    if (lws_is_first_fragment(wsi)) {
-      c->rx_len = 0;
-      c->rx_too_large = false;
-      c->rx_binary = lws_frame_is_binary(wsi);
-    }
-    rx_append(c, in, len);
-    if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi)) break;
-    d->messages_received++;
-    uint64_t now = server_now_ms(d);
-    if (now - c->window_start >= 1000) {
-      c->window_start = now;
-      c->window_count = 0;
-    }
-    if (++c->window_count > d->opt.rate_limit) {
-      client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "rate limit exceeded");
-      break;
-    }
-    if (c->rx_too_large) {
-      client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
-      break;
-    }
-    if (c->rx_binary) {
-      client_send_text(c, sylva_msg_error("bad_request", "binary frames are not accepted", NULL));
-      break;
-    }
-    handle_message(c, c->rx, c->rx_len);
+  case LWS_CALLBACK_RECEIVE:
+    if (!c || !c->set || c->close_code) break;
+    if (client_receive(c, in, len)) handle_message(c, c->rx, c->rx_len);
     break;
-  }
   case LWS_CALLBACK_SERVER_WRITEABLE:
-    if (!c || !c->d) break;
+    if (!c || !c->set) break;
     return client_writable(c);
   default: break;
   }
@@ -173,16 +99,15 @@ static int start_scenario(server *d, const char *path) {
   sylva_scenario *s;
   int rc = files_load_scenario(path, 0, &s); /* plants not required: an empty site, as with create */
   if (rc) return rc;
-  for (run *r = d->runs; r; r = r->next)
-    if (strcmp(r->name, s->name) == 0) {
-      server_log(r->name, "already held (%s); not created again",
-                 sylva_run_status_name(r->status));
-      sylva_scenario_free(s);
-      return SERVER_OK;
-    }
+  run *r = run_find_name(d, s->name, strlen(s->name));
+  if (r) {
+    server_log(r->name, "already held (%s); not created again", sylva_run_status_name(r->status));
+    sylva_scenario_free(s);
+    return SERVER_OK;
+  }
   const char *code;
   char err[512];
-  run *r = run_create(d, s, s->name, true, &code, err, sizeof err);
+  r = run_create(d, s, s->name, true, &code, err, sizeof err);
   sylva_scenario_free(s);
   if (!r) {
     server_log(NULL, "%s: %s", path, err);
@@ -196,8 +121,7 @@ static void stop(server *d) {
   d->stopping = true;
   d->stop_at = uv_now(&d->loop);
   server_log(NULL, "stopping: closing clients, finishing the iterations in flight");
-  for (client *c = d->clients; c; c = c->next) client_close(c, LWS_CLOSE_STATUS_GOINGAWAY,
-                                                            "server shutting down");
+  client_set_close_all(&d->clients, LWS_CLOSE_STATUS_GOINGAWAY, "server shutting down");
   uv_signal_stop(&d->sigint);
   uv_signal_stop(&d->sigterm);
 }
@@ -219,10 +143,10 @@ static void on_shutdown_tick(uv_timer_t *t) {
    * (up to two seconds for clients that do not answer). An export in flight is not
    * waited for: its connection closes with the context, and the loop, drained
    * below, finishes the job and frees its result. */
-  if (!d->stopping || busy || since < 100 || (d->clients && since < 2000)) return;
+  if (!d->stopping || busy || since < 100 || (d->clients.head && since < 2000)) return;
   uv_timer_stop(t);
   uv_close((uv_handle_t *)t, NULL);
-  uv_close((uv_handle_t *)&d->closer, NULL);
+  client_set_close(&d->clients);
   uv_close((uv_handle_t *)&d->sigint, NULL);
   uv_close((uv_handle_t *)&d->sigterm, NULL);
   lws_context_destroy(d->ctx);
@@ -232,7 +156,7 @@ int server_main(const server_options *opt) {
   server *d = calloc(1, sizeof *d);
   if (!d) return 1;
   d->opt = *opt;
-  if (uv_loop_init(&d->loop) || uv_mutex_init(&d->store_lock)) {
+  if (uv_loop_init(&d->loop)) {
     free(d);
     return 1;
   }
@@ -283,8 +207,7 @@ int server_main(const server_options *opt) {
     d->sigint.data = d->sigterm.data = d;
     uv_signal_start(&d->sigint, on_signal, SIGINT);
     uv_signal_start(&d->sigterm, on_signal, SIGTERM);
-    uv_timer_init(&d->loop, &d->closer);
-    d->closer.data = d;
+    client_set_init(&d->clients, &d->loop, opt->max_message, opt->max_pending, opt->rate_limit);
     uv_timer_init(&d->loop, &shutdown_timer);
     shutdown_timer.data = d;
     uv_timer_start(&shutdown_timer, on_shutdown_tick, 100, 100);
@@ -301,7 +224,6 @@ int server_main(const server_options *opt) {
   uv_run(&d->loop, UV_RUN_DEFAULT);
   runs_free(d);
   store_close(d->st);
-  uv_mutex_destroy(&d->store_lock);
   if (uv_loop_close(&d->loop)) server_log(NULL, "the loop still had handles at exit");
   free(d);
   if (!rc) server_log(NULL, "stopped");

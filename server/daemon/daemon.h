@@ -13,6 +13,7 @@
 #include <stdint.h>
 #include <uv.h>
 
+#include "client.h"
 #include "store.h"
 #include "sylva/world.h"
 
@@ -54,74 +55,25 @@ typedef struct server_options {
   size_t max_pending;
 } server_options;
 
-/** A message encoded once and shared by every client it goes to. */
-typedef struct msgbuf {
-  int refs;
-  size_t len;
-  unsigned char data[]; /* LWS_PRE bytes of headroom, then len bytes */
-} msgbuf;
 
-/** Wraps text (len bytes) in a new shared buffer with one reference. */
-msgbuf *msgbuf_new(const char *text, size_t len);
-/** Takes and drops references. */
-msgbuf *msgbuf_ref(msgbuf *m);
-void msgbuf_unref(msgbuf *m);
-
-typedef struct server server;
-typedef struct client client;
 typedef struct run run;
-
-/** A run the daemon holds. */
-struct run {
-  server *d;
-  int64_t id;       /**< the store's run id, also the protocol's "run" */
-  char *name;
-  sylva_world *w;   /**< owned; touched by the worker while busy */
-  sylva_run_status status;
-  int limit;        /**< iteration limit */
-  int snapshot_every;
-  int steps;        /**< iterations still wanted while paused (control step) */
-  int64_t seq;      /**< sequence number of the last delta */
-  int iteration, stems; /**< summary as of the last finished iteration (the */
-  int64_t nodes;        /**< world may be mid-step on a worker) */
-  bool busy;        /**< an iteration is in flight */
-  bool stop_after;  /**< stop requested while busy */
-  uv_work_t work;
-  /* result of the worker */
-  int work_status;
-  char work_error[512];
-  char *work_delta;  /**< encoded delta (malloc'd) */
-  double work_ms;
-  msgbuf *history[DAEMON_DELTA_HISTORY]; /**< the last deltas, by seq % size */
-  struct pending_edit *edits; /**< edits waiting for the iteration in flight */
-  struct pending_light *lights; /**< light requests waiting for the iteration in flight */
-  msgbuf *snapshot;          /**< the snapshot of seq `snapshot_seq`, shared by subscribers */
-  int64_t snapshot_seq;
-  run *next;
-};
 
 /** The daemon. */
 struct server {
   server_options opt;
   uv_loop_t loop;
   uv_signal_t sigint, sigterm;
-  uv_timer_t closer;     /**< runs the closes clients asked for, outside lws callbacks */
   struct lws_context *ctx;
   store *st;
-  uv_mutex_t store_lock; /**< one transaction at a time on the one connection */
   run *runs;
-  client *clients;
+  client_set clients;
   bool stopping;
   uint64_t stop_at;
-  int64_t clients_now, iterations_total, bytes_sent, messages_received;
+  int64_t iterations_total;
   double iteration_ms_total;
   char origin_self[2][128]; /**< http://HOST:PORT forms the daemon accepts as its own */
 };
 
-/** Makes the loop apply pending client closes soon (from outside lws callbacks). */
-void server_schedule_closes(server *d);
-/** Milliseconds of the loop's clock. */
-uint64_t server_now_ms(server *d);
 /** One log line on stderr: "sylva: [run NAME] message". */
 void server_log(const char *run_name, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -1,32 +1,15 @@
 #include "handlers.h"
 
-#include <dirent.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "runs.h"
+#include "scenarios.h"
 #include "sylva/protocol.h"
 #include "sylva/status.h"
 
 static void reply_error(client *c, const char *code, const char *message, const char *ref) {
   client_send_text(c, sylva_msg_error(code, message, ref));
-}
-
-char *handlers_runs_json(server *d, bool message, const char *ref) {
-  size_t n = 0;
-  for (run *r = d->runs; r; r = r->next) n++;
-  sylva_run_summary *list = calloc(n + 1, sizeof *list);
-  if (!list) return NULL;
-  size_t i = 0;
-  for (run *r = d->runs; r; r = r->next, i++) {
-    list[i].run = r->id;
-    list[i].name = r->name;
-    list[i].status = r->status;
-    run_summary(r, &list[i].nodes, &list[i].iteration, &list[i].stems);
-  }
-  char *text = message ? sylva_msg_runs(list, n, ref) : sylva_runs_json(list, n);
-  free(list);
-  return text;
 }
 
 /* Messages that change something need a hello with the token first. */
@@ -68,44 +51,6 @@ static void handle_control(client *c, run *r, const sylva_msg *m) {
   client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
 }
 
-static void handle_scenarios(client *c, const sylva_msg *m) {
-  const char *dir = c->d->opt.scenarios;
-  const char *names[256] = {0}, *titles[256] = {0};
-  char *owned[512] = {0};
-  size_t n = 0, k = 0;
-  DIR *dh = dir ? opendir(dir) : NULL;
-  struct dirent *e;
-  while (dh && n < 256 && (e = readdir(dh))) {
-    size_t len = strlen(e->d_name);
-    if (len < 6 || strcmp(e->d_name + len - 5, ".json") != 0) continue;
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-    FILE *f = fopen(path, "rb");
-    if (!f) continue;
-    static char buf[1 << 20];
-    size_t got = fread(buf, 1, sizeof buf, f);
-    fclose(f);
-    sylva_scenario *s;
-    char err[256];
-    if (sylva_scenario_parse(buf, got, &s, err, sizeof err) < 0) continue;
-    char *name = strndup(e->d_name, len - 5), *title = strdup(s->name);
-    sylva_scenario_free(s);
-    if (!name || !title) {
-      free(name);
-      free(title);
-      break;
-    }
-    owned[k++] = name;
-    owned[k++] = title;
-    names[n] = name;
-    titles[n] = title;
-    n++;
-  }
-  if (dh) closedir(dh);
-  client_send_text(c, sylva_msg_scenarios(names, titles, n, m->ref));
-  for (size_t i = 0; i < k; i++) free(owned[i]);
-}
-
 void handle_message(client *c, const char *text, size_t len) {
   server *d = c->d;
   sylva_msg m;
@@ -141,8 +86,10 @@ void handle_message(client *c, const char *text, size_t len) {
     c->authed = true;
     client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL, m.ref));
     break;
-  case SYLVA_MSG_LIST: client_send_text(c, handlers_runs_json(d, true, m.ref)); break;
-  case SYLVA_MSG_SCENARIOS: handle_scenarios(c, &m); break;
+  case SYLVA_MSG_LIST: client_send_text(c, runs_json(d, true, m.ref)); break;
+  case SYLVA_MSG_SCENARIOS:
+    scenarios_list(&d->loop, &d->clients, c, d->opt.scenarios, m.ref);
+    break;
   case SYLVA_MSG_CREATE: {
     const char *code;
     const char *name = m.name ? m.name : m.scenario->name;

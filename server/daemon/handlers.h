@@ -8,6 +8,4 @@
  *  reply and changes nothing. */
 void handle_message(client *c, const char *text, size_t len);
 
-/** The JSON array of every run (for `list` and GET /api/runs); malloc'd. */
-char *handlers_runs_json(server *d, bool message, const char *ref);
 #endif

@@ -1,6 +1,9 @@
 /* The daemon's HTTP routes; see http.h. */
 #include "http.h"
 
+#include "runs.h"
+#include "scenarios.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <stdarg.h>
@@ -11,9 +14,9 @@
 
 #include "daemon.h"
 #include "export.h"
-#include "handlers.h"
 #include "files.h"
 #include "mesh.h"
+#include "runs.h"
 
 /* Bytes of a reply's body per lws_write. */
 #define HTTP_CHUNK 65536
@@ -93,7 +96,7 @@ static char *healthz_text(server *d) {
   for (run *r = d->runs; r; r = r->next) runs++;
   char buf[160];
   snprintf(buf, sizeof buf, "{\"ok\": true, \"runs\": %lld, \"clients\": %lld}\n",
-           (long long)runs, (long long)d->clients_now);
+           (long long)runs, (long long)d->clients.count);
   return strdup(buf);
 }
 
@@ -121,9 +124,9 @@ static char *metrics_text(server *d) {
           "# TYPE sylva_messages_received_total counter\nsylva_messages_received_total %lld\n"
           "# HELP sylva_bytes_sent_total WebSocket payload bytes sent.\n"
           "# TYPE sylva_bytes_sent_total counter\nsylva_bytes_sent_total %lld\n",
-          (long long)runs, (long long)running, (long long)d->clients_now,
+          (long long)runs, (long long)running, (long long)d->clients.count,
           (long long)d->iterations_total, d->iteration_ms_total / 1e3,
-          (long long)d->messages_received, (long long)d->bytes_sent);
+          (long long)d->clients.messages_received, (long long)d->clients.bytes_sent);
   if (fclose(f) != 0) {
     free(text);
     return NULL;
@@ -141,35 +144,23 @@ static void reply_built(http_pss *pss, const char *type, char *body) {
 
 /* ---- /api/scenarios/NAME -------------------------------------------------------- */
 
-/* NAME: [A-Za-z0-9_-][A-Za-z0-9._-]*, at most HTTP_MAX_SCENARIO_NAME bytes. */
-static bool scenario_name_ok(const char *name) {
-  size_t n = strlen(name);
-  if (n == 0 || n > HTTP_MAX_SCENARIO_NAME || name[0] == '.') return false;
-  for (const char *c = name; *c; c++)
-    if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') ||
-          *c == '_' || *c == '-' || *c == '.'))
-      return false;
-  return true;
-}
-
 /* The ready scenario file <--scenarios>/NAME.json, byte for byte. */
 static void scenario_file(server *d, http_pss *pss, const char *name) {
   char path[PATH_MAX], q[80];
   struct stat sb;
-  if (!d->opt.scenarios || !scenario_name_ok(name) ||
-      snprintf(path, sizeof path, "%s/%s.json", d->opt.scenarios, name) >= (int)sizeof path ||
+  if (!d->opt.scenarios || !scenarios_path(d->opt.scenarios, name, path, sizeof path) ||
       stat(path, &sb) != 0 || !S_ISREG(sb.st_mode)) {
     reply_text(pss, 404, "no scenario \"%s\"", shown(q, sizeof q, name));
     return;
   }
   char *data = NULL;
   size_t len = 0;
-  int e = sb.st_size > (off_t)HTTP_MAX_SCENARIO_FILE
+  int e = sb.st_size > (off_t)SCENARIOS_MAX_FILE
               ? EFBIG
-              : files_read(path, HTTP_MAX_SCENARIO_FILE, &data, &len);
+              : files_read(path, SCENARIOS_MAX_FILE, &data, &len);
   if (e) {
     if (e == EFBIG)
-      server_log(NULL, "%s: larger than %u bytes; not served", path, HTTP_MAX_SCENARIO_FILE);
+      server_log(NULL, "%s: larger than %u bytes; not served", path, SCENARIOS_MAX_FILE);
     else
       server_log(NULL, "%s: %s", path, strerror(e));
     reply_text(pss, 404, "no scenario \"%s\"", shown(q, sizeof q, name));
@@ -182,21 +173,21 @@ static void scenario_file(server *d, http_pss *pss, const char *name) {
 
 static void log_warning(const char *msg) { server_log(NULL, "export: %s", msg); }
 
-/* Worker thread: the export into a tmpfile, the store locked while it is used. */
+/* Worker thread: the export into a tmpfile. */
 static void job_work(uv_work_t *req) {
   http_job *j = req->data;
   j->file = tmpfile();
   if (!j->file) {
-    j->failed = -1;
+    j->failed = SERVER_EFAIL;
     snprintf(j->err, sizeof j->err, "cannot create a temporary file: %s", strerror(errno));
     return;
   }
-  j->failed = export_write(j->file, j->d->st, &j->d->store_lock, &j->spec, log_warning, j->err,
+  j->failed = export_write(j->file, j->d->st, &j->spec, log_warning, j->err,
                            sizeof j->err);
   if (j->failed) return;
   off_t size = ftello(j->file);
   if (size < 0 || fseeko(j->file, 0, SEEK_SET) != 0) {
-    j->failed = -1;
+    j->failed = SERVER_EFAIL;
     snprintf(j->err, sizeof j->err, "temporary file: %s", strerror(errno));
     return;
   }
@@ -370,8 +361,8 @@ static run *run_of_uri(server *d, http_pss *pss, const char *uri, const char *su
   *shaped = lu > ls && strcmp(uri + lu - ls, suffix) == 0;
   if (!*shaped) return NULL;
   /* lws has URL-decoded the path already */
-  for (run *r = d->runs; r; r = r->next)
-    if (strlen(r->name) == lu - ls && strncmp(r->name, uri, lu - ls) == 0) return r;
+  run *r = run_find_name(d, uri, lu - ls);
+  if (r) return r;
   char name[512], q[80];
   snprintf(name, sizeof name, "%.*s", (int)(lu - ls), uri);
   reply_text(pss, 404, "no run \"%s\"", shown(q, sizeof q, name));
@@ -393,7 +384,7 @@ static void route(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
   } else if (strcmp(uri, "/metrics") == 0) {
     reply_built(pss, "text/plain; version=0.0.4", metrics_text(d));
   } else if (strcmp(uri, "/api/runs") == 0) {
-    reply_built(pss, "application/json", handlers_runs_json(d, false, NULL));
+    reply_built(pss, "application/json", runs_json(d, false, NULL));
   } else if (starts(uri, "/api/scenarios/")) {
     scenario_file(d, pss, uri + strlen("/api/scenarios/"));
   } else if (starts(uri, "/api/runs/")) {

@@ -4,7 +4,7 @@
  * Every reply goes out from LWS_CALLBACK_HTTP_WRITEABLE: the headers in one
  * callback, then the body in chunks, from memory or from a file. An export (and
  * stats.csv, its CSV) is written off the loop thread into a tmpfile() by an
- * http_job, taking the store lock while it uses the store. The connection waits
+ * http_job (the store locks itself). The connection waits
  * for it without an lws timeout; a timer closes it when the client leaves. The
  * job may outlive its connection: it is detached when the connection closes
  * (LWS_CALLBACK_HTTP_DROP_PROTOCOL, LWS_CALLBACK_CLOSED_HTTP, also when the
@@ -17,10 +17,6 @@
 #include <stddef.h>
 #include <stdio.h>
 
-/** Most bytes of a scenario file that /api/scenarios/NAME serves. */
-#define HTTP_MAX_SCENARIO_FILE (4u << 20)
-/** Longest NAME of /api/scenarios/NAME. */
-#define HTTP_MAX_SCENARIO_NAME 200
 /** Seconds a reply may make no progress before lws closes the connection. */
 #define HTTP_TIMEOUT_SECS 30
 

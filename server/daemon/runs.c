@@ -33,10 +33,25 @@ run *run_find(server *d, int64_t id) {
   return NULL;
 }
 
-void run_summary(const run *r, int64_t *nodes, int *iteration, int *stems) {
-  *nodes = r->nodes;
-  *iteration = r->iteration;
-  *stems = r->stems;
+run *run_find_name(server *d, const char *name, size_t len) {
+  for (run *r = d->runs; r; r = r->next)
+    if (strlen(r->name) == len && memcmp(r->name, name, len) == 0) return r;
+  return NULL;
+}
+
+char *runs_json(server *d, bool message, const char *ref) {
+  size_t n = 0;
+  for (run *r = d->runs; r; r = r->next) n++;
+  sylva_run_summary *list = calloc(n + 1, sizeof *list);
+  if (!list) return NULL;
+  size_t i = 0;
+  for (run *r = d->runs; r; r = r->next, i++)
+    list[i] = (sylva_run_summary){.run = r->id, .name = r->name, .status = r->status,
+                                  .nodes = r->nodes, .iteration = r->iteration,
+                                  .stems = r->stems};
+  char *text = message ? sylva_msg_runs(list, n, ref) : sylva_runs_json(list, n);
+  free(list);
+  return text;
 }
 
 /* Caches the counts the loop may report while a worker steps the world. */
@@ -54,9 +69,7 @@ static bool run_wants_step(const run *r) {
 
 static void persist_status(run *r, const char *reason) {
   server *d = r->d;
-  uv_mutex_lock(&d->store_lock);
   int failed = store_set_status(d->st, r->id, r->status, reason, r->limit);
-  uv_mutex_unlock(&d->store_lock);
   if (failed) server_log(r->name, "%s", store_error(d->st));
 }
 
@@ -65,7 +78,7 @@ void run_broadcast_status(run *r) {
   msgbuf *m = text ? msgbuf_new(text, strlen(text)) : NULL;
   free(text);
   if (!m) return;
-  for (client *c = r->d->clients; c; c = c->next)
+  for (client *c = r->d->clients.head; c; c = c->next)
     if (client_subscription(c, r->id)) client_send(c, m);
   msgbuf_unref(m);
 }
@@ -101,10 +114,8 @@ static void work_cb(uv_work_t *req) {
              sylva_world_iteration(r->w) + 1, sylva_strerror(r->work_status));
     return;
   }
-  uv_mutex_lock(&d->store_lock);
   int failed = store_save_step(d->st, r->id, r->w, j, r->snapshot_every, r->limit);
   if (failed) snprintf(r->work_error, sizeof r->work_error, "%s", store_error(d->st));
-  uv_mutex_unlock(&d->store_lock);
   if (failed) {
     r->work_status = -1;
     return;
@@ -168,7 +179,7 @@ static void after_cb(uv_work_t *req, int status) {
       *h = NULL;
     }
   }
-  for (client *c = d->clients; c; c = c->next) {
+  for (client *c = d->clients.head; c; c = c->next) {
     subscription *s = client_subscription(c, r->id);
     if (!s) continue;
     if (s->need_snapshot || !m) {
@@ -251,7 +262,7 @@ int runs_load(server *d) {
   size_t n;
   if (store_list_runs(d->st, &stored, &n)) {
     server_log(NULL, "%s", store_error(d->st));
-    return -1;
+    return SERVER_EFAIL;
   }
   for (size_t i = 0; i < n; i++) {
     store_run *sr = &stored[i];
@@ -270,7 +281,7 @@ int runs_load(server *d) {
     if (!r) {
       sylva_world_destroy(w);
       store_runs_free(stored, n);
-      return -1;
+      return SERVER_ENOMEM;
     }
     /* one seq per delta and per edit since the run was planted, so that the numbers a
      * client holds keep their meaning across restarts of the daemon */
@@ -327,11 +338,9 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
     return NULL;
   }
   int64_t id;
-  uv_mutex_lock(&d->store_lock);
   int failed = store_create_run(d->st, name, json, s->seed, s->iterations, STORE_SNAPSHOT_EVERY,
                                 w, &id);
   if (failed) snprintf(err, errlen, "%s", store_error(d->st));
-  uv_mutex_unlock(&d->store_lock);
   free(json);
   if (failed) {
     sylva_world_destroy(w);
@@ -346,9 +355,7 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
     snprintf(err, errlen, "out of memory");
     return NULL;
   }
-  uv_mutex_lock(&d->store_lock);
   store_set_status(d->st, id, r->status, NULL, 0);
-  uv_mutex_unlock(&d->store_lock);
   server_log(r->name, "created (%s)", sylva_run_status_name(r->status));
   run_schedule(r);
   return r;
@@ -397,10 +404,8 @@ static void edit_now(run *r, client *c, const sylva_msg *m) {
                                                err, m->ref));
     return;
   }
-  uv_mutex_lock(&d->store_lock);
   int failed = store_apply_edit(d->st, r->id, edited, &e);
   if (failed) snprintf(err, sizeof err, "%s", store_error(d->st));
-  uv_mutex_unlock(&d->store_lock);
   edit_free(&e);
   if (failed) {
     sylva_world_destroy(edited);
@@ -420,7 +425,7 @@ static void edit_now(run *r, client *c, const sylva_msg *m) {
     msgbuf_unref(r->history[i]);
     r->history[i] = NULL;
   }
-  for (client *o = d->clients; o; o = o->next) {
+  for (client *o = d->clients.head; o; o = o->next) {
     subscription *s = client_subscription(o, r->id);
     if (!s) continue;
     s->need_snapshot = false;
@@ -433,7 +438,7 @@ static void apply_pending_edits(run *r) {
   while (r->edits) {
     pending_edit *e = r->edits;
     r->edits = e->next;
-    if (!r->d->stopping) edit_now(r, client_find(r->d, e->client), &e->msg);
+    if (!r->d->stopping) edit_now(r, client_find(&r->d->clients, e->client), &e->msg);
     sylva_msg_free(&e->msg);
     free(e);
   }
@@ -461,7 +466,7 @@ static void answer_lights(run *r) {
   while (r->lights) {
     pending_light *l = r->lights;
     r->lights = l->next;
-    client *c = client_find(r->d, l->client);
+    client *c = client_find(&r->d->clients, l->client);
     if (c) client_send_text(c, sylva_msg_light_slice(r->id, r->w, l->z, l->ref));
     free(l->ref);
     free(l);
@@ -513,7 +518,6 @@ static void job_work(uv_work_t *req) {
   job *j = req->data;
   server *d = j->d;
   j->code = NULL;
-  uv_mutex_lock(&d->store_lock);
   int failed = store_world_at(d->st, j->run, j->iteration, NULL, &j->w);
   char *scenario = NULL;
   if (!failed && j->fork) {
@@ -526,7 +530,6 @@ static void job_work(uv_work_t *req) {
     snprintf(j->err, sizeof j->err, "%s", store_error(d->st));
     j->code = strstr(j->err, "exists already") ? "bad_request" : "internal";
   }
-  uv_mutex_unlock(&d->store_lock);
   free(scenario);
   if (!failed && !j->fork) {
     j->text = sylva_msg_snapshot(j->run, 0, j->w, j->ref);
@@ -540,7 +543,7 @@ static void job_work(uv_work_t *req) {
 static void job_done(uv_work_t *req, int status) {
   job *j = req->data;
   (void)status;
-  client *c = client_find(j->d, j->client);
+  client *c = client_find(&j->d->clients, j->client);
   if (j->code) {
     if (c) client_send_text(c, sylva_msg_error(j->code, j->err, j->ref));
   } else if (j->fork) {

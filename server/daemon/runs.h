@@ -9,12 +9,44 @@
 #include "sylva/protocol.h"
 #include "sylva/scenario.h"
 
-/** Loads every stored run; runs that were running continue. 0 or -1 (logged). */
+/** A run the daemon holds. */
+struct run {
+  server *d;
+  int64_t id;       /**< the store's run id, also the protocol's "run" */
+  char *name;
+  sylva_world *w;   /**< owned; touched by the worker while busy */
+  sylva_run_status status;
+  int limit;        /**< iteration limit */
+  int snapshot_every;
+  int steps;        /**< iterations still wanted while paused (control step) */
+  int64_t seq;      /**< sequence number of the last delta */
+  int iteration, stems; /**< summary as of the last finished iteration (the */
+  int64_t nodes;        /**< world may be mid-step on a worker) */
+  bool busy;        /**< an iteration is in flight */
+  bool stop_after;  /**< stop requested while busy */
+  uv_work_t work;
+  /* result of the worker */
+  int work_status;
+  char work_error[512];
+  char *work_delta;  /**< encoded delta (malloc'd) */
+  double work_ms;
+  msgbuf *history[DAEMON_DELTA_HISTORY]; /**< the last deltas, by seq % size */
+  struct pending_edit *edits;   /**< edits waiting for the iteration in flight (runs.c) */
+  struct pending_light *lights; /**< light requests waiting for it (runs.c) */
+  msgbuf *snapshot;          /**< the snapshot of seq `snapshot_seq`, shared by subscribers */
+  int64_t snapshot_seq;
+  run *next;
+};
+
+/** Loads every stored run; runs that were running continue. SERVER_OK, or a
+ *  server_error (logged). */
 int runs_load(server *d);
 /** Frees every run (the loop must have no work in flight). */
 void runs_free(server *d);
 /** The run with this id, or NULL. */
 run *run_find(server *d, int64_t id);
+/** The run named by the len bytes at name, or NULL. */
+run *run_find_name(server *d, const char *name, size_t len);
 /** Creates a run from a parsed scenario; on failure err says why (and *code is a
  *  protocol error code). */
 run *run_create(server *d, const sylva_scenario *s, const char *name, bool start,
@@ -40,6 +72,7 @@ void run_fork(run *r, client *c, int iteration, const char *name, const char *re
 void run_light(run *r, client *c, double z, const char *ref);
 /** Sends the client a snapshot of stored iteration `iteration`, off the loop. */
 void run_get(run *r, client *c, int iteration, const char *ref);
-/** The run's current summary for `list` and /api/runs. */
-void run_summary(const run *r, int64_t *nodes, int *iteration, int *stems);
+/** The JSON of every run: a `runs` message (message true, with ref) or the array
+ *  of GET /api/runs; malloc'd, NULL when memory ran out. */
+char *runs_json(server *d, bool message, const char *ref);
 #endif

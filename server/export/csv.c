@@ -41,12 +41,12 @@ static int csv_row(const store_stats_row *r, void *ctx) {
   fprintf(f, ",%lld,%lld,", (long long)r->nodes, (long long)r->shed);
   csv_number(f, r->light, 3);
   fprintf(f, ",%d,%s\n", r->cap, r->finished ? "true" : "false");
-  return ferror(f) ? -1 : 0;
+  return ferror(f) ? SERVER_EWRITE : SERVER_OK;
 }
 
 int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
   fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished\n",
         f);
-  if (ferror(f)) return -1;
+  if (ferror(f)) return SERVER_EWRITE;
   return store_each_stats(st, run, to, csv_row, f);
 }

@@ -5,7 +5,6 @@
 #include <string.h>
 
 #include "csv.h"
-#include "edit.h"
 #include "mesh.h"
 #include "sylva/encode.h"
 #include "sylva/status.h"
@@ -28,42 +27,31 @@ bool export_format_parse(const char *name, export_format *out) {
 
 const char *export_format_extension(export_format format) { return format_extensions[format]; }
 
-static void lock_store(uv_mutex_t *lock) {
-  if (lock) uv_mutex_lock(lock);
-}
-
-static void unlock_store(uv_mutex_t *lock) {
-  if (lock) uv_mutex_unlock(lock);
-}
-
 static int write_failed(char *err, size_t errlen) {
   snprintf(err, errlen, "%s", strerror(errno ? errno : EIO));
   return SERVER_EWRITE;
 }
 
-int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,
-                 void (*warn)(const char *msg), char *err, size_t errlen) {
+int export_write(FILE *f, store *st, const export_spec *spec, void (*warn)(const char *msg),
+                 char *err, size_t errlen) {
   errno = 0;
   if (spec->format == EXPORT_CSV) {
-    lock_store(lock);
     int failed = csv_write_stats(f, st, spec->run, spec->iteration);
     if (failed && !ferror(f)) snprintf(err, errlen, "%s", store_error(st));
-    unlock_store(lock);
-    if (failed) return ferror(f) ? write_failed(err, errlen) : -1;
-    return fflush(f) != 0 ? write_failed(err, errlen) : 0;
+    if (failed) return ferror(f) ? write_failed(err, errlen) : SERVER_EFAIL;
+    return fflush(f) != 0 ? write_failed(err, errlen) : SERVER_OK;
   }
   sylva_world *w = NULL;
-  lock_store(lock);
-  int failed = store_world_at(st, spec->run, spec->iteration, warn, &w);
-  if (failed) snprintf(err, errlen, "run \"%s\": %s", spec->name, store_error(st));
-  unlock_store(lock);
-  if (failed) return -1;
-  int rc = 0;
+  if (store_world_at(st, spec->run, spec->iteration, warn, &w)) {
+    snprintf(err, errlen, "run \"%s\": %s", spec->name, store_error(st));
+    return SERVER_EFAIL;
+  }
+  int rc = SERVER_OK;
   if (spec->format == EXPORT_SKELETON) {
     char *text = sylva_encode_skeleton(w);
     if (!text) {
       snprintf(err, errlen, "out of memory");
-      rc = -1;
+      rc = SERVER_ENOMEM;
     } else if (fputs(text, f) == EOF || fflush(f) != 0) {
       rc = write_failed(err, errlen);
     }
@@ -78,7 +66,7 @@ int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,
       rc = write_failed(err, errlen);
     } else if (m) {
       snprintf(err, errlen, "%s", sylva_strerror(m));
-      rc = -1;
+      rc = m == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EFAIL;
     }
   }
   sylva_world_destroy(w);

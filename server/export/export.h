@@ -9,7 +9,6 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
-#include <uv.h>
 
 #include "store.h"
 
@@ -35,14 +34,13 @@ typedef struct export_spec {
   bool obstacles;       /**< obj, ply: also the obstacle boxes */
 } export_spec;
 
-/** Writes spec to f (flushed, not closed). When lock is not NULL it is held while
- *  st is used: while the world is restored (the newest good snapshot at or before
- *  the iteration, regrown to it: seconds for a large run) and, for the CSV, for
- *  the whole write, which streams from the store. warn (may be NULL) hears of
- *  damaged snapshots passed over. Returns SERVER_OK; SERVER_EFAIL when the store
- *  failed or memory ran out, SERVER_EWRITE when writing to f failed; err then says why in one
- *  line. */
-int export_write(FILE *f, store *st, uv_mutex_t *lock, const export_spec *spec,
-                 void (*warn)(const char *msg), char *err, size_t errlen);
+/** Writes spec to f (flushed, not closed): the world is restored from the store
+ *  (the newest good snapshot at or before the iteration, regrown to it: seconds
+ *  for a large run), the CSV streams from it. Safe on any thread (the store locks
+ *  itself). warn (may be NULL) hears of damaged snapshots passed over. Returns
+ *  SERVER_OK; SERVER_EFAIL when the store failed, SERVER_ENOMEM, SERVER_EWRITE when
+ *  writing to f failed; err then says why in one line. */
+int export_write(FILE *f, store *st, const export_spec *spec, void (*warn)(const char *msg),
+                 char *err, size_t errlen);
 
 #endif

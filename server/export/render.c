@@ -390,19 +390,19 @@ int render_write(FILE *f, const sylva_world *w, const render_options *o, char *e
   if ((unsigned)o->format > RENDER_PDF || (unsigned)o->view > RENDER_ALL ||
       (o->width && (o->width < RENDER_MIN_WIDTH || o->width > RENDER_MAX_SIZE))) {
     snprintf(err, errlen, "bad render options");
-    return -1;
+    return SERVER_EINPUT;
   }
   layout l;
   layout_build(sylva_world_get_def(w), o, &l);
   if (!(l.scale > 0)) {
     snprintf(err, errlen, "a width of %d leaves no room for the views", l.width);
-    return -1;
+    return SERVER_EINPUT;
   }
   size_t count = 0;
   segment *segs = gather_segments(w, &count);
   if (!segs) {
     snprintf(err, errlen, "out of memory");
-    return -1;
+    return SERVER_ENOMEM;
   }
   sink out = {.f = f, .error = 0};
   cairo_surface_t *surface = create_surface(o, &l, &out);
@@ -424,7 +424,7 @@ int render_write(FILE *f, const sylva_world *w, const render_options *o, char *e
   }
   if (status != CAIRO_STATUS_SUCCESS) {
     snprintf(err, errlen, "cairo: %s", cairo_status_to_string(status));
-    return -1;
+    return status == CAIRO_STATUS_NO_MEMORY ? SERVER_ENOMEM : SERVER_EFAIL;
   }
-  return 0;
+  return SERVER_OK;
 }

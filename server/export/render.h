@@ -100,9 +100,10 @@ typedef struct render_options {
   const char *name; /**< the run's or scenario's name, for the title */
 } render_options;
 
-/** Draws w as o asks and writes the picture to f (flushed, not closed). Returns SERVER_OK;
- *  SERVER_EFAIL for bad options or when cairo failed (out of memory); SERVER_EWRITE when
- *  writing to f failed; err then says why in one line. */
+/** Draws w as o asks and writes the picture to f (flushed, not closed). Returns
+ *  SERVER_OK; SERVER_EINPUT for bad options, SERVER_ENOMEM, SERVER_EFAIL when cairo
+ *  failed otherwise, SERVER_EWRITE when writing to f failed; err then says why in one
+ *  line. */
 int render_write(FILE *f, const sylva_world *w, const render_options *o, char *err,
                  size_t errlen);
 

@@ -2,6 +2,7 @@
 #include "store.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <sqlite3.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -15,15 +16,20 @@
 struct store {
   sqlite3 *db;
   char *path;
-  char error[512];
+  pthread_mutex_t lock; /* recursive: one caller at a time on the one connection */
 };
 
-static char open_error[512];
+/* The last failure of this thread's store calls (as errno is), so that a message
+ * read after a call is that call's, whatever other threads do meanwhile. */
+static _Thread_local char last_error[512];
 
-const char *store_error(const store *st) { return st->error; }
-const char *store_open_error(void) { return open_error; }
+const char *store_error(const store *st) {
+  (void)st;
+  return last_error;
+}
+const char *store_open_error(void) { return last_error; }
 
-/* Records "PATH: what: SQLite's reason" and returns -1. */
+/* Records "PATH: what: SQLite's reason" and returns SERVER_EFAIL. */
 static int fail(store *st, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
@@ -37,22 +43,22 @@ static int fail(store *st, const char *fmt, ...) {
   va_end(ap);
   int code = sqlite3_errcode(st->db);
   if (code != SQLITE_OK && code != SQLITE_ROW && code != SQLITE_DONE)
-    snprintf(st->error, sizeof st->error, "%s: %s: %s", st->path, what, sqlite3_errmsg(st->db));
+    snprintf(last_error, sizeof last_error, "%s: %s: %s", st->path, what, sqlite3_errmsg(st->db));
   else
-    snprintf(st->error, sizeof st->error, "%s: %s", st->path, what);
-  return -1;
+    snprintf(last_error, sizeof last_error, "%s: %s", st->path, what);
+  return SERVER_EFAIL;
 }
 
 /* Runs SQL; on failure records "PATH: what: reason". */
 static int exec(store *st, const char *sql, const char *what) {
   char *msg = NULL;
   if (sqlite3_exec(st->db, sql, NULL, NULL, &msg) != SQLITE_OK) {
-    snprintf(st->error, sizeof st->error, "%s: %s: %s", st->path, what,
+    snprintf(last_error, sizeof last_error, "%s: %s: %s", st->path, what,
              msg ? msg : "SQLite error");
     sqlite3_free(msg);
-    return -1;
+    return SERVER_EFAIL;
   }
-  return 0;
+  return SERVER_OK;
 }
 
 static void rollback(store *st) { sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL); }
@@ -150,7 +156,7 @@ static int migrate(store *st) {
   for (int64_t v = version; v < STORE_SCHEMA_VERSION; v++) {
     if (exec(st, migrations[v], "migrating the schema")) {
       rollback(st);
-      return -1;
+      return SERVER_EFAIL;
     }
   }
   char sql[96];
@@ -158,26 +164,27 @@ static int migrate(store *st) {
            STORE_APPLICATION_ID, STORE_SCHEMA_VERSION);
   if (exec(st, sql, "migrating the schema") || exec(st, "COMMIT", "migrating the schema")) {
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
-  return 0;
+  return SERVER_OK;
 }
 
 int store_open(const char *path, bool create, store **out) {
   *out = NULL;
   store *st = calloc(1, sizeof *st);
-  if (!st || !(st->path = strdup(path))) {
+  if (!st || !(st->path = strdup(path)) || pthread_mutex_init(&st->lock, NULL)) {
+    if (st) free(st->path);
     free(st);
-    snprintf(open_error, sizeof open_error, "%s: out of memory", path);
-    return -1;
+    snprintf(last_error, sizeof last_error, "%s: out of memory", path);
+    return SERVER_EFAIL;
   }
   int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0);
   if (sqlite3_open_v2(path, &st->db, flags, NULL) != SQLITE_OK) {
-    int rc = -1;
-    snprintf(open_error, sizeof open_error, "%s: %s", path,
+    int rc = SERVER_EFAIL;
+    snprintf(last_error, sizeof last_error, "%s: %s", path,
              st->db ? sqlite3_errmsg(st->db) : "cannot open");
     if (!create && st->db && sqlite3_errcode(st->db) == SQLITE_CANTOPEN) {
-      snprintf(open_error, sizeof open_error, "%s: no such store (or it cannot be opened)", path);
+      snprintf(last_error, sizeof last_error, "%s: no such store (or it cannot be opened)", path);
       rc = SERVER_EINPUT;
     }
     store_close(st);
@@ -191,17 +198,17 @@ int store_open(const char *path, bool create, store **out) {
   if (rc || exec(st, "PRAGMA journal_mode = WAL", "opening the store") ||
       exec(st, "PRAGMA synchronous = FULL", "opening the store") ||
       exec(st, "PRAGMA foreign_keys = ON", "opening the store")) {
-    snprintf(open_error, sizeof open_error, "%s", st->error);
-    store_close(st);
-    return rc == SERVER_EINPUT ? SERVER_EINPUT : -1;
+        store_close(st);
+    return rc == SERVER_EINPUT ? SERVER_EINPUT : SERVER_EFAIL;
   }
   *out = st;
-  return 0;
+  return SERVER_OK;
 }
 
 void store_close(store *st) {
   if (!st) return;
   sqlite3_close_v2(st->db);
+  pthread_mutex_destroy(&st->lock);
   free(st->path);
   free(st);
 }
@@ -238,16 +245,16 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   sqlite3_finalize(q);
   free(img);
   if (rc != SQLITE_DONE) return fail(st, "storing iteration %d", it);
-  return 0;
+  return SERVER_OK;
 }
 
-int store_create_run(store *st, const char *name, const char *scenario_json, uint64_t seed,
+static int create_run_unlocked(store *st, const char *name, const char *scenario_json, uint64_t seed,
                      int iterations, int snapshot_every, const sylva_world *w, int64_t *run) {
   char now[32];
   utc_now(now);
   char what[320];
   snprintf(what, sizeof what, "creating run \"%s\"", name);
-  if (exec(st, "BEGIN IMMEDIATE", what)) return -1;
+  if (exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO runs (name, scenario, seed, iterations, snapshot_every,"
@@ -268,7 +275,7 @@ int store_create_run(store *st, const char *name, const char *scenario_json, uin
   sqlite3_finalize(q);
   if (rc == SQLITE_CONSTRAINT_UNIQUE) {
     rollback(st);
-    snprintf(st->error, sizeof st->error,
+    snprintf(last_error, sizeof last_error,
              "%s: a run named \"%s\" exists already (continue it with 'sylva resume', or "
              "choose another --name)", st->path, name);
     return SERVER_EINPUT;
@@ -276,18 +283,18 @@ int store_create_run(store *st, const char *name, const char *scenario_json, uin
   if (rc != SQLITE_DONE) {
     fail(st, "creating run \"%s\"", name);
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
   *run = sqlite3_last_insert_rowid(st->db);
   if (insert_iteration(st, *run, w, true)) {
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
   if (exec(st, "COMMIT", what)) {
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
-  return 0;
+  return SERVER_OK;
 }
 
 static char *dup_column(sqlite3_stmt *q, int col) {
@@ -324,7 +331,7 @@ static int read_run(sqlite3_stmt *q, store_run *r) {
   copy_column(q, 9, r->updated, sizeof r->updated);
   r->last_iteration = sqlite3_column_int(q, 10);
   r->nodes = sqlite3_column_int64(q, 11);
-  return r->name && r->scenario ? 0 : -1;
+  return r->name && r->scenario ? 0 : SERVER_EFAIL;
 }
 
 void store_run_free(store_run *r) {
@@ -339,7 +346,7 @@ void store_runs_free(store_run *runs, size_t count) {
   free(runs);
 }
 
-int store_find_run(store *st, const char *name, store_run *out, bool *found) {
+static int find_run_unlocked(store *st, const char *name, store_run *out, bool *found) {
   *found = false;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, RUN_COLUMNS " WHERE r.name = ?", -1, &q, NULL) != SQLITE_OK)
@@ -350,17 +357,17 @@ int store_find_run(store *st, const char *name, store_run *out, bool *found) {
     if (read_run(q, out)) {
       store_run_free(out);
       sqlite3_finalize(q);
-      snprintf(st->error, sizeof st->error, "%s: out of memory", st->path);
-      return -1;
+      snprintf(last_error, sizeof last_error, "%s: out of memory", st->path);
+      return SERVER_EFAIL;
     }
     *found = true;
   }
   sqlite3_finalize(q);
   if (rc != SQLITE_ROW && rc != SQLITE_DONE) return fail(st, "looking up run \"%s\"", name);
-  return 0;
+  return SERVER_OK;
 }
 
-int store_list_runs(store *st, store_run **out, size_t *count) {
+static int list_runs_unlocked(store *st, store_run **out, size_t *count) {
   *out = NULL;
   *count = 0;
   sqlite3_stmt *q;
@@ -386,14 +393,14 @@ int store_list_runs(store *st, store_run **out, size_t *count) {
   if (rc != SQLITE_DONE) {
     store_runs_free(runs, n);
     if (rc == SQLITE_ROW) {
-      snprintf(st->error, sizeof st->error, "%s: out of memory", st->path);
-      return -1;
+      snprintf(last_error, sizeof last_error, "%s: out of memory", st->path);
+      return SERVER_EFAIL;
     }
     return fail(st, "listing runs");
   }
   *out = runs;
   *count = n;
-  return 0;
+  return SERVER_OK;
 }
 
 /* ---- iterations ---------------------------------------------------------------- */
@@ -405,16 +412,16 @@ static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
     sqlite3_bind_double(q, col, v);
 }
 
-int store_save_iteration(store *st, int64_t run, const sylva_world *w,
+static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
                          const sylva_journal *j, bool snapshot) {
   int it = j->iteration;
   char now[32], what[64];
   utc_now(now);
   snprintf(what, sizeof what, "storing iteration %d", it);
-  if (exec(st, "BEGIN IMMEDIATE", what)) return -1;
+  if (exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
   if (insert_iteration(st, run, w, snapshot)) {
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
@@ -424,7 +431,7 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
                          -1, &q, NULL) != SQLITE_OK) {
     fail(st, "storing iteration %d", it);
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
   for (size_t k = 0; k < j->stem_count; k++) {
     const sylva_stem_stats *s = &j->stats[k];
@@ -447,7 +454,7 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
       fail(st, "storing iteration %d", it);
       sqlite3_finalize(q);
       rollback(st);
-      return -1;
+      return SERVER_EFAIL;
     }
   }
   sqlite3_finalize(q);
@@ -455,7 +462,7 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
       SQLITE_OK) {
     fail(st, "storing iteration %d", it);
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
   sqlite3_bind_text(q, 1, now, -1, SQLITE_STATIC);
   sqlite3_bind_int64(q, 2, run);
@@ -464,9 +471,9 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
   if (rc != SQLITE_DONE || exec(st, "COMMIT", what)) {
     if (rc != SQLITE_DONE) fail(st, "storing iteration %d", it);
     rollback(st);
-    return -1;
+    return SERVER_EFAIL;
   }
-  return 0;
+  return SERVER_OK;
 }
 
 int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
@@ -475,7 +482,7 @@ int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_jo
   return store_save_iteration(st, run, w, j, last || j->iteration % every == 0);
 }
 
-int store_set_status(store *st, int64_t run, sylva_run_status status, const char *reason,
+static int set_status_unlocked(store *st, int64_t run, sylva_run_status status, const char *reason,
                      int iterations) {
   char now[32];
   utc_now(now);
@@ -499,7 +506,7 @@ int store_set_status(store *st, int64_t run, sylva_run_status status, const char
   return rc == SQLITE_DONE ? 0 : fail(st, "setting the status of a run");
 }
 
-int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, bool *found) {
+static int iteration_hash_unlocked(store *st, int64_t run, int iteration, uint64_t *hash, bool *found) {
   *found = false;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, "SELECT hash FROM iterations WHERE run = ? AND iteration = ?",
@@ -516,7 +523,7 @@ int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, 
   return rc == SQLITE_ROW || rc == SQLITE_DONE ? 0 : fail(st, "reading iteration %d", iteration);
 }
 
-int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
+static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(const char *msg),
                      sylva_world **world_out, int *from) {
   *world_out = NULL;
   sqlite3_stmt *q;
@@ -556,9 +563,9 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
     }
     if (load == SYLVA_ENOMEM) {
       sqlite3_finalize(q);
-      snprintf(st->error, sizeof st->error, "%s: out of memory restoring iteration %d", st->path,
+      snprintf(last_error, sizeof last_error, "%s: out of memory restoring iteration %d", st->path,
                it);
-      return -1;
+      return SERVER_EFAIL;
     }
     if (warn) {
       char msg[512];
@@ -569,10 +576,13 @@ int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *ms
   }
   sqlite3_finalize(q);
   if (rc != SQLITE_DONE) return fail(st, "reading snapshots");
-  snprintf(st->error, sizeof st->error, "%s: no good snapshot at or before iteration %d",
+  snprintf(last_error, sizeof last_error, "%s: no good snapshot at or before iteration %d",
            st->path, at);
-  return -1;
+  return SERVER_EFAIL;
 }
+
+static int log_command_unlocked(store *st, int64_t run, int iteration, const char *command_json,
+                                int64_t *seq);
 
 /* Replays one logged record on *w. */
 static int replay_record(const char *json, sylva_world **w, char *why, size_t whylen) {
@@ -603,7 +613,7 @@ static int replay_commands(store *st, int64_t run, int it, sylva_world **w) {
     const char *json = (const char *)sqlite3_column_text(q, 1);
     char why[400] = "not text";
     if (!json || replay_record(json, w, why, sizeof why)) {
-      snprintf(st->error, sizeof st->error, "%s: replaying command %lld after iteration %d: %s",
+      snprintf(last_error, sizeof last_error, "%s: replaying command %lld after iteration %d: %s",
                st->path, (long long)sqlite3_column_int64(q, 0), it, why);
       sqlite3_finalize(q);
       return SERVER_EFAIL;
@@ -613,7 +623,7 @@ static int replay_commands(store *st, int64_t run, int it, sylva_world **w) {
   return rc == SQLITE_DONE ? SERVER_OK : fail(st, "reading the command log");
 }
 
-int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e) {
+static int apply_edit_unlocked(store *st, int64_t run, const sylva_world *w, const edit *e) {
   int it = sylva_world_iteration(w);
   char what[64];
   snprintf(what, sizeof what, "storing an edit after iteration %d", it);
@@ -643,7 +653,7 @@ int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e
   }
   free(img);
   if (rc != SQLITE_DONE || sqlite3_changes(st->db) != 1 ||
-      store_log_command(st, run, it, record, NULL) || exec(st, "COMMIT", what)) {
+      log_command_unlocked(st, run, it, record, NULL) || exec(st, "COMMIT", what)) {
     if (rc != SQLITE_DONE) fail(st, "%s", what);
     rollback(st);
     free(record);
@@ -658,31 +668,36 @@ int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg)
   sylva_world *w;
   int from;
   *world_out = NULL;
-  if (store_load_world(st, run, at, warn, &w, &from)) return -1;
+  if (store_load_world(st, run, at, warn, &w, &from)) return SERVER_EFAIL;
   while (sylva_world_iteration(w) < at) {
     int status = sylva_world_step(w, NULL);
     int it = sylva_world_iteration(w);
     uint64_t hash;
     bool found = false;
-    if (status == SYLVA_OK &&
-        (replay_commands(st, run, it, &w) || store_iteration_hash(st, run, it, &hash, &found))) {
+    int failed = 0;
+    if (status == SYLVA_OK) {
+      pthread_mutex_lock(&st->lock);
+      failed = replay_commands(st, run, it, &w);
+      pthread_mutex_unlock(&st->lock);
+    }
+    if (status == SYLVA_OK && (failed || store_iteration_hash(st, run, it, &hash, &found))) {
       sylva_world_destroy(w);
-      return -1;
+      return SERVER_EFAIL;
     }
     if (status != SYLVA_OK || (found && hash != sylva_world_hash(w))) {
-      snprintf(st->error, sizeof st->error,
+      snprintf(last_error, sizeof last_error,
                "%s: regrowing iteration %d from the snapshot of %d %s", st->path, it, from,
                status != SYLVA_OK ? sylva_strerror(status)
                                   : "gives another world than the one stored");
       sylva_world_destroy(w);
-      return -1;
+      return SERVER_EFAIL;
     }
   }
   *world_out = w;
-  return 0;
+  return SERVER_OK;
 }
 
-int store_run_scenario(store *st, int64_t run, char **json) {
+static int run_scenario_unlocked(store *st, int64_t run, char **json) {
   *json = NULL;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, "SELECT scenario FROM runs WHERE id = ?", -1, &q, NULL) !=
@@ -694,17 +709,17 @@ int store_run_scenario(store *st, int64_t run, char **json) {
   sqlite3_finalize(q);
   if (rc != SQLITE_ROW) return fail(st, "reading a run's scenario");
   if (!*json) {
-    snprintf(st->error, sizeof st->error, "%s: out of memory", st->path);
-    return -1;
+    snprintf(last_error, sizeof last_error, "%s: out of memory", st->path);
+    return SERVER_EFAIL;
   }
-  return 0;
+  return SERVER_OK;
 }
 
 static double column_real(sqlite3_stmt *q, int col) {
   return sqlite3_column_type(q, col) == SQLITE_NULL ? NAN : sqlite3_column_double(q, col);
 }
 
-int store_each_stats(store *st, int64_t run, int to,
+static int each_stats_unlocked(store *st, int64_t run, int to,
                      int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
@@ -735,8 +750,8 @@ int store_each_stats(store *st, int64_t run, int to,
     if (!r.plant) r.plant = "";
     if (fn(&r, ctx)) {
       sqlite3_finalize(q);
-      snprintf(st->error, sizeof st->error, "%s: reading stats: stopped", st->path);
-      return -1;
+      snprintf(last_error, sizeof last_error, "%s: reading stats: stopped", st->path);
+      return SERVER_EFAIL;
     }
   }
   sqlite3_finalize(q);
@@ -745,7 +760,7 @@ int store_each_stats(store *st, int64_t run, int to,
 
 /* ---- commands ------------------------------------------------------------------ */
 
-int store_log_command(store *st, int64_t run, int iteration, const char *command_json,
+static int log_command_unlocked(store *st, int64_t run, int iteration, const char *command_json,
                       int64_t *seq) {
   char now[32];
   utc_now(now);
@@ -767,7 +782,7 @@ int store_log_command(store *st, int64_t run, int iteration, const char *command
   return rc == SQLITE_DONE ? 0 : fail(st, "logging a command");
 }
 
-int store_command_count(store *st, int64_t run, int64_t *count) {
+static int command_count_unlocked(store *st, int64_t run, int64_t *count) {
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, "SELECT count(*) FROM commands WHERE run = ?", -1, &q, NULL) !=
       SQLITE_OK)
@@ -777,4 +792,73 @@ int store_command_count(store *st, int64_t run, int64_t *count) {
   if (rc == SQLITE_ROW) *count = sqlite3_column_int64(q, 0);
   sqlite3_finalize(q);
   return rc == SQLITE_ROW ? 0 : fail(st, "counting commands");
+}
+
+/* ---- the entry points: one caller at a time --------------------------------------- */
+
+/* The store is used from several threads (the daemon's loop and its workers), on
+ * one SQLite connection: each entry point holds the store's lock for its own
+ * statements and transaction, and no longer. Regrowing a world (store_world_at)
+ * holds it only for each read. */
+#define LOCKED(st, call)                  \
+  do {                                    \
+    pthread_mutex_lock(&(st)->lock);      \
+    int locked_rc_ = (call);              \
+    pthread_mutex_unlock(&(st)->lock);    \
+    return locked_rc_;                    \
+  } while (0)
+
+int store_create_run(store *st, const char *name, const char *scenario_json, uint64_t seed,
+                     int iterations, int snapshot_every, const sylva_world *w, int64_t *run) {
+  LOCKED(st, create_run_unlocked(st, name, scenario_json, seed, iterations, snapshot_every, w,
+                                 run));
+}
+
+int store_find_run(store *st, const char *name, store_run *out, bool *found) {
+  LOCKED(st, find_run_unlocked(st, name, out, found));
+}
+
+int store_list_runs(store *st, store_run **out, size_t *count) {
+  LOCKED(st, list_runs_unlocked(st, out, count));
+}
+
+int store_save_iteration(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
+                         bool snapshot) {
+  LOCKED(st, save_iteration_unlocked(st, run, w, j, snapshot));
+}
+
+int store_set_status(store *st, int64_t run, sylva_run_status status, const char *reason,
+                     int iterations) {
+  LOCKED(st, set_status_unlocked(st, run, status, reason, iterations));
+}
+
+int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, bool *found) {
+  LOCKED(st, iteration_hash_unlocked(st, run, iteration, hash, found));
+}
+
+int store_load_world(store *st, int64_t run, int at, void (*warn)(const char *msg),
+                     sylva_world **world_out, int *from) {
+  LOCKED(st, load_world_unlocked(st, run, at, warn, world_out, from));
+}
+
+int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e) {
+  LOCKED(st, apply_edit_unlocked(st, run, w, e));
+}
+
+int store_run_scenario(store *st, int64_t run, char **json) {
+  LOCKED(st, run_scenario_unlocked(st, run, json));
+}
+
+int store_each_stats(store *st, int64_t run, int to,
+                     int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
+  LOCKED(st, each_stats_unlocked(st, run, to, fn, ctx));
+}
+
+int store_log_command(store *st, int64_t run, int iteration, const char *command_json,
+                      int64_t *seq) {
+  LOCKED(st, log_command_unlocked(st, run, iteration, command_json, seq));
+}
+
+int store_command_count(store *st, int64_t run, int64_t *count) {
+  LOCKED(st, command_count_unlocked(st, run, count));
 }

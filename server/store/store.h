@@ -4,6 +4,10 @@
  * iteration, so after a crash the file holds a consistent prefix of every run).
  *
  * Snapshots are core images (sylva/snapshot.h), which carry their own checksum.
+ * A store may be used from several threads: each call holds the store's own lock
+ * for its statements and transaction (store_world_at only for each read, not
+ * while it regrows), and store_error() gives the last failure of the calling
+ * thread, as errno does.
  * Every function returns SERVER_OK or SERVER_EFAIL (SERVER_EINPUT where the
  * caller's input is at fault: not a sylva store, a newer schema, a missing file, a taken name); after
  * a failure store_error() says what failed, with the file's name and SQLite's
@@ -52,7 +56,7 @@ typedef struct store_run {
 int store_open(const char *path, bool create, store **out);
 /** Closes the store; NULL is fine. */
 void store_close(store *st);
-/** What the last failing call of this store said. */
+/** What the calling thread's last failing store call said (as errno is per thread). */
 const char *store_error(const store *st);
 /** The message of a failed store_open (which has no store to ask). */
 const char *store_open_error(void);
@@ -116,7 +120,8 @@ typedef struct store_stats_row {
 } store_stats_row;
 
 /** Calls fn for every stats row of a run up to iteration `to`, in iteration then
- *  stem order; fn returns 0 to go on, non-zero to stop (returned as -1). */
+ *  stem order; fn returns 0 to go on, non-zero to stop (returned as SERVER_EFAIL).
+ *  The store stays locked meanwhile: fn must not call it. */
 int store_each_stats(store *st, int64_t run, int to,
                      int (*fn)(const store_stats_row *row, void *ctx), void *ctx);
 

@@ -112,9 +112,10 @@ test('export: any run name is found, and its file name is sanitized', () => with
 
 test('export: clients that leave right after asking do not hurt the daemon', () => withDaemon({}, async (d) => {
   await grown(d, 'stand.json', 'stand', 15);
-  // a regrown iteration; the restores take turns on the store, so most of these are
-  // still being written when their clients are long gone
-  for (let i = 0; i < 6; i++) {
+  // a regrown iteration (about 0.1 s each); the worker pool takes four at a time on
+  // two cores, so most of these thirty are still queued or being written when
+  // their clients are long gone (the daemon looks every 0.5 s)
+  for (let i = 0; i < 30; i++) {
     await askOnly(d.port, `/api/runs/stand/export?format=${i % 2 ? 'ply' : 'obj'}&iteration=14`,
       { leave: true });
   }
@@ -140,6 +141,8 @@ test('scenarios: /api/scenarios/NAME is the ready file byte for byte; other name
   writeFileSync(join(dir, 'big.json'), Buffer.alloc((4 << 20) + 1, 0x20));
   writeFileSync(join(dir, `${'a'.repeat(201)}.json`), wall);
   writeFileSync(join(dir, `${'a'.repeat(200)}.json`), wall);
+  writeFileSync(join(dir, 'b-copy.json'), wall);
+  writeFileSync(join(dir, 'notes.json'), '{"not": "a scenario"}');
   try {
     await withDaemon({ args: ['--scenarios', dir] }, async (d) => {
       const r = await get(d, '/api/scenarios/wall');
@@ -150,6 +153,15 @@ test('scenarios: /api/scenarios/NAME is the ready file byte for byte; other name
       for (const name of ['missing', '.hidden', 'wall.json', 'big', 'a'.repeat(201), 'wa%20ll'])
         assert.equal((await get(d, `/api/scenarios/${name}`)).status, 404, name);
       assert.match(d.stderr(), /big\.json: larger than 4194304 bytes; not served/);
+      // the `scenarios` message lists exactly what can be fetched, sorted by name
+      const c = await connect(d.url);
+      c.send({ type: 'scenarios', id: 's' });
+      const listed = await c.type('scenarios');
+      c.close();
+      assert.equal(listed.ref, 's');
+      const title = JSON.parse(wall.toString()).name;
+      assert.deepEqual(listed.scenarios, [
+        { name: 'a'.repeat(200), title }, { name: 'b-copy', title }, { name: 'wall', title }]);
       // paths that climb out, sent as they are
       for (const path of ['/api/scenarios/../scenarios/../../wall', '/api/scenarios/..%2fwall',
         '/api/scenarios/%2e%2e/wall', '/api/scenarios/%2e%2e%2f%2e%2e%2fREADME.md',
