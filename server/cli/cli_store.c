@@ -3,7 +3,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "edit.h"
 #include "options.h"
 
 int cli_store_open(const char *path, bool create, store **out) {
@@ -74,4 +73,12 @@ int cli_stored_iteration(const char *db, const store_run *r, bool given, uint64_
   }
   *at = (int)iteration;
   return CLI_EXIT_OK;
+}
+
+void cli_store_warn(const char *msg) { fprintf(stderr, "sylva: warning: %s\n", msg); }
+
+int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out) {
+  if (store_world_at(st, r->id, at, cli_store_warn, out) == SERVER_OK) return CLI_EXIT_OK;
+  fprintf(stderr, "sylva: run \"%s\": %s\n", r->name, store_error(st));
+  return CLI_EXIT_FAILURE;
 }

@@ -33,4 +33,11 @@ int cli_store_find(store *st, const char *db, const char *name, store_run *out);
 int cli_stored_iteration(const char *db, const store_run *r, bool given, uint64_t iteration,
                          int *at);
 
+/** The world of run r at iteration `at`, damaged snapshots warned of; on failure
+ *  prints "sylva: run \"NAME\": why" and returns CLI_EXIT_FAILURE. */
+int cli_store_world_at(store *st, const store_run *r, int at, sylva_world **out);
+
+/** Prints a store's warning (a damaged snapshot passed over): "sylva: warning: ...". */
+void cli_store_warn(const char *msg);
+
 #endif

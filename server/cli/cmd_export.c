@@ -9,7 +9,6 @@
 #include "export.h"
 #include "options.h"
 #include "outfile.h"
-#include "replay.h"
 #include "sylva/scenario.h"
 
 enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_FORMAT, OPT_OUT, OPT_SIDES, OPT_OBSTACLES, OPT_HELP,
@@ -96,7 +95,7 @@ int cmd_export(int argc, char **argv) {
   if (rc == CLI_EXIT_OK) rc = cli_outfile_open(&o, "-o", out, true);
   if (rc == CLI_EXIT_OK) {
     char err[512];
-    int failed = export_write(o.f, st, &spec, store_warn_stderr, err, sizeof err);
+    int failed = export_write(o.f, st, &spec, cli_store_warn, err, sizeof err);
     if (failed == SERVER_EWRITE)
       fprintf(stderr, "sylva: %s: %s\n", out, err);
     else if (failed)

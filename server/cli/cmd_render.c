@@ -11,12 +11,11 @@
 
 #include "commands.h"
 #include "cli_store.h"
-#include "files.h"
+#include "cli_input.h"
 #include "grow.h"
 #include "options.h"
 #include "outfile.h"
 #include "render.h"
-#include "replay.h"
 #include "sylva/scenario.h"
 
 enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_SEED, OPT_ITERATIONS, OPT_VIEW, OPT_WIDTH, OPT_OUT,
@@ -146,7 +145,7 @@ static int render_stored(render_args *a) {
   cli_outfile o = {0};
   if (rc == CLI_EXIT_OK) rc = cli_outfile_open(&o, "-o", a->out, false);
   sylva_world *w = NULL;
-  if (rc == CLI_EXIT_OK) rc = server_exit_status(store_world_at_logged(st, &r, at, &w));
+  if (rc == CLI_EXIT_OK) rc = cli_store_world_at(st, &r, at, &w);
   a->ro.name = r.name;
   if (rc == CLI_EXIT_OK) rc = render_to(&o, w, &a->ro);
   rc = cli_outfile_close(&o, rc);
@@ -159,14 +158,14 @@ static int render_stored(render_args *a) {
 /* The scenario form: SCENARIO.json grown silently to its end. */
 static int render_scenario(render_args *a) {
   sylva_scenario *s;
-  int rc = server_exit_status(files_load_scenario(a->scenario, SYLVA_SCENARIO_NEED_PLANTS, &s));
+  int rc = cli_input_scenario(a->scenario, SYLVA_SCENARIO_NEED_PLANTS, &s);
   if (rc) return rc;
   if (a->seed_text) s->seed = a->seed;
   /* open the output now, so that a bad path fails before the growing */
   cli_outfile o = {0};
   rc = cli_outfile_open(&o, "-o", a->out, false);
   sylva_world *w = NULL;
-  if (rc == CLI_EXIT_OK) rc = server_exit_status(files_build_world(a->scenario, s, &w));
+  if (rc == CLI_EXIT_OK) rc = cli_input_world(a->scenario, s, &w);
   grow_job job = {.label = a->scenario, .w = w,
                   .limit = a->iterations ? (int)a->iterations : s->iterations,
                   .progress = isatty(STDERR_FILENO), .silent = true};

@@ -7,7 +7,6 @@
 #include "cli_store.h"
 #include "grow.h"
 #include "options.h"
-#include "replay.h"
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
 
@@ -65,7 +64,7 @@ int cmd_resume(int argc, char **argv) {
   grow_job job = {.label = r.name, .limit = iterations ? (int)iterations : r.iterations,
                   .progress = !quiet && isatty(STDERR_FILENO), .st = st, .run = r.id,
                   .snapshot_every = r.snapshot_every};
-  rc = server_exit_status(store_world_at_logged(st, &r, r.last_iteration, &job.w));
+  rc = cli_store_world_at(st, &r, r.last_iteration, &job.w);
   if (rc == CLI_EXIT_OK && store_set_status(st, r.id, SYLVA_RUN_RUNNING, NULL, job.limit)) {
     fprintf(stderr, "sylva: %s\n", store_error(st));
     rc = CLI_EXIT_FAILURE;

@@ -10,7 +10,7 @@
 
 #include "commands.h"
 #include "grow.h"
-#include "files.h"
+#include "cli_input.h"
 #include "options.h"
 #include "outfile.h"
 #include "store.h"
@@ -105,7 +105,7 @@ int cmd_run(int argc, char **argv) {
   const char *path = argv[first];
 
   sylva_scenario *s;
-  int rc = server_exit_status(files_load_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s));
+  int rc = cli_input_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s);
   if (rc) return rc;
   if (seed_text) s->seed = seed;
   int limit = iterations ? (int)iterations : s->iterations;
@@ -118,7 +118,7 @@ int cmd_run(int argc, char **argv) {
   }
 
   sylva_world *w = NULL;
-  rc = server_exit_status(files_build_world(path, s, &w));
+  rc = cli_input_world(path, s, &w);
   grow_job job = {.label = path, .w = w, .limit = limit,
                   .progress = !quiet && isatty(STDERR_FILENO),
                   .snapshot_every = (int)snapshot_every};

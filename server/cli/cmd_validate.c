@@ -2,7 +2,7 @@
 #include <stdio.h>
 
 #include "commands.h"
-#include "files.h"
+#include "cli_input.h"
 #include "options.h"
 #include "sylva/encode.h"
 
@@ -43,10 +43,10 @@ int cmd_validate(int argc, char **argv) {
   const char *path = argv[first];
 
   sylva_scenario *s;
-  int rc = server_exit_status(files_load_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s));
+  int rc = cli_input_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s);
   if (rc) return rc;
   sylva_world *w;
-  rc = server_exit_status(files_build_world(path, s, &w));
+  rc = cli_input_world(path, s, &w);
   if (rc) {
     sylva_scenario_free(s);
     return rc;

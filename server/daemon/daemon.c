@@ -97,8 +97,13 @@ static const struct lws_protocol_vhost_options mime_mjs = {&mime_map, NULL, ".mj
  * Returns SERVER_OK or a server_error. */
 static int start_scenario(server *d, const char *path) {
   sylva_scenario *s;
-  int rc = files_load_scenario(path, 0, &s); /* plants not required: an empty site, as with create */
-  if (rc) return rc;
+  char err[1200];
+  /* plants not required: an empty site, as with create */
+  int rc = files_load_scenario(path, 0, &s, err, sizeof err);
+  if (rc) {
+    server_log(NULL, "%s", err);
+    return rc;
+  }
   run *r = run_find_name(d, s->name, strlen(s->name));
   if (r) {
     server_log(r->name, "already held (%s); not created again", sylva_run_status_name(r->status));
@@ -106,7 +111,6 @@ static int start_scenario(server *d, const char *path) {
     return SERVER_OK;
   }
   const char *code;
-  char err[512];
   r = run_create(d, s, s->name, true, &code, err, sizeof err);
   sylva_scenario_free(s);
   if (!r) {

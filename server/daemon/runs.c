@@ -5,7 +5,6 @@
 #include <time.h>
 
 #include "edit.h"
-#include "replay.h"
 #include "sylva/protocol.h"
 #include "sylva/status.h"
 
@@ -257,6 +256,8 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
   return r;
 }
 
+static void load_warning(const char *msg) { server_log(NULL, "warning: %s", msg); }
+
 int runs_load(server *d) {
   store_run *stored;
   size_t n;
@@ -267,8 +268,8 @@ int runs_load(server *d) {
   for (size_t i = 0; i < n; i++) {
     store_run *sr = &stored[i];
     sylva_world *w;
-    if (store_world_at_logged(d->st, sr, sr->last_iteration, &w)) {
-      server_log(sr->name, "not loaded (see above)");
+    if (store_world_at(d->st, sr->id, sr->last_iteration, load_warning, &w)) {
+      server_log(sr->name, "not loaded: %s", store_error(d->st));
       continue;
     }
     int64_t edits = 0;

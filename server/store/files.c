@@ -63,34 +63,36 @@ int files_read(const char *path, size_t max, char **data, size_t *len) {
   return 0;
 }
 
-int files_load_scenario(const char *path, unsigned flags, sylva_scenario **out) {
+int files_load_scenario(const char *path, unsigned flags, sylva_scenario **out, char *err,
+                        size_t errlen) {
   *out = NULL;
   char *text;
   size_t len;
   int e = files_read(path, FILES_MAX_INPUT, &text, &len);
   if (e == EFBIG) {
-    fprintf(stderr, "sylva: %s: larger than %u MiB\n", path, FILES_MAX_INPUT >> 20);
+    snprintf(err, errlen, "%s: larger than %u MiB", path, FILES_MAX_INPUT >> 20);
     return SERVER_EINPUT;
   }
   if (e) {
-    fprintf(stderr, "sylva: %s: %s\n", path, strerror(e));
+    snprintf(err, errlen, "%s: %s", path, strerror(e));
     return e == ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   }
-  char err[1024];
-  int rc = sylva_scenario_parse_ex(text, len, flags, out, err, sizeof err);
+  char why[1024];
+  int rc = sylva_scenario_parse_ex(text, len, flags, out, why, sizeof why);
   free(text);
   if (rc < 0) {
-    fprintf(stderr, "sylva: %s: %s\n", path, err);
+    snprintf(err, errlen, "%s: %s", path, why);
     return rc == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   }
   return SERVER_OK;
 }
 
-int files_build_world(const char *path, const sylva_scenario *s, sylva_world **out) {
-  char err[1024];
-  int rc = sylva_scenario_build(s, out, err, sizeof err);
+int files_build_world(const char *path, const sylva_scenario *s, sylva_world **out, char *err,
+                      size_t errlen) {
+  char why[1024];
+  int rc = sylva_scenario_build(s, out, why, sizeof why);
   if (rc < 0) {
-    fprintf(stderr, "sylva: %s: %s\n", path, err);
+    snprintf(err, errlen, "%s: %s", path, why);
     return rc == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   }
   return SERVER_OK;

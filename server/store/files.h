@@ -5,6 +5,8 @@
 
 #include <stddef.h>
 
+#include "sylva/world.h"
+
 #include "sylva/scenario.h"
 
 /** Largest input file, bytes. */
@@ -16,14 +18,16 @@
 int files_read(const char *path, size_t max, char **data, size_t *len);
 
 /** Reads and parses a scenario file (flags: SYLVA_SCENARIO_*, as for
- *  sylva_scenario_parse_ex()). On failure prints "sylva: PATH: message" to stderr
- *  and returns SERVER_EINPUT for bad or unreadable input, SERVER_ENOMEM when out
- *  of memory; SERVER_OK and *out on success. */
-int files_load_scenario(const char *path, unsigned flags, sylva_scenario **out);
+ *  sylva_scenario_parse_ex()). On failure err says "PATH: message" and the result
+ *  is SERVER_EINPUT for bad or unreadable input, SERVER_ENOMEM when out of memory;
+ *  SERVER_OK and *out on success. */
+int files_load_scenario(const char *path, unsigned flags, sylva_scenario **out, char *err,
+                        size_t errlen);
 
-/** Builds the world of a scenario loaded from path; on failure prints
- *  "sylva: PATH: message" and returns SERVER_EINPUT or SERVER_ENOMEM; SERVER_OK and
- *  *out on success. */
-int files_build_world(const char *path, const sylva_scenario *s, sylva_world **out);
+/** Builds the world of a scenario loaded from path; on failure err says "PATH:
+ *  message" and the result is SERVER_EINPUT or SERVER_ENOMEM; SERVER_OK and *out on
+ *  success. */
+int files_build_world(const char *path, const sylva_scenario *s, sylva_world **out, char *err,
+                      size_t errlen);
 
 #endif
