@@ -61,6 +61,14 @@ static int exec(store *st, const char *sql, const char *what) {
   return SERVER_OK;
 }
 
+/* Prepares sql and binds ?1 to run and ?2 to n. */
+static int prepare_run(store *st, const char *sql, int64_t run, int n, sqlite3_stmt **q) {
+  if (sqlite3_prepare_v2(st->db, sql, -1, q, NULL) != SQLITE_OK) return SERVER_EFAIL;
+  sqlite3_bind_int64(*q, 1, run);
+  sqlite3_bind_int(*q, 2, n);
+  return SERVER_OK;
+}
+
 static void rollback(store *st) { sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL); }
 
 static void utc_now(char out[32]) {
@@ -248,8 +256,9 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   return SERVER_OK;
 }
 
-static int create_run_unlocked(store *st, const char *name, const char *scenario_json, uint64_t seed,
-                     int iterations, int snapshot_every, const sylva_world *w, int64_t *run) {
+static int create_run_unlocked(store *st, const char *name, const char *scenario_json,
+                               uint64_t seed, int iterations, int snapshot_every,
+                               const sylva_world *w, int64_t *run) {
   char now[32];
   utc_now(now);
   char what[320];
@@ -413,7 +422,7 @@ static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
 }
 
 static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
-                         const sylva_journal *j, bool snapshot) {
+                                   const sylva_journal *j, bool snapshot) {
   int it = j->iteration;
   char now[32], what[64];
   utc_now(now);
@@ -483,7 +492,7 @@ int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_jo
 }
 
 static int set_status_unlocked(store *st, int64_t run, sylva_run_status status, const char *reason,
-                     int iterations) {
+                               int iterations) {
   char now[32];
   utc_now(now);
   sqlite3_stmt *q;
@@ -506,14 +515,13 @@ static int set_status_unlocked(store *st, int64_t run, sylva_run_status status, 
   return rc == SQLITE_DONE ? 0 : fail(st, "setting the status of a run");
 }
 
-static int iteration_hash_unlocked(store *st, int64_t run, int iteration, uint64_t *hash, bool *found) {
+static int iteration_hash_unlocked(store *st, int64_t run, int iteration, uint64_t *hash,
+                                   bool *found) {
   *found = false;
   sqlite3_stmt *q;
-  if (sqlite3_prepare_v2(st->db, "SELECT hash FROM iterations WHERE run = ? AND iteration = ?",
-                         -1, &q, NULL) != SQLITE_OK)
+  if (prepare_run(st, "SELECT hash FROM iterations WHERE run = ? AND iteration = ?",
+                  run, iteration, &q))
     return fail(st, "reading iteration %d", iteration);
-  sqlite3_bind_int64(q, 1, run);
-  sqlite3_bind_int(q, 2, iteration);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW) {
     *hash = (uint64_t)sqlite3_column_int64(q, 0);
@@ -524,17 +532,14 @@ static int iteration_hash_unlocked(store *st, int64_t run, int iteration, uint64
 }
 
 static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(const char *msg),
-                     sylva_world **world_out, int *from) {
+                               sylva_world **world_out, int *from) {
   *world_out = NULL;
   sqlite3_stmt *q;
-  if (sqlite3_prepare_v2(st->db,
-                         "SELECT iteration, snapshot, hash FROM iterations"
-                         " WHERE run = ? AND iteration <= ? AND snapshot IS NOT NULL"
-                         " ORDER BY iteration DESC",
-                         -1, &q, NULL) != SQLITE_OK)
+  if (prepare_run(st, "SELECT iteration, snapshot, hash FROM iterations"
+                      " WHERE run = ? AND iteration <= ? AND snapshot IS NOT NULL"
+                      " ORDER BY iteration DESC",
+                  run, at, &q))
     return fail(st, "reading snapshots");
-  sqlite3_bind_int64(q, 1, run);
-  sqlite3_bind_int(q, 2, at);
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     int it = sqlite3_column_int(q, 0);
@@ -601,13 +606,10 @@ static int replay_record(const char *json, sylva_world **w, char *why, size_t wh
 /* Replays the commands logged at iteration `it` on *w. */
 static int replay_commands(store *st, int64_t run, int it, sylva_world **w) {
   sqlite3_stmt *q;
-  if (sqlite3_prepare_v2(st->db,
-                         "SELECT seq, command FROM commands WHERE run = ? AND iteration = ?"
-                         " ORDER BY seq",
-                         -1, &q, NULL) != SQLITE_OK)
+  if (prepare_run(st, "SELECT seq, command FROM commands WHERE run = ? AND iteration = ?"
+                      " ORDER BY seq",
+                  run, it, &q))
     return fail(st, "reading the command log");
-  sqlite3_bind_int64(q, 1, run);
-  sqlite3_bind_int(q, 2, it);
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     const char *json = (const char *)sqlite3_column_text(q, 1);
@@ -720,16 +722,13 @@ static double column_real(sqlite3_stmt *q, int col) {
 }
 
 static int each_stats_unlocked(store *st, int64_t run, int to,
-                     int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
+                               int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
   sqlite3_stmt *q;
-  if (sqlite3_prepare_v2(st->db,
-                         "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
-                         " crown_base, nodes, shed, light, cap, finished FROM stats"
-                         " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
-                         -1, &q, NULL) != SQLITE_OK)
+  if (prepare_run(st, "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
+                      " crown_base, nodes, shed, light, cap, finished FROM stats"
+                      " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
+                  run, to, &q))
     return fail(st, "reading stats");
-  sqlite3_bind_int64(q, 1, run);
-  sqlite3_bind_int(q, 2, to);
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     store_stats_row r = {
@@ -761,18 +760,15 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
 /* ---- commands ------------------------------------------------------------------ */
 
 static int log_command_unlocked(store *st, int64_t run, int iteration, const char *command_json,
-                      int64_t *seq) {
+                                int64_t *seq) {
   char now[32];
   utc_now(now);
   sqlite3_stmt *q;
-  if (sqlite3_prepare_v2(st->db,
-                         "INSERT INTO commands (run, seq, iteration, command, created)"
-                         " VALUES (?1, (SELECT coalesce(max(seq), 0) + 1 FROM commands"
-                         " WHERE run = ?1), ?2, ?3, ?4) RETURNING seq",
-                         -1, &q, NULL) != SQLITE_OK)
+  if (prepare_run(st, "INSERT INTO commands (run, seq, iteration, command, created)"
+                      " VALUES (?1, (SELECT coalesce(max(seq), 0) + 1 FROM commands"
+                      " WHERE run = ?1), ?2, ?3, ?4) RETURNING seq",
+                  run, iteration, &q))
     return fail(st, "logging a command");
-  sqlite3_bind_int64(q, 1, run);
-  sqlite3_bind_int(q, 2, iteration);
   sqlite3_bind_text(q, 3, command_json, -1, SQLITE_STATIC);
   sqlite3_bind_text(q, 4, now, -1, SQLITE_STATIC);
   int rc = sqlite3_step(q);
