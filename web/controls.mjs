@@ -19,6 +19,14 @@ export class ControlsPanel {
     $('stop').onclick = () => this.control('stop');
     $('step').onclick = () => this.control('step', { count: stepCount($('step-count').value) });
     $('fork').onclick = () => this.fork();
+    // with a token for reading, the links fetch with it (a plain link cannot)
+    for (const [id] of EXPORTS) {
+      $(id).onclick = (ev) => {
+        if (this.session.publicRead || !$(id).href) return;
+        ev.preventDefault();
+        this.session.download($(id).getAttribute('href'));
+      };
+    }
   }
 
   async control(action, extra = {}) {

@@ -39,7 +39,7 @@ export class CreatePanel {
   async loadReady(name) {
     if (!name) return;
     try {
-      const res = await fetch(`api/scenarios/${encodeURIComponent(name)}`);
+      const res = await this.session.fetch(`api/scenarios/${encodeURIComponent(name)}`);
       if (!res.ok) throw new Error(`${name}: ${res.status} ${res.statusText}`);
       const text = await res.text();
       $('scenario-text').value = text;

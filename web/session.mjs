@@ -1,7 +1,8 @@
 // The page's session with the daemon: the connection (its socket lives in a
 // worker), the connection badge in the header, the token (asked for in a dialog
-// when the daemon has one and kept for the tab's session), changing requests,
-// and the message line under the controls.
+// when the daemon has one and kept for the tab's session: before anything when
+// reading needs it too, else before the first change), changing requests, the
+// daemon's HTTP routes with the token, and the message line under the controls.
 import { Connection } from './connection.mjs';
 import { $ } from './dom.mjs';
 import { connectionLabel, wsAddress } from './helpers.mjs';
@@ -11,6 +12,7 @@ export class Session {
   // daemon pushes (meta: the worker's parse time and the text's length).
   constructor({ onOpen, onMessage }) {
     this.auth = false;     // the daemon needs a token
+    this.publicRead = true; // reading needs none
     this.authed = false;   // this connection said hello with a token that works
     this.token = sessionStorage.getItem('sylva.token') || '';
     this.conn = new Connection(wsAddress(location.protocol, location.host), {
@@ -19,8 +21,9 @@ export class Session {
         el.dataset.state = state;
         el.textContent = connectionLabel(state, detail);
       },
-      onOpen: () => {
-        this.hello().catch(() => {});
+      onOpen: async () => {
+        await this.hello().catch(() => {});
+        if (!this.publicRead) await this.ensureAuth().catch(() => {});
         onOpen();
       },
       onMessage,
@@ -36,12 +39,15 @@ export class Session {
   request(msg) { return this.conn.request(msg); }
 
   // The daemon's welcome, on connect.
-  welcome(msg) { this.auth = msg.auth; }
+  welcome(msg) {
+    this.auth = msg.auth;
+    this.publicRead = msg.public_read !== false;
+  }
 
   async hello() {
     try {
       const w = await this.conn.request({ type: 'hello', ...(this.token ? { token: this.token } : {}) });
-      this.auth = w.auth;
+      this.welcome(w);
       this.authed = true;
     } catch (e) {
       if (e.code !== 'unauthorized') throw e;
@@ -82,6 +88,29 @@ export class Session {
         return this.conn.request(msg);
       }
       throw e;
+    }
+  }
+
+  // GET of one of the daemon's HTTP routes, with the token when the page has one
+  // that works.
+  fetch(path) {
+    const headers = this.auth && this.authed && this.token ? { Authorization: `Bearer ${this.token}` } : {};
+    return fetch(path, { headers });
+  }
+
+  // Saves what a route returns as a file (a link cannot carry the token).
+  async download(path) {
+    try {
+      const res = await this.fetch(path);
+      if (!res.ok) throw new Error(`${res.status}: ${(await res.text()).trim()}`);
+      const name = /filename="([^"]+)"/.exec(res.headers.get('content-disposition') || '')?.[1] || 'export';
+      const a = document.createElement('a');
+      a.href = URL.createObjectURL(await res.blob());
+      a.download = name;
+      a.click();
+      setTimeout(() => URL.revokeObjectURL(a.href), 60000);
+    } catch (e) {
+      this.message(`export: ${e.message}`, true);
     }
   }
 

@@ -124,7 +124,7 @@ export class Watch {
   async loadStats() {
     const run = this.run;
     try {
-      const res = await fetch(`api/runs/${encodeURIComponent(run.name)}/stats.csv`);
+      const res = await this.session.fetch(`api/runs/${encodeURIComponent(run.name)}/stats.csv`);
       if (!res.ok || this.run !== run) return;
       const rows = parseStatsCsv(await res.text());
       for (const [it, stats] of rows) if (it <= this.live.iteration) this.plots.add(it, stats);

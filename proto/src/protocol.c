@@ -448,13 +448,15 @@ static void put_string(sylva__strbuf *b, const char *s) {
   sylva__strbuf_json_string(b, s ? s : "");
 }
 
-char *sylva_msg_welcome(const char *server_version, bool auth, const char *ref) {
+char *sylva_msg_welcome(const char *server_version, sylva_auth auth, const char *ref) {
   sylva__strbuf b = {0};
   sylva__strbuf_printf(
       &b, "{\"type\":\"welcome\",\"protocol\":%d,\"server\":{\"name\":\"sylva\",\"version\":",
       SYLVA_PROTOCOL_VERSION);
   put_string(&b, server_version);
-  sylva__strbuf_printf(&b, "},\"auth\":%s", auth ? "true" : "false");
+  sylva__strbuf_printf(&b, "},\"auth\":%s,\"public_read\":%s",
+                       auth != SYLVA_AUTH_NONE ? "true" : "false",
+                       auth != SYLVA_AUTH_ALL ? "true" : "false");
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }

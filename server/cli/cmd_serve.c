@@ -9,8 +9,9 @@
 #include "daemon.h"
 #include "options.h"
 
-enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_ORIGIN, OPT_INSECURE,
-       OPT_MAX_MESSAGE, OPT_RATE, OPT_HELP, OPT_COUNT };
+enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_TOKEN_FILE,
+       OPT_PUBLIC_READ, OPT_HOST, OPT_ORIGIN, OPT_INSECURE, OPT_MAX_MESSAGE, OPT_RATE, OPT_HELP,
+       OPT_COUNT };
 
 static const cli_option serve_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
@@ -20,7 +21,15 @@ static const cli_option serve_options[OPT_COUNT] = {
     [OPT_WEB] = {"web", 0, "DIR", "the viewer's files (default ./web when it exists)"},
     [OPT_SCENARIOS] = {"scenarios", 0, "DIR",
                        "ready scenarios offered to clients (default ./scenarios when it exists)"},
-    [OPT_TOKEN] = {"token", 0, "T", "changing messages need a hello with this token"},
+    [OPT_TOKEN] = {"token", 0, "T",
+                   "every message and route but /healthz and the viewer's files need this "
+                   "token (shows in ps: prefer --token-file or SYLVA_TOKEN)"},
+    [OPT_TOKEN_FILE] = {"token-file", 0, "FILE", "the token: the first line of FILE"},
+    [OPT_PUBLIC_READ] = {"public-read", 0, NULL,
+                         "with a token, only changing messages need it; reading is open"},
+    [OPT_HOST] = {"allow-host", 0, "NAME",
+                  "also serve requests whose Host is NAME (repeatable; the listen address, "
+                  "localhost, 127.0.0.1 and [::1] always are)"},
     [OPT_ORIGIN] = {"allow-origin", 0, "ORIGIN",
                     "also accept WebSockets from this Origin (repeatable)"},
     [OPT_INSECURE] = {"insecure", 0, NULL, "allow a non-loopback address without --token"},
@@ -41,6 +50,8 @@ static void serve_usage(FILE *f) {
         "running continue from their last stored iteration. SIGINT or SIGTERM stops it:\n"
         "iterations in flight are stored and clients are closed with 1001.\n"
         "\n"
+        "The token may also come from the environment variable SYLVA_TOKEN.\n"
+        "\n"
         "Options:\n",
         f);
   cli_print_options(f, serve_options, OPT_COUNT);
@@ -49,6 +60,18 @@ static void serve_usage(FILE *f) {
 static bool is_dir(const char *path) {
   struct stat sb;
   return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+/* The token of --token-file: its first line, without the line end. */
+static int read_token_file(const char *path, char *out, size_t size) {
+  FILE *f = fopen(path, "r");
+  if (!f) return cli_usage_error("serve", "--token-file: cannot read '%s'", path);
+  bool got = fgets(out, (int)size, f) != NULL;
+  fclose(f);
+  if (got) out[strcspn(out, "\r\n")] = 0;
+  if (!got || !out[0])
+    return cli_usage_error("serve", "--token-file: '%s' has no token on its first line", path);
+  return CLI_EXIT_OK;
 }
 
 static bool loopback(const char *host) {
@@ -64,7 +87,7 @@ int cmd_serve(int argc, char **argv) {
   server_options o = {.db = "sylva.db", .host = "127.0.0.1", .port = 8080,
                       .max_message = DAEMON_MAX_MESSAGE, .rate_limit = DAEMON_RATE_LIMIT,
                       .max_pending = DAEMON_MAX_PENDING};
-  static char host[256];
+  static char host[256], token[512];
   bool insecure = false, web_given = false, scenarios_given = false;
   const char *arg;
   int first = argc, opt;
@@ -98,6 +121,19 @@ int cmd_serve(int argc, char **argv) {
       if (!arg[0]) return cli_usage_error("serve", "--token: empty token");
       o.token = arg;
       break;
+    case OPT_TOKEN_FILE:
+      if (read_token_file(arg, token, sizeof token)) return CLI_EXIT_USAGE;
+      o.token = token;
+      break;
+    case OPT_PUBLIC_READ: o.public_read = true; break;
+    case OPT_HOST:
+      if (o.host_count == ACCESS_MAX_HOSTS)
+        return cli_usage_error("serve", "--allow-host: at most %d", ACCESS_MAX_HOSTS);
+      if (!arg[0] || strpbrk(arg, ":/ "))
+        return cli_usage_error("serve", "--allow-host: expected a host name without a port, got "
+                               "'%s'", arg);
+      o.hosts[o.host_count++] = arg;
+      break;
     case OPT_ORIGIN:
       if (o.origin_count == DAEMON_MAX_ORIGINS)
         return cli_usage_error("serve", "--allow-origin: at most %d", DAEMON_MAX_ORIGINS);
@@ -119,6 +155,11 @@ int cmd_serve(int argc, char **argv) {
   }
   if (opt == -2) return CLI_EXIT_USAGE;
   if (first != argc) return cli_usage_error("serve", "unexpected argument '%s'", argv[first]);
+  const char *env = getenv("SYLVA_TOKEN");
+  if (!o.token && env && env[0]) o.token = env;
+  if (o.public_read && !o.token)
+    return cli_usage_error("serve", "--public-read: there is no token (give --token-file, "
+                           "SYLVA_TOKEN or --token)");
   if (!loopback(o.host) && !o.token && !insecure)
     return cli_usage_error("serve", "--listen %s is not a loopback address: give --token (or "
                            "--insecure to serve anyone who can reach it)", o.host);

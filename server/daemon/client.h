@@ -47,6 +47,7 @@ struct client {
   struct lws *wsi;
   uint64_t serial;      /**< unique for the daemon's life; finds a client again later */
   bool authed;
+  int token_failures;   /**< wrong hellos so far */
   msgbuf **queue;       /**< ring of messages waiting to be sent */
   size_t qhead, qlen, qcap, pending;
   size_t sent;          /**< bytes of the message at the head already written */

@@ -28,19 +28,22 @@ void server_log(const char *run_name, const char *fmt, ...) {
     fprintf(stderr, "sylva: %s\n", msg);
 }
 
+sylva_auth server_auth(const server *d) {
+  if (!d->opt.token) return SYLVA_AUTH_NONE;
+  return d->opt.public_read ? SYLVA_AUTH_CHANGES : SYLVA_AUTH_ALL;
+}
+
 /* ---- WebSocket sessions --------------------------------------------------------- */
 
-/* Origin must be the daemon's own (the Host it was reached at) or allowed. */
-static bool origin_allowed(server *d, struct lws *wsi) {
-  char origin[256], host[256];
-  if (lws_hdr_total_length(wsi, WSI_TOKEN_ORIGIN) <= 0) return true; /* not a browser */
-  if (lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN) < 0) return false;
-  for (int i = 0; i < d->opt.origin_count; i++)
-    if (strcmp(origin, d->opt.origins[i]) == 0) return true;
-  if (lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST) < 0) return false;
-  char self[300];
-  snprintf(self, sizeof self, "http://%s", host);
-  return strcmp(origin, self) == 0;
+/* A close frame's payload: none, or a code a peer may send (1000-1003, 1007-1014,
+ * 3000-4999) and a reason. */
+static bool close_payload_ok(const void *in, size_t len) {
+  if (len == 0) return true;
+  if (len == 1) return false;
+  const unsigned char *p = in;
+  unsigned code = (unsigned)p[0] << 8 | p[1];
+  return (code >= 1000 && code <= 1003) || (code >= 1007 && code <= 1014) ||
+         (code >= 3000 && code <= 4999);
 }
 
 static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
@@ -49,19 +52,24 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
   server *d = lws_context_user(lws_get_context(wsi));
   switch (reason) {
   case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
+    /* an upgrade: only /ws, from a Host and an Origin that name this daemon */
     char uri[64];
+    const char *why = NULL;
     if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) < 0 || strcmp(uri, "/ws") != 0)
-      return 1;
-    if (d->stopping) return 1;
-    if (!origin_allowed(d, wsi)) {
-      server_log(NULL, "refused a WebSocket from a foreign origin");
-      return 1;
-    }
-    return 0;
+      why = "WebSockets are served on /ws with the subprotocol sylva.v1";
+    else if (d->stopping)
+      why = "the daemon is stopping";
+    else if (!access_host_ok(&d->access, wsi) || !access_origin_ok(&d->access, wsi))
+      why = "the Host or the Origin is not this daemon's (see --allow-host)";
+    if (!why) return 0;
+    if (!d->stopping) server_log(NULL, "refused a WebSocket upgrade: %s", why);
+    lws_return_http_status(wsi, d->stopping ? HTTP_STATUS_SERVICE_UNAVAILABLE : HTTP_STATUS_FORBIDDEN,
+                           why);
+    return 1;
   }
   case LWS_CALLBACK_ESTABLISHED:
     client_open(&d->clients, c, wsi, d, d->opt.token == NULL);
-    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL, NULL));
+    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, server_auth(d), NULL));
     break;
   case LWS_CALLBACK_CLOSED:
     if (c && c->set) client_closed(c);
@@ -69,6 +77,15 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
   case LWS_CALLBACK_RECEIVE:
     if (!c || !c->set || c->close_code) break;
     if (client_receive(c, in, len)) handle_message(c, c->rx, c->rx_len);
+    break;
+  case LWS_CALLBACK_WS_PEER_INITIATED_CLOSE:
+    /* RFC 6455 7.4: a close payload is empty or a valid code (and UTF-8, which lws
+     * checks); anything else is a protocol error */
+    if (!close_payload_ok(in, len)) {
+      lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"invalid close frame",
+                       19);
+      return -1;
+    }
     break;
   case LWS_CALLBACK_SERVER_WRITEABLE:
     if (!c || !c->set) break;
@@ -195,6 +212,10 @@ int server_main(const server_options *opt) {
   info.foreign_loops = foreign;
   info.pcontext = &d->ctx;
   info.user = d;
+  d->access = (access_rules){.listen_host = opt->host, .host_count = opt->host_count,
+                             .origins = d->opt.origins, .origin_count = opt->origin_count,
+                             .token = opt->token, .public_read = opt->public_read};
+  for (int i = 0; i < opt->host_count; i++) d->access.hosts[i] = opt->hosts[i];
   info.timeout_secs = HTTP_TIMEOUT_SECS;
   d->ctx = lws_create_context(&info);
   int rc = 0;

@@ -13,8 +13,10 @@
 #include <stdint.h>
 #include <uv.h>
 
+#include "access.h"
 #include "client.h"
 #include "store.h"
+#include "sylva/protocol.h"
 #include "sylva/world.h"
 
 #ifdef SYLVA_VERSION
@@ -46,10 +48,15 @@ typedef struct server_options {
   int port;              /**< listen port */
   const char *web;       /**< the viewer's files, or NULL */
   const char *scenarios; /**< ready scenarios offered to clients, or NULL */
-  const char *token;     /**< required for changing messages, or NULL */
+  const char *token;     /**< required for every message and route but /healthz and
+                              the static files (changing ones only with public_read),
+                              or NULL */
   const char *start_scenario; /**< a scenario to grow at start unless its run exists */
   const char *origins[DAEMON_MAX_ORIGINS];
   int origin_count;
+  const char *hosts[ACCESS_MAX_HOSTS]; /**< --allow-host names */
+  int host_count;
+  bool public_read;      /**< with a token, reading needs none */
   size_t max_message;
   int rate_limit;
   size_t max_pending;
@@ -71,8 +78,11 @@ struct server {
   uint64_t stop_at;
   int64_t iterations_total;
   double iteration_ms_total;
-  char origin_self[2][128]; /**< http://HOST:PORT forms the daemon accepts as its own */
+  access_rules access;   /**< Host, Origin and token checks */
 };
+
+/** What the daemon wants its token for (the welcome says it). */
+sylva_auth server_auth(const server *d);
 
 /** One log line on stderr: "sylva: [run NAME] message". */
 void server_log(const char *run_name, const char *fmt, ...)

@@ -60,7 +60,8 @@ void handle_message(client *c, const char *text, size_t len) {
     sylva_msg_free(&m);
     return;
   }
-  if (changes(m.type) && d->opt.token && !c->authed) {
+  bool needs_token = m.type != SYLVA_MSG_HELLO && (changes(m.type) || !d->opt.public_read);
+  if (needs_token && d->opt.token && !c->authed) {
     reply_error(c, "unauthorized", "send a hello with the token first", m.ref);
     sylva_msg_free(&m);
     return;
@@ -78,14 +79,23 @@ void handle_message(client *c, const char *text, size_t len) {
     }
   }
   switch (m.type) {
-  case SYLVA_MSG_HELLO:
-    if (d->opt.token && (!m.token || strcmp(m.token, d->opt.token) != 0)) {
-      reply_error(c, "unauthorized", "/token: wrong token", m.ref);
+  case SYLVA_MSG_HELLO: {
+    access_verdict v = access_check_token(&d->access, m.token, uv_now(&d->loop));
+    if (v != ACCESS_OK) {
+      /* the last failure a socket may have closes it instead of answering */
+      if (++c->token_failures >= ACCESS_FAILURES_PER_CLIENT)
+        client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "too many wrong tokens");
+      else
+        reply_error(c, "unauthorized",
+                    v == ACCESS_WRONG ? "/token: wrong token"
+                                      : "/token: too many wrong tokens; try again in a second",
+                    m.ref);
       break;
     }
     c->authed = true;
-    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, d->opt.token != NULL, m.ref));
+    client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, server_auth(d), m.ref));
     break;
+  }
   case SYLVA_MSG_LIST: client_send_text(c, runs_json(d, true, m.ref)); break;
   case SYLVA_MSG_SCENARIOS:
     scenarios_list(&d->loop, &d->clients, c, d->opt.scenarios, m.ref);

@@ -375,10 +375,30 @@ static bool starts(const char *s, const char *prefix) {
   return strncmp(s, prefix, strlen(prefix)) == 0;
 }
 
+/* Whether the request may read uri: with a token (and without --public-read) every
+ * route but /healthz needs "Authorization: Bearer TOKEN"; otherwise the reply is
+ * set (401, or 429 while wrong tokens are throttled). */
+static bool authorized(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
+  if (!d->opt.token || d->opt.public_read || strcmp(uri, "/healthz") == 0) return true;
+  char buf[512];
+  switch (access_check_token(&d->access, access_bearer(wsi, buf, sizeof buf), uv_now(&d->loop))) {
+  case ACCESS_OK: return true;
+  case ACCESS_WRONG:
+    reply_text(pss, 401, "a token is needed: Authorization: Bearer TOKEN");
+    pss->challenge = true;
+    return false;
+  case ACCESS_THROTTLED:
+    reply_text(pss, 429, "too many wrong tokens; try again in a second");
+    return false;
+  }
+  return false;
+}
+
 /* Sets the reply of uri, or starts the job that will. */
 static void route(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
   bool shaped = false;
   run *r;
+  if (!authorized(d, wsi, pss, uri)) return;
   if (strcmp(uri, "/healthz") == 0) {
     reply_built(pss, "application/json", healthz_text(d));
   } else if (strcmp(uri, "/metrics") == 0) {
@@ -410,6 +430,10 @@ static int send_headers(struct lws *wsi, http_pss *pss) {
       lws_add_http_header_by_name(wsi, (const unsigned char *)"content-disposition:",
                                   (const unsigned char *)pss->disposition,
                                   (int)strlen(pss->disposition), &p, end))
+    return -1;
+  if (pss->challenge &&
+      lws_add_http_header_by_name(wsi, (const unsigned char *)"www-authenticate:",
+                                  (const unsigned char *)"Bearer", 6, &p, end))
     return -1;
   return lws_finalize_write_http_header(wsi, start, &p, end) ? -1 : 0;
 }
@@ -465,6 +489,17 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
   http_pss *pss = user;
   server *d = lws_context_user(lws_get_context(wsi));
   switch (reason) {
+  case LWS_CALLBACK_FILTER_HTTP_CONNECTION:
+    /* every request, the static files too: the Host must name this daemon */
+    if (access_host_ok(&d->access, wsi)) return 0;
+    lws_return_http_status(wsi, 421,
+                           "this daemon does not serve that Host (see --allow-host)");
+    return 1;
+  case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
+    /* an upgrade without the sylva.v1 subprotocol lands here: refused */
+    lws_return_http_status(wsi, HTTP_STATUS_FORBIDDEN,
+                           "WebSockets are served on /ws with the subprotocol sylva.v1");
+    return 1;
   case LWS_CALLBACK_HTTP: {
     char uri[1024];
     if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) < 0) uri[0] = '\0';

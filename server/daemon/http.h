@@ -28,6 +28,7 @@ typedef struct http_pss {
   const char *type;    /**< its content type */
   char disposition[320]; /**< a Content-Disposition value, or "" */
   bool headers_sent;
+  bool challenge;      /**< a 401: send WWW-Authenticate: Bearer */
   char *body;          /**< the body in memory (malloc'd), or NULL */
   FILE *file;          /**< or in a file (an export's tmpfile) */
   size_t len, off;     /**< body length and how much went out */

@@ -706,17 +706,21 @@ static void test_suite(const char *dir) {
 /* ---- encoders ---- */
 
 static void test_encoders(void) {
-  char *text = sylva_msg_welcome("0.1.0", true, NULL);
+  char *text = sylva_msg_welcome("0.1.0", SYLVA_AUTH_ALL, NULL);
   CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
-                  "\"0.1.0\"},\"auth\":true}");
+                  "\"0.1.0\"},\"auth\":true,\"public_read\":false}");
   free(text);
-  text = sylva_msg_welcome("0.1.0", false, "\"h1\"");
+  text = sylva_msg_welcome("0.1.0", SYLVA_AUTH_CHANGES, NULL);
   CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
-                  "\"0.1.0\"},\"auth\":false,\"ref\":\"h1\"}");
+                  "\"0.1.0\"},\"auth\":true,\"public_read\":true}");
+  free(text);
+  text = sylva_msg_welcome("0.1.0", SYLVA_AUTH_NONE, "\"h1\"");
+  CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
+                  "\"0.1.0\"},\"auth\":false,\"public_read\":true,\"ref\":\"h1\"}");
   cJSON *j = VALID_JSON(text);
   cJSON_Delete(j);
   free(text);
-  text = sylva_msg_welcome(NULL, false, NULL);
+  text = sylva_msg_welcome(NULL, SYLVA_AUTH_NONE, NULL);
   j = VALID_JSON(text);
   if (j) {
     CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(j, "auth")));

@@ -3,6 +3,7 @@ import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
 import { spawnSync } from 'node:child_process';
+import { readFileSync } from 'node:fs';
 import {
   SYLVA, ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, exportSkeleton, plantsJSON, cleanup, tempDir,
 } from '../server/harness.mjs';
@@ -349,8 +350,8 @@ test('an invalid scenario shows the daemon\'s message next to the field it names
   }
 });
 
-test('a daemon with a token: a changing action asks for it', async () => {
-  const d = await startDaemon({ args: [...WEB, '--token', 's3cret'] });
+test('a daemon with a token and --public-read: a changing action asks for it', async () => {
+  const d = await startDaemon({ args: [...WEB, '--token', 's3cret', '--public-read'] });
   try {
     const { page, errors } = await openViewer(browser, d.http);
     const c = await connect(d.url);
@@ -370,6 +371,37 @@ test('a daemon with a token: a changing action asks for it', async () => {
     await page.fill('#token-input', 's3cret');
     await page.click('#token-ok');
     await until(page, (s) => s.iteration === 1 && s.authed, 'one step with the token');
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('a daemon with a token for reading too: the page asks for it first, then lists, plots and exports with it', async () => {
+  const d = await startDaemon({ args: [...WEB, '--token', 's3cret'] });
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'hello', token: 's3cret' });
+    await c.type('welcome');
+    c.send({ type: 'create', scenario: scenario('wall.json', { iterations: 3 }), name: 'guarded', start: true, id: 'c' });
+    const { run } = await c.type('created');
+    c.send({ type: 'subscribe', run });
+    await c.next((m) => m.type === 'status' && m.status === 'finished', 120000);
+    c.close();
+    const { page, errors } = await openViewer(browser, d.http);
+    await page.waitForSelector('#token-dialog[open]');
+    await page.fill('#token-input', 's3cret');
+    await page.click('#token-ok');
+    await page.waitForSelector(`#runs tr[data-run="${run}"]`);
+    await page.click(`#runs tr[data-run="${run}"]`);
+    await until(page, (s) => s.run === run && s.iteration === 3 && s.authed, 'the run, read with the token');
+    // the plots' history comes from stats.csv, fetched with the token
+    await page.waitForFunction(() => window.sylva.plots().height.iterations.length >= 3);
+    // an export link downloads with the token too
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
+    const path = await download.path();
+    assert.match(readFileSync(path, 'utf8'), /^iteration,plant,stem,/);
     assert.deepEqual(errors, []);
   } finally {
     await stopDaemon(d);

@@ -124,11 +124,18 @@ void sylva_msg_free(sylva_msg *m);
 /** The wire name of a message type ("hello", ...), or NULL for an unknown value. */
 const char *sylva_msg_type_name(sylva_msg_type type);
 
-/** {"type":"welcome","protocol":1,"server":{"name":"sylva","version":"..."},"auth":true}
- *  auth: whether the daemon wants a token before changing messages; ref (a JSON
- *  value as the client sent it, or NULL for the greeting on connect) is echoed
- *  as "ref" in reply to a hello. */
-char *sylva_msg_welcome(const char *server_version, bool auth, const char *ref);
+/** What a daemon wants a token for. */
+typedef enum sylva_auth {
+  SYLVA_AUTH_NONE,    /**< no token */
+  SYLVA_AUTH_CHANGES, /**< changing messages only (reading is public) */
+  SYLVA_AUTH_ALL,     /**< every message but hello */
+} sylva_auth;
+
+/** {"type":"welcome","protocol":1,"server":{"name":"sylva","version":".."},
+ *  "auth":true,"public_read":false,"ref":..}: auth says whether the daemon has a
+ *  token, public_read whether reading needs none; ref (a JSON value as the client
+ *  sent it, or NULL for the greeting on connect) is echoed in reply to a hello. */
+char *sylva_msg_welcome(const char *server_version, sylva_auth auth, const char *ref);
 
 /** {"type":"error","code":"...","message":"...","ref":...}. code is one of
  *  bad_request, unknown_run, unauthorized, too_large, busy, internal; message
