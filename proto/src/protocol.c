@@ -496,8 +496,8 @@ static void put_runs(sylva__strbuf *b, const sylva_run_summary *runs, size_t n) 
     put_string(b, r->name);
     sylva__strbuf_puts(b, ",\"status\":");
     put_string(b, sylva_run_status_name(r->status));
-    sylva__strbuf_printf(b, ",\"iteration\":%d,\"stems\":%d,\"nodes\":%" PRId64 "}", r->iteration,
-                         r->stems, r->nodes);
+    sylva__strbuf_printf(b, ",\"iteration\":%d,\"stems\":%d,\"nodes\":%" PRId64 "%s}",
+                         r->iteration, r->stems, r->nodes, r->loading ? ",\"loading\":true" : "");
   }
   sylva__strbuf_putc(b, ']');
 }

@@ -86,7 +86,7 @@ int cmd_serve(int argc, char **argv) {
   cli_parser_init(&p, "serve", serve_options, OPT_COUNT, argc, argv);
   server_options o = {.db = "sylva.db", .host = "127.0.0.1", .port = 8080,
                       .max_message = DAEMON_MAX_MESSAGE, .rate_limit = DAEMON_RATE_LIMIT,
-                      .max_pending = DAEMON_MAX_PENDING};
+                      .max_pending = DAEMON_MAX_PENDING, .workers = DAEMON_WORKERS};
   static char host[256], token[512];
   bool insecure = false, web_given = false, scenarios_given = false;
   const char *arg;

@@ -60,6 +60,7 @@ static void release(client *c) {
   for (size_t i = 0; i < c->qlen; i++) msgbuf_unref(c->queue[(c->qhead + i) % c->qcap]);
   free(c->queue);
   free(c->rx);
+  for (size_t i = 0; i < c->nsubs; i++) free(c->subs[i].ref);
   free(c->subs);
   c->queue = NULL;
   c->rx = NULL;
@@ -227,14 +228,14 @@ subscription *client_subscribe(client *c, int64_t run) {
     c->subs_cap = cap;
   }
   s = &c->subs[c->nsubs++];
-  s->run = run;
-  s->need_snapshot = false;
+  *s = (subscription){.run = run};
   return s;
 }
 
 void client_unsubscribe(client *c, int64_t run) {
   for (size_t i = 0; i < c->nsubs; i++)
     if (c->subs[i].run == run) {
+      free(c->subs[i].ref);
       c->subs[i] = c->subs[--c->nsubs];
       return;
     }

@@ -38,7 +38,8 @@ client *client_find(client_set *s, uint64_t serial);
 /** A client's subscription to a run. */
 typedef struct subscription {
   int64_t run;
-  bool need_snapshot; /**< send a snapshot (not the next delta) when the run is idle */
+  bool need_snapshot; /**< send a snapshot (not the next delta) when there is one */
+  char *ref;          /**< the subscribe's id, for that snapshot (malloc'd), or NULL */
 } subscription;
 
 struct client {

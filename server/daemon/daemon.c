@@ -143,6 +143,7 @@ static void stop(server *d) {
   d->stop_at = uv_now(&d->loop);
   server_log(NULL, "stopping: closing clients, finishing the iterations in flight");
   client_set_close_all(&d->clients, LWS_CLOSE_STATUS_GOINGAWAY, "server shutting down");
+  pool_stop(&d->pool); /* iterations not started are dropped; the running ones end */
   uv_signal_stop(&d->sigint);
   uv_signal_stop(&d->sigterm);
 }
@@ -157,8 +158,7 @@ static uv_timer_t shutdown_timer;
 static void on_shutdown_tick(uv_timer_t *t) {
   server *d = t->data;
   /* close frames need a moment on the wire before the context goes */
-  bool busy = false;
-  for (run *r = d->runs; r; r = r->next) busy |= r->busy;
+  bool busy = runs_busy(d) || !pool_idle(&d->pool);
   uint64_t since = uv_now(&d->loop) - d->stop_at;
   /* wait for the iterations in flight, and give the close frames time to leave
    * (up to two seconds for clients that do not answer). An export in flight is not
@@ -168,6 +168,7 @@ static void on_shutdown_tick(uv_timer_t *t) {
   uv_timer_stop(t);
   uv_close((uv_handle_t *)t, NULL);
   client_set_close(&d->clients);
+  pool_close(&d->pool);
   uv_close((uv_handle_t *)&d->sigint, NULL);
   uv_close((uv_handle_t *)&d->sigterm, NULL);
   lws_context_destroy(d->ctx);
@@ -224,6 +225,10 @@ int server_main(const server_options *opt) {
                opt->host, opt->port);
     rc = 1;
   }
+  if (!rc && pool_init(&d->pool, &d->loop, opt->workers)) {
+    server_log(NULL, "cannot start %d worker threads", opt->workers);
+    rc = 1;
+  }
   if (!rc && runs_load(d)) rc = 1;
   if (!rc && opt->start_scenario) rc = server_exit_status(start_scenario(d, opt->start_scenario));
   if (!rc) {
@@ -240,8 +245,12 @@ int server_main(const server_options *opt) {
                opt->host, opt->port, opt->db);
     if (opt->web) server_log(NULL, "viewer: http://%s:%d/", opt->host, opt->port);
     uv_run(&d->loop, UV_RUN_DEFAULT);
-  } else if (d->ctx) {
-    lws_context_destroy(d->ctx);
+  } else {
+    if (d->pool.threads) {
+      pool_stop(&d->pool);
+      pool_close(&d->pool);
+    }
+    if (d->ctx) lws_context_destroy(d->ctx);
     uv_run(&d->loop, UV_RUN_DEFAULT);
   }
   /* lws needs a second destroy after its handles drained on the loop */

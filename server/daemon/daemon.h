@@ -15,6 +15,7 @@
 
 #include "access.h"
 #include "client.h"
+#include "pool.h"
 #include "store.h"
 #include "sylva/protocol.h"
 #include "sylva/world.h"
@@ -38,6 +39,8 @@
 #define DAEMON_HISTORY_BYTES (64u << 20)
 /** Most cells of a light slice (its message is about 1.34 bytes a cell). */
 #define DAEMON_MAX_SLICE (16ll << 20)
+/** Threads of the run pool (default). */
+#define DAEMON_WORKERS 2
 /** Most origins given with --allow-origin. */
 #define DAEMON_MAX_ORIGINS 16
 
@@ -60,6 +63,7 @@ typedef struct server_options {
   size_t max_message;
   int rate_limit;
   size_t max_pending;
+  int workers;           /**< threads of the run pool */
 } server_options;
 
 
@@ -74,6 +78,7 @@ struct server {
   store *st;
   run *runs;
   client_set clients;
+  pool pool;             /**< the workers every run's tasks share */
   bool stopping;
   uint64_t stop_at;
   int64_t iterations_total;

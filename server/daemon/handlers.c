@@ -19,36 +19,11 @@ static bool changes(sylva_msg_type t) {
 }
 
 static void handle_control(client *c, run *r, const sylva_msg *m) {
-  switch (m->action) {
-  case SYLVA_CONTROL_START:
-    if (sylva_run_status_over(r->status)) {
-      reply_error(c, "bad_request", "/action: the run has ended; fork it to go on", m->ref);
-      return;
-    }
-    run_set_status(r, SYLVA_RUN_RUNNING);
-    break;
-  case SYLVA_CONTROL_PAUSE:
-    if (r->status == SYLVA_RUN_RUNNING) run_set_status(r, SYLVA_RUN_PAUSED);
-    r->steps = 0;
-    break;
-  case SYLVA_CONTROL_STEP:
-    if (sylva_run_status_over(r->status)) {
-      reply_error(c, "bad_request", "/action: the run has ended; fork it to go on", m->ref);
-      return;
-    }
-    if (r->status == SYLVA_RUN_RUNNING) run_set_status(r, SYLVA_RUN_PAUSED);
-    r->steps += m->count;
-    break;
-  case SYLVA_CONTROL_STOP:
-    r->steps = 0;
-    if (r->busy)
-      r->stop_after = true; /* ends when the iteration in flight is stored */
-    else
-      run_set_status(r, SYLVA_RUN_FINISHED);
-    break;
-  }
-  run_schedule(r);
-  client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
+  const char *refused = run_control(r, m->action, m->count);
+  if (refused)
+    reply_error(c, "bad_request", refused, m->ref);
+  else
+    client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
 }
 
 void handle_message(client *c, const char *text, size_t len) {
@@ -115,7 +90,11 @@ void handle_message(client *c, const char *text, size_t len) {
   case SYLVA_MSG_CONTROL: handle_control(c, r, &m); break;
   case SYLVA_MSG_LIGHT: {
     int dims[3];
-    sylva_world_dims(r->w, dims);
+    if (r->loading) {
+      reply_error(c, "busy", "/run: the run is still loading; ask again in a moment", m.ref);
+      break;
+    }
+    sylva_world_dims(r->w, dims); /* fixed for the world's life; safe while busy */
     if ((int64_t)dims[0] * dims[1] > DAEMON_MAX_SLICE) {
       snprintf(err, sizeof err, "/z: the slice would have %lld cells; at most %lld are sent",
                (long long)dims[0] * dims[1], (long long)DAEMON_MAX_SLICE);

@@ -15,6 +15,10 @@ typedef struct msgbuf {
 /** Wraps text (len bytes) in a new shared buffer with one reference; NULL when
  *  memory ran out. */
 msgbuf *msgbuf_new(const char *text, size_t len);
+/** A new buffer holding the JSON object of m with "ref": ref added as its last
+ *  member (ref is JSON text), exactly what the encoder writes for a message with
+ *  a ref; NULL when memory ran out. */
+msgbuf *msgbuf_with_ref(const msgbuf *m, const char *ref);
 /** Takes a reference. */
 msgbuf *msgbuf_ref(msgbuf *m);
 /** Drops a reference (NULL is fine); the last one frees the buffer. */

@@ -8,14 +8,14 @@
 #include "sylva/protocol.h"
 #include "sylva/status.h"
 
-/** An edit waiting for the iteration in flight. */
+/** An edit waiting for its task. */
 typedef struct pending_edit {
   sylva_msg msg;
   uint64_t client;
   struct pending_edit *next;
 } pending_edit;
 
-/** A light request waiting for the iteration in flight. */
+/** A light request waiting for its task. */
 typedef struct pending_light {
   uint64_t client;
   double z;
@@ -23,47 +23,20 @@ typedef struct pending_light {
   struct pending_light *next;
 } pending_light;
 
-static void apply_pending_edits(run *r);
-static void answer_lights(run *r);
 
-run *run_find(server *d, int64_t id) {
-  for (run *r = d->runs; r; r = r->next)
-    if (r->id == id) return r;
-  return NULL;
-}
-
-run *run_find_name(server *d, const char *name, size_t len) {
-  for (run *r = d->runs; r; r = r->next)
-    if (strlen(r->name) == len && memcmp(r->name, name, len) == 0) return r;
-  return NULL;
-}
-
-char *runs_json(server *d, bool message, const char *ref) {
-  size_t n = 0;
-  for (run *r = d->runs; r; r = r->next) n++;
-  sylva_run_summary *list = calloc(n + 1, sizeof *list);
-  if (!list) return NULL;
-  size_t i = 0;
-  for (run *r = d->runs; r; r = r->next, i++)
-    list[i] = (sylva_run_summary){.run = r->id, .name = r->name, .status = r->status,
-                                  .nodes = r->nodes, .iteration = r->iteration,
-                                  .stems = r->stems};
-  char *text = message ? sylva_msg_runs(list, n, ref) : sylva_runs_json(list, n);
-  free(list);
-  return text;
-}
-
-/* Caches the counts the loop may report while a worker steps the world. */
+/* Caches what the loop may report while a worker has the world. */
 static void run_note(run *r) {
   r->nodes = (int64_t)sylva_world_node_count(r->w);
   r->iteration = sylva_world_iteration(r->w);
   r->stems = sylva_world_stem_count(r->w);
+  r->finished = sylva_world_finished(r->w);
 }
 
 static bool run_wants_step(const run *r) {
+  if (r->loading) return false;
   if (r->status != SYLVA_RUN_RUNNING && !(r->status == SYLVA_RUN_PAUSED && r->steps > 0))
     return false;
-  return !sylva_world_finished(r->w) && sylva_world_iteration(r->w) < r->limit;
+  return !r->finished && r->iteration < r->limit;
 }
 
 static void persist_status(run *r, const char *reason) {
@@ -86,10 +59,37 @@ void run_set_status(run *r, sylva_run_status status) {
   if (r->status == status) return;
   r->status = status;
   const char *reason = NULL;
-  if (status == SYLVA_RUN_FINISHED) reason = sylva_world_finished(r->w) ? "finished" : "limit";
+  if (status == SYLVA_RUN_FINISHED) reason = r->finished ? "finished" : "limit";
   persist_status(r, reason);
   server_log(r->name, "%s at iteration %d", sylva_run_status_name(status), r->iteration);
   run_broadcast_status(r);
+}
+
+const char *run_control(run *r, sylva_control_action action, int count) {
+  switch (action) {
+  case SYLVA_CONTROL_START:
+    if (sylva_run_status_over(r->status)) return "/action: the run has ended; fork it to go on";
+    run_set_status(r, SYLVA_RUN_RUNNING);
+    break;
+  case SYLVA_CONTROL_PAUSE:
+    if (r->status == SYLVA_RUN_RUNNING) run_set_status(r, SYLVA_RUN_PAUSED);
+    r->steps = 0;
+    break;
+  case SYLVA_CONTROL_STEP:
+    if (sylva_run_status_over(r->status)) return "/action: the run has ended; fork it to go on";
+    if (r->status == SYLVA_RUN_RUNNING) run_set_status(r, SYLVA_RUN_PAUSED);
+    r->steps += count;
+    break;
+  case SYLVA_CONTROL_STOP:
+    r->steps = 0;
+    if (r->busy)
+      r->stop_after = true; /* ends when the task in flight is done */
+    else
+      run_set_status(r, SYLVA_RUN_FINISHED);
+    break;
+  }
+  run_schedule(r);
+  return NULL;
 }
 
 static double mono_ms(void) {
@@ -98,71 +98,153 @@ static double mono_ms(void) {
   return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
 }
 
-/* Worker thread: one iteration, stored, and its delta encoded once. */
-static void work_cb(uv_work_t *req) {
-  run *r = req->data;
+/* ---- the tasks, on a worker ----------------------------------------------------- */
+
+static void load_warning(const char *msg) { server_log(NULL, "warning: %s", msg); }
+
+static void work_load(run *r) {
+  server *d = r->d;
+  if (store_world_at(d->st, r->id, r->iteration, load_warning, &r->task_world) ||
+      store_command_count(d->st, r->id, &r->task_edits)) {
+    r->task_status = SYLVA_EINVAL;
+    snprintf(r->task_error, sizeof r->task_error, "%s", store_error(d->st));
+  }
+}
+
+static void work_step(run *r) {
   server *d = r->d;
   const sylva_journal *j;
   double t0 = mono_ms();
-  r->work_status = sylva_world_step(r->w, &j);
-  r->work_ms = mono_ms() - t0;
-  r->work_delta = NULL;
-  r->work_error[0] = 0;
-  if (r->work_status != SYLVA_OK) {
-    snprintf(r->work_error, sizeof r->work_error, "iteration %d: %s",
-             sylva_world_iteration(r->w) + 1, sylva_strerror(r->work_status));
+  r->task_status = sylva_world_step(r->w, &j);
+  r->task_ms = mono_ms() - t0;
+  if (r->task_status != SYLVA_OK) {
+    snprintf(r->task_error, sizeof r->task_error, "iteration %d: %s",
+             sylva_world_iteration(r->w) + 1, sylva_strerror(r->task_status));
     return;
   }
-  int failed = store_save_step(d->st, r->id, r->w, j, r->snapshot_every, r->limit);
-  if (failed) snprintf(r->work_error, sizeof r->work_error, "%s", store_error(d->st));
-  if (failed) {
-    r->work_status = -1;
+  if (store_save_step(d->st, r->id, r->w, j, r->snapshot_every, r->limit)) {
+    snprintf(r->task_error, sizeof r->task_error, "%s", store_error(d->st));
+    r->task_status = SYLVA_EINVAL;
     return;
   }
-  r->work_delta = sylva_msg_delta(r->id, r->seq + 1, r->w, j);
+  r->task_text = sylva_msg_delta(r->id, r->seq + 1, r->w, j);
 }
 
-/* The snapshot of the run's current seq, encoded once and shared by every client
- * that needs it (a reply with a ref is encoded for its client alone). */
-static void send_snapshot(run *r, client *c, const char *ref) {
-  if (ref) {
-    client_send_text(c, sylva_msg_snapshot(r->id, r->seq, r->w, ref));
-    return;
+/* The store's edit of a protocol `edit` message (copies; SYLVA_ENOMEM or 0). */
+static int edit_from_msg(const sylva_msg *m, edit *e) {
+  *e = (edit){0};
+  if (edit_reserve(e, m->remove_obstacle_count, m->add_obstacle_count, m->add_plant_count))
+    return SYLVA_ENOMEM;
+  for (int i = 0; i < m->remove_obstacle_count; i++)
+    if (!(e->removals[i] = strdup(m->remove_obstacles[i]))) return SYLVA_ENOMEM;
+  for (int i = 0; i < m->add_obstacle_count; i++) {
+    const sylva_scenario_obstacle *o = &m->add_obstacles[i];
+    edit_obstacle *eo = &e->obstacles[i];
+    memcpy(eo->min, o->min, sizeof eo->min);
+    memcpy(eo->max, o->max, sizeof eo->max);
+    if (!(eo->id = strdup(o->id))) return SYLVA_ENOMEM;
   }
-  if (!r->snapshot || r->snapshot_seq != r->seq) {
-    msgbuf_unref(r->snapshot);
-    r->snapshot = NULL;
-    char *text = sylva_msg_snapshot(r->id, r->seq, r->w, NULL);
-    if (text) r->snapshot = msgbuf_new(text, strlen(text));
-    free(text);
-    r->snapshot_seq = r->seq;
+  for (int i = 0; i < m->add_plant_count; i++) {
+    const sylva_scenario_plant *p = &m->add_plants[i];
+    edit_plant *ep = &e->plants[i];
+    size_t roots = (size_t)p->root_count * sizeof *p->roots;
+    if (!(ep->id = strdup(p->id)) || !(ep->species = strdup(m->add_plant_species[i])) ||
+        !(ep->roots = malloc(roots)))
+      return SYLVA_ENOMEM;
+    memcpy(ep->roots, p->roots, roots);
+    ep->root_count = p->root_count;
   }
-  if (r->snapshot)
-    client_send(c, r->snapshot);
-  else
-    client_send_text(c, NULL); /* out of memory: an error */
+  return SYLVA_OK;
 }
 
-static void after_cb(uv_work_t *req, int status) {
-  run *r = req->data;
+static void work_edit(run *r) {
   server *d = r->d;
-  r->busy = false;
-  (void)status;
-  answer_lights(r);
-  if (r->work_status != SYLVA_OK) {
-    server_log(r->name, "failed: %s", r->work_error);
+  const sylva_msg *m = &r->edits->msg;
+  edit e;
+  r->task_code = "internal";
+  snprintf(r->task_error, sizeof r->task_error, "out of memory");
+  int rc = edit_from_msg(m, &e);
+  if (rc == SYLVA_OK) rc = edit_apply(r->w, &e, &r->task_world, r->task_error, sizeof r->task_error);
+  if (rc != SYLVA_OK) {
+    if (rc != SYLVA_ENOMEM) r->task_code = "bad_request";
+  } else if (store_apply_edit(d->st, r->id, r->task_world, &e)) {
+    snprintf(r->task_error, sizeof r->task_error, "%s", store_error(d->st));
+    sylva_world_destroy(r->task_world);
+    r->task_world = NULL;
+    rc = SYLVA_EINVAL;
+  }
+  edit_free(&e);
+  r->task_status = rc;
+}
+
+static void task_work(pool_task *t) {
+  run *r = (run *)((char *)t - offsetof(run, task));
+  r->task_status = SYLVA_OK;
+  r->task_error[0] = 0;
+  switch (r->kind) {
+  case RUN_TASK_LOAD: work_load(r); break;
+  case RUN_TASK_STEP: work_step(r); break;
+  case RUN_TASK_EDIT: work_edit(r); break;
+  case RUN_TASK_LIGHT:
+    r->task_text = sylva_msg_light_slice(r->id, r->w, r->lights->z, r->lights->ref);
+    break;
+  case RUN_TASK_SNAPSHOT: r->task_text = sylva_msg_snapshot(r->id, r->seq, r->w, NULL); break;
+  case RUN_TASK_NONE: break;
+  }
+}
+
+/* ---- the tasks' results, on the loop -------------------------------------------- */
+
+/* Sends the cached snapshot to every subscriber waiting for one. */
+static void send_waiting_snapshots(run *r) {
+  for (client *c = r->d->clients.head; c; c = c->next) {
+    subscription *s = client_subscription(c, r->id);
+    if (!s || !s->need_snapshot) continue;
+    s->need_snapshot = false;
+    if (!r->snapshot) {
+      client_send_text(c, NULL); /* out of memory: an error */
+    } else if (s->ref) {
+      msgbuf *m = msgbuf_with_ref(r->snapshot, s->ref);
+      if (m) client_send(c, m);
+      else client_send_text(c, NULL);
+      msgbuf_unref(m);
+    } else {
+      client_send(c, r->snapshot);
+    }
+    free(s->ref);
+    s->ref = NULL;
+  }
+}
+
+static bool snapshot_wanted(run *r) {
+  for (client *c = r->d->clients.head; c; c = c->next) {
+    subscription *s = client_subscription(c, r->id);
+    if (s && s->need_snapshot) return true;
+  }
+  return false;
+}
+
+static void done_snapshot(run *r) {
+  msgbuf_unref(r->snapshot);
+  r->snapshot = r->task_text ? msgbuf_new(r->task_text, strlen(r->task_text)) : NULL;
+  r->snapshot_seq = r->seq;
+  send_waiting_snapshots(r);
+}
+
+static void done_step(run *r) {
+  server *d = r->d;
+  if (r->task_status != SYLVA_OK) {
+    server_log(r->name, "failed: %s", r->task_error);
     r->status = SYLVA_RUN_FAILED;
     persist_status(r, NULL);
     run_broadcast_status(r);
     return;
   }
   d->iterations_total++;
-  d->iteration_ms_total += r->work_ms;
+  d->iteration_ms_total += r->task_ms;
   run_note(r);
   r->seq++;
-  msgbuf *m = r->work_delta ? msgbuf_new(r->work_delta, strlen(r->work_delta)) : NULL;
-  free(r->work_delta);
-  r->work_delta = NULL;
+  msgbuf *m = r->task_text ? msgbuf_new(r->task_text, strlen(r->task_text)) : NULL;
   msgbuf **slot = &r->history[r->seq % DAEMON_DELTA_HISTORY];
   msgbuf_unref(*slot);
   *slot = m;
@@ -178,36 +260,145 @@ static void after_cb(uv_work_t *req, int status) {
       *h = NULL;
     }
   }
+  /* a subscriber waiting for a snapshot gets the next one (the next task) instead */
   for (client *c = d->clients.head; c; c = c->next) {
     subscription *s = client_subscription(c, r->id);
     if (!s) continue;
-    if (s->need_snapshot || !m) {
-      s->need_snapshot = false;
-      send_snapshot(r, c, NULL);
-    } else {
-      client_send(c, m);
-    }
+    if (!m) s->need_snapshot = true;
+    if (!s->need_snapshot) client_send(c, m);
   }
   if (r->steps > 0) r->steps--;
-  apply_pending_edits(r);
   if (d->stopping) return;
-  if (r->stop_after || sylva_world_finished(r->w) || sylva_world_iteration(r->w) >= r->limit) {
+  if (r->stop_after || r->finished || r->iteration >= r->limit) {
     r->stop_after = false;
     run_set_status(r, SYLVA_RUN_FINISHED);
     return;
   }
   if (r->status == SYLVA_RUN_PAUSED && r->steps == 0) run_broadcast_status(r);
+}
+
+static void done_edit(run *r) {
+  server *d = r->d;
+  pending_edit *e = r->edits;
+  r->edits = e->next;
+  client *c = client_find(&d->clients, e->client);
+  const sylva_msg *m = &e->msg;
+  if (r->task_status != SYLVA_OK) {
+    if (strcmp(r->task_code, "internal") == 0)
+      server_log(r->name, "edit not applied: %s", r->task_error);
+    if (c) client_send_text(c, sylva_msg_error(r->task_code, r->task_error, m->ref));
+  } else {
+    sylva_world_destroy(r->w);
+    r->w = r->task_world;
+    r->task_world = NULL;
+    run_note(r);
+    server_log(r->name, "edited after iteration %d (+%d plants, +%d obstacles, -%d obstacles)",
+               r->iteration, m->add_plant_count, m->add_obstacle_count,
+               m->remove_obstacle_count);
+    /* deltas cannot carry an edit: every subscriber gets a fresh snapshot (the next
+     * task), and the deltas held for resubscribers end here */
+    r->seq++;
+    for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) {
+      msgbuf_unref(r->history[i]);
+      r->history[i] = NULL;
+    }
+    for (client *o = d->clients.head; o; o = o->next) {
+      subscription *s = client_subscription(o, r->id);
+      if (s) s->need_snapshot = true;
+    }
+    if (c) client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
+  }
+  sylva_msg_free(&e->msg);
+  free(e);
+}
+
+static void done_light(run *r) {
+  pending_light *l = r->lights;
+  r->lights = l->next;
+  client *c = client_find(&r->d->clients, l->client);
+  if (c) client_send_text(c, r->task_text); /* takes it */
+  else free(r->task_text);
+  r->task_text = NULL;
+  free(l->ref);
+  free(l);
+}
+
+static void run_remove(run *r);
+
+static void done_load(run *r) {
+  if (r->task_status != SYLVA_OK) {
+    server_log(r->name, "not loaded: %s", r->task_error);
+    run_remove(r);
+    return;
+  }
+  r->w = r->task_world;
+  r->task_world = NULL;
+  r->loading = false;
+  run_note(r);
+  /* one seq per delta and per edit since the run was planted, so that the numbers a
+   * client holds keep their meaning across restarts of the daemon */
+  r->seq = (int64_t)r->iteration + r->task_edits;
+  server_log(r->name, "loaded at iteration %d (%s)", r->iteration,
+             sylva_run_status_name(r->status));
+}
+
+static void task_done(pool_task *t, bool cancelled) {
+  run *r = (run *)((char *)t - offsetof(run, task));
+  run_task kind = r->kind;
+  r->busy = false;
+  r->kind = RUN_TASK_NONE;
+  if (!cancelled) {
+    switch (kind) {
+    case RUN_TASK_LOAD: done_load(r); break;
+    case RUN_TASK_STEP: done_step(r); break;
+    case RUN_TASK_EDIT: done_edit(r); break;
+    case RUN_TASK_LIGHT: done_light(r); break;
+    case RUN_TASK_SNAPSHOT: done_snapshot(r); break;
+    case RUN_TASK_NONE: break;
+    }
+    if (kind == RUN_TASK_LOAD && r->task_status != SYLVA_OK) return; /* removed */
+  }
+  free(r->task_text);
+  r->task_text = NULL;
+  sylva_world_destroy(r->task_world);
+  r->task_world = NULL;
+  if (cancelled || r->d->stopping) return;
+  if (r->stop_after && kind != RUN_TASK_STEP) {
+    r->stop_after = false;
+    run_set_status(r, SYLVA_RUN_FINISHED);
+  }
   run_schedule(r);
 }
 
+/* Starts the run's next task: pending edits first, then light slices, then a
+ * snapshot for subscribers waiting for one, then an iteration. */
 void run_schedule(run *r) {
-  if (r->busy || r->d->stopping || !run_wants_step(r)) return;
+  if (r->busy || r->d->stopping || r->loading) return;
+  run_task kind = RUN_TASK_NONE;
+  if (r->edits)
+    kind = RUN_TASK_EDIT;
+  else if (r->lights)
+    kind = RUN_TASK_LIGHT;
+  else if (snapshot_wanted(r)) {
+    if (r->snapshot && r->snapshot_seq == r->seq) {
+      send_waiting_snapshots(r); /* the cached one is current */
+      run_schedule(r);
+      return;
+    }
+    kind = RUN_TASK_SNAPSHOT;
+  } else if (run_wants_step(r))
+    kind = RUN_TASK_STEP;
+  if (kind == RUN_TASK_NONE) return;
   r->busy = true;
-  r->work.data = r;
-  if (uv_queue_work(&r->d->loop, &r->work, work_cb, after_cb) != 0) {
-    r->busy = false;
-    server_log(r->name, "cannot queue an iteration");
-  }
+  r->kind = kind;
+  r->task = (pool_task){.work = task_work, .done = task_done};
+  pool_submit(&r->d->pool, &r->task);
+}
+
+bool runs_busy(server *d) {
+  for (run *r = d->runs; r; r = r->next)
+    if (r->busy) return true;
+  return false;
 }
 
 void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref) {
@@ -217,7 +408,8 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
     return;
   }
   /* the deltas after `since` can be replayed when every one of them is held */
-  if (has_since && since >= 0 && since <= r->seq && r->seq - since < DAEMON_DELTA_HISTORY) {
+  if (!r->loading && has_since && since >= 0 && since <= r->seq &&
+      r->seq - since < DAEMON_DELTA_HISTORY) {
     bool all = true;
     for (int64_t q = since + 1; q <= r->seq; q++)
       if (!r->history[q % DAEMON_DELTA_HISTORY]) all = false;
@@ -228,15 +420,18 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
       return;
     }
   }
-  if (r->busy)
-    s->need_snapshot = true; /* sent when the iteration in flight is done */
+  free(s->ref);
+  s->ref = ref ? strdup(ref) : NULL;
+  s->need_snapshot = true;
+  /* now when the cached snapshot is current and no task is in flight, else after */
+  if (!r->busy && !r->loading && r->snapshot && r->snapshot_seq == r->seq)
+    send_waiting_snapshots(r);
   else
-    send_snapshot(r, c, ref);
+    run_schedule(r);
 }
 
 static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
-                    sylva_run_status status,
-                    int limit, int snapshot_every) {
+                    sylva_run_status status, int limit, int snapshot_every) {
   run *r = calloc(1, sizeof *r);
   if (!r || !(r->name = strdup(name))) {
     free(r);
@@ -248,7 +443,7 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
   r->limit = limit;
   r->snapshot_every = snapshot_every;
   r->status = status;
-  run_note(r);
+  if (w) run_note(r);
   /* append, so that runs stay in creation order */
   run **tail = &d->runs;
   while (*tail) tail = &(*tail)->next;
@@ -256,7 +451,37 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
   return r;
 }
 
-static void load_warning(const char *msg) { server_log(NULL, "warning: %s", msg); }
+static void run_free(run *r) {
+  while (r->edits) {
+    pending_edit *e = r->edits;
+    r->edits = e->next;
+    sylva_msg_free(&e->msg);
+    free(e);
+  }
+  while (r->lights) {
+    pending_light *l = r->lights;
+    r->lights = l->next;
+    free(l->ref);
+    free(l);
+  }
+  for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
+  msgbuf_unref(r->snapshot);
+  free(r->task_text);
+  sylva_world_destroy(r->task_world);
+  sylva_world_destroy(r->w);
+  free(r->name);
+  free(r);
+}
+
+/* Takes an idle run out of the list and frees it. */
+static void run_remove(run *r) {
+  for (run **p = &r->d->runs; *p; p = &(*p)->next)
+    if (*p == r) {
+      *p = r->next;
+      break;
+    }
+  run_free(r);
+}
 
 int runs_load(server *d) {
   store_run *stored;
@@ -267,59 +492,58 @@ int runs_load(server *d) {
   }
   for (size_t i = 0; i < n; i++) {
     store_run *sr = &stored[i];
-    sylva_world *w;
-    if (store_world_at(d->st, sr->id, sr->last_iteration, load_warning, &w)) {
-      server_log(sr->name, "not loaded: %s", store_error(d->st));
-      continue;
-    }
-    int64_t edits = 0;
-    if (store_command_count(d->st, sr->id, &edits)) {
-      server_log(sr->name, "%s", store_error(d->st));
-      sylva_world_destroy(w);
-      continue;
-    }
-    run *r = run_new(d, sr->id, sr->name, w, sr->status, sr->iterations, sr->snapshot_every);
+    run *r = run_new(d, sr->id, sr->name, NULL, sr->status, sr->iterations, sr->snapshot_every);
     if (!r) {
-      sylva_world_destroy(w);
       store_runs_free(stored, n);
       return SERVER_ENOMEM;
     }
-    /* one seq per delta and per edit since the run was planted, so that the numbers a
-     * client holds keep their meaning across restarts of the daemon */
-    r->seq = (int64_t)sr->last_iteration + edits;
-    server_log(r->name, "loaded at iteration %d (%s)", sr->last_iteration,
-               sylva_run_status_name(sr->status));
-    if (r->status == SYLVA_RUN_RUNNING) run_schedule(r);
+    r->loading = true;
+    r->iteration = sr->last_iteration;
+    r->nodes = sr->nodes;
+    r->busy = true;
+    r->kind = RUN_TASK_LOAD;
+    r->task = (pool_task){.work = task_work, .done = task_done};
+    pool_submit(&d->pool, &r->task);
   }
   store_runs_free(stored, n);
-  return 0;
+  return SERVER_OK;
 }
 
 void runs_free(server *d) {
   run *r = d->runs;
   while (r) {
     run *next = r->next;
-    while (r->edits) {
-      pending_edit *e = r->edits;
-      r->edits = e->next;
-      sylva_msg_free(&e->msg);
-      free(e);
-    }
-    while (r->lights) {
-      pending_light *l = r->lights;
-      r->lights = l->next;
-      free(l->ref);
-      free(l);
-    }
-    for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
-    msgbuf_unref(r->snapshot);
-    free(r->work_delta);
-    sylva_world_destroy(r->w);
-    free(r->name);
-    free(r);
+    run_free(r);
     r = next;
   }
   d->runs = NULL;
+}
+
+run *run_find(server *d, int64_t id) {
+  for (run *r = d->runs; r; r = r->next)
+    if (r->id == id) return r;
+  return NULL;
+}
+
+run *run_find_name(server *d, const char *name, size_t len) {
+  for (run *r = d->runs; r; r = r->next)
+    if (strlen(r->name) == len && memcmp(r->name, name, len) == 0) return r;
+  return NULL;
+}
+
+char *runs_json(server *d, bool message, const char *ref) {
+  size_t n = 0;
+  for (run *r = d->runs; r; r = r->next) n++;
+  sylva_run_summary *list = calloc(n + 1, sizeof *list);
+  if (!list) return NULL;
+  size_t i = 0;
+  for (run *r = d->runs; r; r = r->next, i++)
+    list[i] = (sylva_run_summary){.run = r->id, .name = r->name, .status = r->status,
+                                  .nodes = r->nodes, .iteration = r->iteration,
+                                  .stems = r->stems, .loading = r->loading};
+  char *text = message ? sylva_msg_runs(list, n, ref) : sylva_runs_json(list, n);
+  free(list);
+  return text;
 }
 
 run *run_create(server *d, const sylva_scenario *s, const char *name, bool start,
@@ -362,94 +586,9 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
   return r;
 }
 
-/* ---- edits, forks, history ------------------------------------------------------ */
-
-/* The store's edit of a protocol `edit` message (copies; SYLVA_ENOMEM or 0). */
-static int edit_from_msg(const sylva_msg *m, edit *e) {
-  *e = (edit){0};
-  if (edit_reserve(e, m->remove_obstacle_count, m->add_obstacle_count, m->add_plant_count))
-    return SYLVA_ENOMEM;
-  for (int i = 0; i < m->remove_obstacle_count; i++)
-    if (!(e->removals[i] = strdup(m->remove_obstacles[i]))) return SYLVA_ENOMEM;
-  for (int i = 0; i < m->add_obstacle_count; i++) {
-    const sylva_scenario_obstacle *o = &m->add_obstacles[i];
-    edit_obstacle *eo = &e->obstacles[i];
-    memcpy(eo->min, o->min, sizeof eo->min);
-    memcpy(eo->max, o->max, sizeof eo->max);
-    if (!(eo->id = strdup(o->id))) return SYLVA_ENOMEM;
-  }
-  for (int i = 0; i < m->add_plant_count; i++) {
-    const sylva_scenario_plant *p = &m->add_plants[i];
-    edit_plant *ep = &e->plants[i];
-    size_t roots = (size_t)p->root_count * sizeof *p->roots;
-    if (!(ep->id = strdup(p->id)) || !(ep->species = strdup(m->add_plant_species[i])) ||
-        !(ep->roots = malloc(roots)))
-      return SYLVA_ENOMEM;
-    memcpy(ep->roots, p->roots, roots);
-    ep->root_count = p->root_count;
-  }
-  return SYLVA_OK;
-}
-
-/* Applies one edit to the idle run; answers the client when it is still there. */
-static void edit_now(run *r, client *c, const sylva_msg *m) {
-  server *d = r->d;
-  char err[512] = "out of memory";
-  sylva_world *edited = NULL;
-  edit e;
-  int rc = edit_from_msg(m, &e);
-  if (rc == SYLVA_OK) rc = edit_apply(r->w, &e, &edited, err, sizeof err);
-  if (rc != SYLVA_OK) {
-    edit_free(&e);
-    if (c) client_send_text(c, sylva_msg_error(rc == SYLVA_ENOMEM ? "internal" : "bad_request",
-                                               err, m->ref));
-    return;
-  }
-  int failed = store_apply_edit(d->st, r->id, edited, &e);
-  if (failed) snprintf(err, sizeof err, "%s", store_error(d->st));
-  edit_free(&e);
-  if (failed) {
-    sylva_world_destroy(edited);
-    server_log(r->name, "edit not stored: %s", err);
-    if (c) client_send_text(c, sylva_msg_error("internal", err, m->ref));
-    return;
-  }
-  sylva_world_destroy(r->w);
-  r->w = edited;
-  run_note(r);
-  server_log(r->name, "edited after iteration %d (+%d plants, +%d obstacles, -%d obstacles)",
-             r->iteration, m->add_plant_count, m->add_obstacle_count, m->remove_obstacle_count);
-  /* deltas cannot carry an edit: every subscriber gets a fresh snapshot, and the
-   * deltas held for resubscribers end here */
-  r->seq++;
-  for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) {
-    msgbuf_unref(r->history[i]);
-    r->history[i] = NULL;
-  }
-  for (client *o = d->clients.head; o; o = o->next) {
-    subscription *s = client_subscription(o, r->id);
-    if (!s) continue;
-    s->need_snapshot = false;
-    send_snapshot(r, o, NULL);
-  }
-  if (c) client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
-}
-
-static void apply_pending_edits(run *r) {
-  while (r->edits) {
-    pending_edit *e = r->edits;
-    r->edits = e->next;
-    if (!r->d->stopping) edit_now(r, client_find(&r->d->clients, e->client), &e->msg);
-    sylva_msg_free(&e->msg);
-    free(e);
-  }
-}
+/* ---- edits, light slices, forks, history ----------------------------------------- */
 
 void run_edit(run *r, client *c, sylva_msg *m) {
-  if (!r->busy) {
-    edit_now(r, c, m);
-    return;
-  }
   pending_edit *e = calloc(1, sizeof *e);
   if (!e) {
     client_send_text(c, sylva_msg_error("internal", "out of memory", m->ref));
@@ -461,24 +600,10 @@ void run_edit(run *r, client *c, sylva_msg *m) {
   pending_edit **tail = &r->edits;
   while (*tail) tail = &(*tail)->next;
   *tail = e;
-}
-
-static void answer_lights(run *r) {
-  while (r->lights) {
-    pending_light *l = r->lights;
-    r->lights = l->next;
-    client *c = client_find(&r->d->clients, l->client);
-    if (c) client_send_text(c, sylva_msg_light_slice(r->id, r->w, l->z, l->ref));
-    free(l->ref);
-    free(l);
-  }
+  run_schedule(r);
 }
 
 void run_light(run *r, client *c, double z, const char *ref) {
-  if (!r->busy) {
-    client_send_text(c, sylva_msg_light_slice(r->id, r->w, z, ref));
-    return;
-  }
   pending_light *l = calloc(1, sizeof *l);
   if (!l || (ref && !(l->ref = strdup(ref)))) {
     free(l);
@@ -490,6 +615,7 @@ void run_light(run *r, client *c, double z, const char *ref) {
   pending_light **tail = &r->lights;
   while (*tail) tail = &(*tail)->next;
   *tail = l;
+  run_schedule(r);
 }
 
 /* A fork or a history snapshot, computed off the loop. */

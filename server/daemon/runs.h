@@ -1,45 +1,66 @@
 /* sylva server: the runs the daemon holds: loading them from the store, creating
- * and forking them, growing them off the loop thread (one iteration in flight per
- * run), and sending each delta, encoded once, to every subscriber. */
+ * and forking them, and their work off the loop thread (iterations, edits, light
+ * slices, snapshots: one task at a time per run, on the shared pool), and
+ * sending each delta and snapshot, encoded once, to every subscriber. */
 #ifndef SYLVA_SERVER_RUNS_H
 #define SYLVA_SERVER_RUNS_H
 
 #include "client.h"
 #include "daemon.h"
+#include "pool.h"
 #include "sylva/protocol.h"
 #include "sylva/scenario.h"
 
-/** A run the daemon holds. */
+/** What a run's worker is doing. */
+typedef enum run_task {
+  RUN_TASK_NONE,
+  RUN_TASK_LOAD,     /**< restoring the world from the store (at start) */
+  RUN_TASK_STEP,     /**< one iteration, stored, its delta encoded */
+  RUN_TASK_EDIT,     /**< the oldest pending edit, applied and stored */
+  RUN_TASK_LIGHT,    /**< the oldest pending light slice, encoded */
+  RUN_TASK_SNAPSHOT, /**< the snapshot of the current seq, encoded */
+} run_task;
+
+/** A run the daemon holds. Its world is touched only by its task, one at a time
+ *  on the shared pool (pool.h); the loop reads the summary fields. */
 struct run {
   server *d;
   int64_t id;       /**< the store's run id, also the protocol's "run" */
   char *name;
-  sylva_world *w;   /**< owned; touched by the worker while busy */
+  sylva_world *w;   /**< owned; NULL while loading; the worker's while busy */
   sylva_run_status status;
+  bool loading;     /**< being restored from the store */
   int limit;        /**< iteration limit */
   int snapshot_every;
   int steps;        /**< iterations still wanted while paused (control step) */
-  int64_t seq;      /**< sequence number of the last delta */
-  int iteration, stems; /**< summary as of the last finished iteration (the */
-  int64_t nodes;        /**< world may be mid-step on a worker) */
-  bool busy;        /**< an iteration is in flight */
+  int64_t seq;      /**< sequence number of the last delta or edit */
+  /* summary as of the last finished task (the world may be busy on a worker) */
+  int iteration, stems;
+  int64_t nodes;
+  bool finished;    /**< the growth equations ended every stem */
+  bool busy;        /**< a task is queued or running */
   bool stop_after;  /**< stop requested while busy */
-  uv_work_t work;
-  /* result of the worker */
-  int work_status;
-  char work_error[512];
-  char *work_delta;  /**< encoded delta (malloc'd) */
-  double work_ms;
+  pool_task task;
+  run_task kind;
+  /* the task's results */
+  int task_status;     /**< SYLVA_OK or why it failed */
+  char task_error[512];
+  const char *task_code; /**< the protocol error code of a failed edit */
+  char *task_text;     /**< an encoded delta, slice or snapshot (malloc'd) */
+  sylva_world *task_world; /**< an edited or loaded world */
+  int64_t task_edits;  /**< loading: the edits logged since the run began */
+  double task_ms;
   msgbuf *history[DAEMON_DELTA_HISTORY]; /**< the last deltas, by seq % size */
-  struct pending_edit *edits;   /**< edits waiting for the iteration in flight (runs.c) */
-  struct pending_light *lights; /**< light requests waiting for it (runs.c) */
+  struct pending_edit *edits;   /**< edits waiting for their task (runs.c) */
+  struct pending_light *lights; /**< light requests waiting for theirs (runs.c) */
   msgbuf *snapshot;          /**< the snapshot of seq `snapshot_seq`, shared by subscribers */
   int64_t snapshot_seq;
   run *next;
 };
 
-/** Loads every stored run; runs that were running continue. SERVER_OK, or a
- *  server_error (logged). */
+/** Lists every stored run and restores their worlds on the pool (they are listed
+ *  as loading meanwhile); runs that were running continue once loaded. SERVER_OK,
+ *  or a server_error (logged) when the store cannot list them. */
 int runs_load(server *d);
 /** Frees every run (the loop must have no work in flight). */
 void runs_free(server *d);
@@ -58,6 +79,11 @@ void run_schedule(run *r);
 void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref);
 /** Sets status (running, paused, finished) and tells the subscribers. */
 void run_set_status(run *r, sylva_run_status status);
+/** A `control` action (count: the steps of SYLVA_CONTROL_STEP); returns NULL or
+ *  the message of a refusal. */
+const char *run_control(run *r, sylva_control_action action, int count);
+/** Whether a task of some run is running (the daemon waits for them at stop). */
+bool runs_busy(server *d);
 /** Sends a status message to every subscriber of the run. */
 void run_broadcast_status(run *r);
 /** Applies an edit between iterations (now, or after the iteration in flight):

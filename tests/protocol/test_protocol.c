@@ -804,9 +804,9 @@ static void test_encoders(void) {
   CHECK_STR(sylva_run_status_name((sylva_run_status)99), "unknown");
 
   sylva_run_summary runs[] = {
-      {1, "wall", SYLVA_RUN_RUNNING, 4, 5, 1234},
-      {2, "tab\there \xe2\x9c\x93", SYLVA_RUN_FINISHED, 40, 1, 9000000000LL},
-      {3, NULL, SYLVA_RUN_FAILED, 0, 0, 0},
+      {1, "wall", SYLVA_RUN_RUNNING, 4, 5, 1234, false},
+      {2, "tab\there \xe2\x9c\x93", SYLVA_RUN_FINISHED, 40, 1, 9000000000LL, false},
+      {3, NULL, SYLVA_RUN_PAUSED, 0, 0, 0, true},
   };
   text = sylva_msg_runs(runs, 3, "\"L\"");
   j = VALID_JSON(text);
@@ -818,6 +818,8 @@ static void test_encoders(void) {
     CHECK_STR(str_of(r1, "name"), "tab\there \xe2\x9c\x93");
     CHECK(num_of(r1, "nodes") == 9000000000.0);
     CHECK_STR(str_of(cJSON_GetArrayItem(arr, 2), "name"), "");
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(arr, 2), "loading")));
+    CHECK(!cJSON_GetObjectItemCaseSensitive(r1, "loading"));
     CHECK_STR(str_of(j, "ref"), "L");
   }
   cJSON_Delete(j);

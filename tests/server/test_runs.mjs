@@ -156,7 +156,10 @@ test('kill -9 mid-run, twice: the run continues by itself and ends as an uninter
       assert.equal(at.status, 'running', `after kill ${k + 1}`);
       assert.ok(at.iteration < 14, `kill ${k + 1} came after the run ended (iteration ${at.iteration})`);
       d = await startDaemon({ dir });
-      assert.match(d.stderr(), new RegExp(`\\[run crash\\] loaded at iteration ${at.iteration} \\(running\\)`));
+      // runs load on the workers after the daemon listens
+      const loaded = new RegExp(`\\[run crash\\] loaded at iteration ${at.iteration} \\(running\\)`);
+      for (let w = 0; w < 3000 && !loaded.test(d.stderr()); w++) await new Promise((r) => setTimeout(r, 10));
+      assert.match(d.stderr(), loaded);
       c = await connect(d.url);
       c.send({ type: 'subscribe', run });
       const snap = await c.type('snapshot');

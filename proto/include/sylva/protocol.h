@@ -157,6 +157,7 @@ typedef struct sylva_run_summary {
   int iteration;
   int stems;
   int64_t nodes;
+  bool loading; /**< still being restored from the store ("loading": true) */
 } sylva_run_summary;
 
 /** {"type":"runs","runs":[{"run":1,"name":"..","status":"running","iteration":4,

@@ -1,0 +1,118 @@
+#include "pool.h"
+
+#include <errno.h>
+#include <stdlib.h>
+
+static void *worker(void *arg) {
+  pool *p = arg;
+  pthread_mutex_lock(&p->lock);
+  for (;;) {
+    while (!p->queue && !p->stopping) pthread_cond_wait(&p->wake, &p->lock);
+    if (!p->queue) break; /* stopping, nothing left */
+    pool_task *t = p->queue;
+    p->queue = t->next;
+    if (!p->queue) p->queue_tail = NULL;
+    p->running++;
+    pthread_mutex_unlock(&p->lock);
+    t->work(t);
+    pthread_mutex_lock(&p->lock);
+    p->running--;
+    t->next = p->finished;
+    p->finished = t;
+    uv_async_send(&p->async);
+  }
+  pthread_mutex_unlock(&p->lock);
+  return NULL;
+}
+
+/* Loop thread: reports the finished tasks, oldest first. */
+static void on_async(uv_async_t *a) {
+  pool *p = a->data;
+  pthread_mutex_lock(&p->lock);
+  pool_task *list = p->finished;
+  p->finished = NULL;
+  pthread_mutex_unlock(&p->lock);
+  pool_task *ordered = NULL;
+  while (list) { /* the list is newest first */
+    pool_task *next = list->next;
+    list->next = ordered;
+    ordered = list;
+    list = next;
+  }
+  while (ordered) {
+    pool_task *next = ordered->next;
+    ordered->done(ordered, false);
+    ordered = next;
+  }
+}
+
+int pool_init(pool *p, uv_loop_t *loop, int count) {
+  *p = (pool){.count = 0};
+  if (pthread_mutex_init(&p->lock, NULL)) return -ENOMEM;
+  if (pthread_cond_init(&p->wake, NULL)) {
+    pthread_mutex_destroy(&p->lock);
+    return -ENOMEM;
+  }
+  int rc = uv_async_init(loop, &p->async, on_async);
+  if (rc) {
+    pthread_cond_destroy(&p->wake);
+    pthread_mutex_destroy(&p->lock);
+    return rc;
+  }
+  p->async.data = p;
+  p->threads = calloc((size_t)count, sizeof *p->threads);
+  if (!p->threads) rc = -ENOMEM;
+  for (int i = 0; !rc && i < count; i++) {
+    if (pthread_create(&p->threads[i], NULL, worker, p)) rc = -EAGAIN;
+    else p->count++;
+  }
+  return rc;
+}
+
+void pool_submit(pool *p, pool_task *t) {
+  t->next = NULL;
+  pthread_mutex_lock(&p->lock);
+  if (p->queue_tail) p->queue_tail->next = t;
+  else p->queue = t;
+  p->queue_tail = t;
+  pthread_cond_signal(&p->wake);
+  pthread_mutex_unlock(&p->lock);
+}
+
+int pool_waiting(pool *p) {
+  pthread_mutex_lock(&p->lock);
+  int n = 0;
+  for (pool_task *t = p->queue; t; t = t->next) n++;
+  pthread_mutex_unlock(&p->lock);
+  return n;
+}
+
+void pool_stop(pool *p) {
+  pthread_mutex_lock(&p->lock);
+  pool_task *dropped = p->queue;
+  p->queue = p->queue_tail = NULL;
+  p->stopping = true;
+  pthread_cond_broadcast(&p->wake);
+  pthread_mutex_unlock(&p->lock);
+  while (dropped) {
+    pool_task *next = dropped->next;
+    dropped->done(dropped, true);
+    dropped = next;
+  }
+}
+
+bool pool_idle(pool *p) {
+  pthread_mutex_lock(&p->lock);
+  bool idle = !p->running && !p->queue && !p->finished;
+  pthread_mutex_unlock(&p->lock);
+  return idle;
+}
+
+void pool_close(pool *p) {
+  for (int i = 0; i < p->count; i++) pthread_join(p->threads[i], NULL);
+  free(p->threads);
+  p->threads = NULL;
+  uv_close((uv_handle_t *)&p->async, NULL);
+  pthread_cond_destroy(&p->wake);
+  pthread_mutex_destroy(&p->lock);
+}

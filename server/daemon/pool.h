@@ -1,0 +1,51 @@
+/* sylva server: the fixed pool of worker threads that every run's work shares
+ * (iterations, edits, light slices, snapshots, loading at start). Tasks run in
+ * the order they were submitted; a run has at most one task queued or running,
+ * and submits its next one when the last is done, so the runs take turns
+ * (round-robin) and none starves another. A task's done callback runs on the
+ * loop thread. The exports and regrows of clients use libuv's own threadpool
+ * (capped apart, see jobs in daemon.h), so they never hold up growing. */
+#ifndef SYLVA_SERVER_POOL_H
+#define SYLVA_SERVER_POOL_H
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <uv.h>
+
+typedef struct pool_task pool_task;
+
+/** One piece of work: work runs on a worker, done on the loop (cancelled true
+ *  when the pool dropped it unrun at shutdown). */
+struct pool_task {
+  void (*work)(pool_task *t);
+  void (*done)(pool_task *t, bool cancelled);
+  pool_task *next;
+};
+
+typedef struct pool {
+  pthread_t *threads;
+  int count;
+  pthread_mutex_t lock;
+  pthread_cond_t wake;
+  pool_task *queue, *queue_tail; /**< waiting, in order */
+  pool_task *finished;           /**< done on a worker, waiting for the loop */
+  int running;                   /**< tasks on workers now */
+  bool stopping;
+  uv_async_t async;              /**< wakes the loop for finished tasks */
+} pool;
+
+/** Starts count workers on the loop's side; 0 or a negative errno. */
+int pool_init(pool *p, uv_loop_t *loop, int count);
+/** Queues a task (loop thread). */
+void pool_submit(pool *p, pool_task *t);
+/** Tasks queued and not started. */
+int pool_waiting(pool *p);
+/** Drops the queued tasks (their done gets cancelled = true, on the loop) and
+ *  lets the running ones finish; the workers then exit. */
+void pool_stop(pool *p);
+/** Whether no task is running or waiting to be reported. */
+bool pool_idle(pool *p);
+/** Joins the workers and closes the handle (after pool_stop, once idle). */
+void pool_close(pool *p);
+
+#endif
