@@ -317,8 +317,7 @@ static void test_reference(void) {
   sylva_free(plain.image);
 }
 
-/* Every allocation failing once: SYLVA_ENOMEM, nothing changed, and retried, the
- * run's bytes as without failures. */
+/* Each allocation failing once: SYLVA_ENOMEM, no change, and retried the same bytes. */
 static void test_transient(void) {
   const outcome *r = reference();
   double t0 = seconds();
@@ -330,8 +329,7 @@ static void test_transient(void) {
   CHECK_INT(transient, ref_calls);
 }
 
-/* Every allocation failing from one on: SYLVA_ENOMEM with the world unchanged, then
- * destroyed without a leak. */
+/* All allocations failing from one on: SYLVA_ENOMEM, no change, no leak once destroyed. */
 static void test_persistent(void) {
   const outcome *r = reference();
   double t0 = seconds();

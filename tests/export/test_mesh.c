@@ -645,9 +645,9 @@ static size_t tag_mismatches(const mesh_case *k, size_t o, int tag) {
   return mismatched;
 }
 
-/* OBJ objects: one per stem with geometry, named and with its faces, then one per
- * box; the PLY stem property names the same stem (or -1 - i for box i). */
+/* OBJ objects: each stem with geometry, then each box; PLY's stem tags name the same. */
 static void test_objects(void) {
+  /* the PLY stem property is the stem's index, or -1 - i for box i */
   const mesh_case *k = mesh_cases();
   const model *m = &world_model;
   for (int c = 0; c < CASES; c++, k++) {
@@ -711,8 +711,7 @@ static void save(const char *name, const blob *b) {
   CHECK_INT(fclose(f), 0);
 }
 
-/* With OUTDIR: every case's files written there, and listed in the manifest with
- * their counts and (OBJ) objects, stems with geometry then boxes. */
+/* With OUTDIR: every case's files written there and listed in expected.tsv. */
 static void test_files(void) {
   if (!outdir) return;
   const mesh_case *k = mesh_cases();
@@ -750,8 +749,7 @@ static void mesh_cases_free(void) {
   }
 }
 
-/* Options: 3 to 64 sides, nothing written otherwise; a known format; NULL options
- * are the defaults. */
+/* Options: 3 to 64 sides (else nothing written), a known format, NULL as the defaults. */
 static void test_options(void) {
   const sylva_world *w = the_world();
   sylva_mesh_options d = sylva_mesh_default_options();

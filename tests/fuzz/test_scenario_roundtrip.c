@@ -124,9 +124,10 @@ static void test_defaults(void) {
   sylva_scenario_free(s);
 }
 
-/* The voxel follows the smallest rho among planted species only; the initial trunk
- * follows the final growth equation; growth overrides keep the rest of a preset. */
+/* Species resolved: the voxel, the initial trunk, growth overrides on a preset. */
 static void test_species_resolution(void) {
+  /* The voxel follows the smallest rho among planted species only; the initial trunk
+   * follows the final growth equation; growth overrides keep the rest of a preset. */
   const char *text =
       "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD ", \"species\": {"
       "\"tiny\": {\"rho\": 0.01},"
@@ -171,9 +172,9 @@ static void test_parse_errors(void) {
   EXPECT(sylva_scenario_parse("[]", 2, &s, NULL, 0) < 0 && s == NULL, "NULL buffer");
 }
 
-/* No plants: an empty site by default (the daemon plants it by edits); refused
- * with SYLVA_SCENARIO_NEED_PLANTS (a scenario to grow as it is). */
+/* No plants: an empty site, but refused with SYLVA_SCENARIO_NEED_PLANTS. */
 static void test_no_plants(void) {
+  /* (the daemon plants an empty site by edits; a scenario to grow as it is needs plants) */
   static const char *const no_plants[][2] = {
       {"", "/plants: required"},
       {", \"plants\": []", "/plants: nothing to grow (the list is empty)"}};
@@ -193,8 +194,7 @@ static void test_no_plants(void) {
   }
 }
 
-/* sylva_fmt_fixed: at most the decimals asked, no trailing zeros, no "-0", null for
- * what is not finite. */
+/* sylva_fmt_fixed: the decimals asked at most, no trailing zero or "-0", null if not finite. */
 static void test_fmt_fixed(void) {
   char buf[SYLVA_FMT_BUFSIZE];
   struct {

@@ -171,9 +171,9 @@ static void test_valid_create(void) {
   sylva_msg_free(&m);
 }
 
-/* An empty site, to be planted by edits: no plants, or an empty list (a scenario
- * file needs plants: `sylva run` and `validate` refuse both). */
+/* create of an empty site, to be planted by edits: no plants, or an empty list. */
 static void test_valid_create_empty_site(void) {
+  /* (a scenario file needs plants: `sylva run` and `validate` refuse both) */
   static const char *const empty_sites[] = {"", ",\"plants\":[]"};
   for (size_t i = 0; i < sizeof empty_sites / sizeof empty_sites[0]; i++) {
     sylva_msg m;
@@ -369,8 +369,7 @@ static void test_invalid_hello(void) {
   PARSE_BAD("{\"type\":\"hello\",\"token\":null}", "/token: expected a string, got null");
 }
 
-/* create: a scenario object; a name of 1 to 255 bytes without control characters;
- * start a boolean. */
+/* create: a scenario object, a name of 1 to 255 bytes and no control, a boolean start. */
 static void test_invalid_create(void) {
   PARSE_BAD("{\"type\":\"create\"}", "/scenario: required");
   PARSE_BAD("{\"type\":\"create\",\"scenario\":[]}", "/scenario: expected an object, got an array");
@@ -492,8 +491,7 @@ static void test_invalid_control(void) {
             "/count: only allowed with \"action\": \"step\"");
 }
 
-/* edit's add_plants: objects with an id, a species and at least one [x, y, z] root;
- * ids unique. */
+/* edit's add_plants: unique ids, a species and at least one [x, y, z] root each. */
 static void test_invalid_edit_plants(void) {
   PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":{}}",
             "/add_plants: expected an array, got an object");
@@ -529,8 +527,7 @@ static void test_invalid_edit_plants(void) {
             "/add_plants/2/id: duplicate plant id \"a\" (also /add_plants/0/id)");
 }
 
-/* edit's add_obstacles: boxes with max above min, ids unique; remove_obstacles: an
- * array of unique ids. */
+/* edit's add_obstacles: boxes, max above min, unique ids; remove_obstacles: unique ids. */
 static void test_invalid_edit_obstacles(void) {
   PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":[{\"id\":\"w\",\"kind\":\"sphere\","
             "\"min\":[0,0,0],\"max\":[1,1,1]}]}",
@@ -578,8 +575,7 @@ static void test_invalid_edit_list_sizes(void) {
   }
 }
 
-/* fork: an iteration in [0, 2^31 - 1] and a name of 1 to 255 bytes without control
- * characters. */
+/* fork: an iteration in [0, 2^31 - 1], a name of 1 to 255 bytes and no control. */
 static void test_invalid_fork(void) {
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"name\":\"x\"}", "/iteration: required");
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":2}", "/name: required");
@@ -612,26 +608,32 @@ static void test_invalid_get_light(void) {
   PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":[1]}", "/z: expected a number, got an array");
 }
 
-/* The ref survives a failure so that the error can echo it; nothing else does. The
- * error buffer may be NULL, or short: the message is cut and NUL-terminated. */
+/* A bad edit whose second plant's root is not [x, y, z]. */
+static const char *const bad_edit =
+    "{\"id\":\"r1\",\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+    "\"roots\":[[0,0,0]]},{\"id\":\"b\",\"species\":\"o\",\"roots\":[[0,0]]}]}";
+
+/* The ref survives a failure so that the error can echo it; nothing else does. */
 static void test_invalid_keeps_ref(void) {
   sylva_msg m;
   char err[256];
-  const char *bad = "{\"id\":\"r1\",\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\","
-                    "\"species\":\"o\","
-                    "\"roots\":[[0,0,0]]},{\"id\":\"b\",\"species\":\"o\",\"roots\":[[0,0]]}]}";
-  CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, err, sizeof err), SYLVA_EINVAL);
+  CHECK_INT(sylva_msg_parse(bad_edit, strlen(bad_edit), &m, err, sizeof err), SYLVA_EINVAL);
   CHECK_STR(m.ref, "\"r1\"");
   CHECK(m.add_plants == NULL && m.add_plant_count == 0 && m.add_plant_species == NULL);
   CHECK(strstr(err, "/add_plants/1/roots/0: expected [x, y, z]") != NULL);
   sylva_msg_free(&m);
   CHECK(m.ref == NULL);
-  CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, NULL, 0), SYLVA_EINVAL);
+}
+
+/* The error buffer may be NULL, or short: the message is then cut and NUL-terminated. */
+static void test_invalid_error_buffer(void) {
+  sylva_msg m;
+  CHECK_INT(sylva_msg_parse(bad_edit, strlen(bad_edit), &m, NULL, 0), SYLVA_EINVAL);
   sylva_msg_free(&m);
   CHECK_INT(sylva_msg_parse("[", 1, &m, NULL, 0), SYLVA_EINVAL);
   sylva_msg_free(&m);
   char tiny[8];
-  CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, tiny, sizeof tiny), SYLVA_EINVAL);
+  CHECK_INT(sylva_msg_parse(bad_edit, strlen(bad_edit), &m, tiny, sizeof tiny), SYLVA_EINVAL);
   CHECK_INT(strlen(tiny), 7);
   sylva_msg_free(&m);
 }
@@ -862,8 +864,7 @@ static void test_encode_created(void) {
                 "{\"type\":\"created\",\"run\":3,\"name\":\"oak \\\"stand\\\"\",\"ref\":\"c\"}");
 }
 
-/* status: runs beyond 2^53; every status by its one name (sylva/run_status.h), and
- * the names parse back. */
+/* status: runs beyond 2^53, each status by its one name (run_status.h), parsed back. */
 static void test_encode_status(void) {
   check_encoded(
       sylva_msg_status(9007199254740992LL, SYLVA_RUN_PAUSED, 12, NULL),
@@ -1152,8 +1153,7 @@ static void compare_with_skeleton(model *m, const sylva_world *w, int iteration)
   free(skel);
 }
 
-/* A first snapshot: its header, the stats and species' labels; its nodes, obstacles
- * and plants are the skeleton's. */
+/* A first snapshot: its header, stats and species; nodes, obstacles, plants as the skeleton's. */
 static void test_snapshot(void) {
   sylva_world *w = snapshot_world();
   if (!w) return;
@@ -1379,8 +1379,7 @@ static size_t dark_over_board(const unsigned char *values, int nx) {
   return dark;
 }
 
-/* Inside the board and just under it every cell over the board is dark; beside it,
- * at the edge of the world, light. */
+/* Inside the board and just under it, dark over the board and light beside it. */
 static void test_light_slice_board(void) {
   sylva_world *w = board_world();
   if (!w) return;
@@ -1401,9 +1400,8 @@ static void test_light_slice_board(void) {
   sylva_world_destroy(w);
 }
 
-/* The top layer is in full light; z is clamped into the world and rounded down to
- * its layer as the core's voxel lookup does (0.3 / 0.1 is 2.9999999999999996). */
-static void test_light_slice_layers(void) {
+/* The top layer is in full light (z clamped into the world). */
+static void test_light_slice_top(void) {
   sylva_world *w = board_world();
   if (!w) return;
   unsigned char *values = NULL;
@@ -1415,6 +1413,16 @@ static void test_light_slice_layers(void) {
     CHECK_INT(full, 40 * 30);
   }
   free(values);
+  sylva_world_destroy(w);
+}
+
+/* z is clamped into the world and taken to its layer as the core's voxel lookup does. */
+static void test_light_slice_layers(void) {
+  sylva_world *w = board_world();
+  if (!w) return;
+  unsigned char *values = NULL;
+  int nx = 0;
+  /* z asked, z of the layer's centre: 0.3 / 0.1 is 2.9999999999999996, layer 2 */
   static const double z[][2] = {{-7, 0.05}, {NAN, 0.05}, {4.0, 3.95}, {0.3, 0.25}};
   for (size_t i = 0; i < sizeof z / sizeof z[0]; i++) {
     check_slice(w, z[i][0], z[i][1], NULL, &values, &nx);
@@ -1467,12 +1475,12 @@ int main(int argc, char **argv) {
       CHECK_TEST(invalid_run), CHECK_TEST(invalid_subscribe), CHECK_TEST(invalid_control),
       CHECK_TEST(invalid_edit_plants), CHECK_TEST(invalid_edit_obstacles),
       CHECK_TEST(invalid_edit_list_sizes), CHECK_TEST(invalid_fork), CHECK_TEST(invalid_get_light),
-      CHECK_TEST(invalid_keeps_ref), CHECK_TEST(invalid_long_key), CHECK_TEST(depth),
-      CHECK_TEST(encode_welcome), CHECK_TEST(encode_error), CHECK_TEST(encode_parse_error),
-      CHECK_TEST(encode_created), CHECK_TEST(encode_status), CHECK_TEST(encode_runs),
-      CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot), CHECK_TEST(deltas),
-      CHECK_TEST(later_snapshot), CHECK_TEST(light_slice_board), CHECK_TEST(light_slice_layers),
-      CHECK_TEST(light_slice_padding)};
+      CHECK_TEST(invalid_keeps_ref), CHECK_TEST(invalid_error_buffer), CHECK_TEST(invalid_long_key),
+      CHECK_TEST(depth), CHECK_TEST(encode_welcome), CHECK_TEST(encode_error),
+      CHECK_TEST(encode_parse_error), CHECK_TEST(encode_created), CHECK_TEST(encode_status),
+      CHECK_TEST(encode_runs), CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
+      CHECK_TEST(deltas), CHECK_TEST(later_snapshot), CHECK_TEST(light_slice_board),
+      CHECK_TEST(light_slice_top), CHECK_TEST(light_slice_layers), CHECK_TEST(light_slice_padding)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("protocol");
 }

@@ -188,11 +188,12 @@ static void check_sprout(const sylva_world *w, size_t i, int32_t slot, double r,
   CHECK_INT(w->sprouts.data[i].n, n);
 }
 
-/* L = 1, 2, 4 -> Q = 7, 6, 4; R_trunk = 10; lambda 0.5, k 0.5, tau 0.
- * RBH: a = 7*.5*1/3.5 = 1, b = 6*.5*2/3 = 2, c = 4*.5*4/2 = 4; ranks c, b, a;
- * w = 1, 1, 0.6 - 0.3 * (2/3 - 1/2) / (1/2) = 0.5 -> weighted 4, 2, 0.5 (sum 6.5);
- * R = 6.15, 3.08, 0.77 -> the apex grows 6, b sprouts a lateral of 3, a nothing. */
+/* The hand-worked allocation: the apex grows 6, b sprouts a lateral of 3, a nothing. */
 static void test_allocation_hand_worked(void) {
+  /* L = 1, 2, 4 -> Q = 7, 6, 4; R_trunk = 10; lambda 0.5, k 0.5, tau 0.
+   * RBH: a = 7*.5*1/3.5 = 1, b = 6*.5*2/3 = 2, c = 4*.5*4/2 = 4; ranks c, b, a;
+   * w = 1, 1, 0.6 - 0.3 * (2/3 - 1/2) / (1/2) = 0.5 -> weighted 4, 2, 0.5 (sum 6.5);
+   * R = 6.15, 3.08, 0.77. */
   sylva_world *w = trunk();
   CHECK_INT(sylva__allocate(w, 12), 0); /* c(12) = 8 */
   CHECK_INT(w->sprouts.len, 2);
@@ -231,12 +232,12 @@ static void test_allocation_apical_control(void) {
   sylva_world_destroy(w);
 }
 
-/* The apex's share of the main flow (docs/model.md, "Allocation"), lambda 0.6, no
- * apical control: L = 1, 2, 4, Q = 7, 6, 4. RBH a = 7*.4*1/(3.6+.4) = 0.7,
- * b = 6*.4*2/(2.4+.8) = 1.5, apex own 4; the rest 7 - 0.7 - 1.5 - 4 = 0.8.
- * apical_flow 0.5: RBH apex 4.4; ranks apex, b, a with w 1, 1, 0.5: weighted
- * 4.4, 1.5, 0.35 (sum 6.25), R_trunk 10 -> apex 7.04 (7 internodes), b 2.4 (2). */
+/* The apex's share of the main flow (docs/model.md, "Allocation"): apical_flow 0.5. */
 static void test_allocation_apical_flow(void) {
+  /* lambda 0.6, no apical control: L = 1, 2, 4, Q = 7, 6, 4. RBH a = 7*.4*1/(3.6+.4)
+   * = 0.7, b = 6*.4*2/(2.4+.8) = 1.5, apex own 4; the rest 7 - 0.7 - 1.5 - 4 = 0.8.
+   * apical_flow 0.5: RBH apex 4.4; ranks apex, b, a with w 1, 1, 0.5: weighted
+   * 4.4, 1.5, 0.35 (sum 6.25), R_trunk 10 -> apex 7.04 (7 internodes), b 2.4 (2). */
   sylva_world *w = trunk();
   w->species[0].def.lambda = 0.6;
   w->species[0].def.apical_flow = 0.5;
@@ -271,12 +272,13 @@ static void test_allocation_no_rest(void) {
   sylva_world_destroy(w);
 }
 
-/* Apical zone (docs/model.md, "Allocation"), the first case again (lambda 0.5,
- * RBH a 1, b 2, apex 4). Zone 1: b is 1 internode below the apex and a 2, both
- * may sprout: as before. Zone 2: b's bud is dormant (RBH 0); ranks apex, a, b with
- * w 1, 1, 0.5: weighted 4, 1, 0 (sum 5) -> apex 8 (cap 8), a 2 (2 internodes).
- * Zone 3: a too; the apex takes all 10 and grows its cap of 8. */
+/* The apical zone (docs/model.md, "Allocation"): lateral buds within it stay dormant. */
 static void test_allocation_apical_zone(void) {
+  /* The first case again (lambda 0.5, RBH a 1, b 2, apex 4). Zone 1: b is 1 internode
+   * below the apex and a 2, both may sprout: as before. Zone 2: b's bud is dormant
+   * (RBH 0); ranks apex, a, b with w 1, 1, 0.5: weighted 4, 1, 0 (sum 5) -> apex 8
+   * (cap 8), a 2 (2 internodes). Zone 3: a too; the apex takes all 10 and grows its
+   * cap of 8. */
   /* zone; then the expected sprouts in order: slot, R, internodes */
   const struct {
     int zone;

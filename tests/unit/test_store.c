@@ -135,8 +135,7 @@ static void test_find_run(void) {
   fixture_close(&f);
 }
 
-/* The newest snapshot at or before 7 is 6; at or before 2 it is the planted world;
- * the stored hash of an iteration is its world's. */
+/* A world loads from the newest snapshot at or before it: 6 for 7, the planted one for 2. */
 static void test_load_world(void) {
   fixture f;
   fixture_open(&f);
@@ -150,6 +149,13 @@ static void test_load_world(void) {
   CHECK_INT(from, 0);
   CHECK(sylva_world_hash(back) == f.hashes[0]);
   sylva_world_destroy(back);
+  fixture_close(&f);
+}
+
+/* The stored hash of an iteration is its world's. */
+static void test_iteration_hash(void) {
+  fixture f;
+  fixture_open(&f);
   uint64_t h;
   bool found;
   CHECK_INT(store_iteration_hash(f.st, f.run, 5, &h, &found), 0);
@@ -246,8 +252,8 @@ static void test_newer_file_refused(void) {
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(open_needs_create), CHECK_TEST(run_name_taken), CHECK_TEST(find_run),
-      CHECK_TEST(load_world), CHECK_TEST(stats_rows), CHECK_TEST(command_log),
-      CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
+      CHECK_TEST(load_world), CHECK_TEST(iteration_hash), CHECK_TEST(stats_rows),
+      CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
       CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");
