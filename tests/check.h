@@ -1,11 +1,15 @@
 /* Small assert macros for the test suites: each failure prints both values and
- * the place; a suite ends with "N passed, N failed" and exits non-zero on failure. */
+ * the place; a suite ends with "N passed, N failed" and exits non-zero on failure.
+ * A suite is a table of named tests, `static void test_NAME(void)` listed as
+ * CHECK_TEST(NAME), that main runs with CHECK_RUN; a name on the command line runs
+ * that test alone. */
 #ifndef SYLVA_TEST_CHECK_H
 #define SYLVA_TEST_CHECK_H
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static int check_passed, check_failed;
 
@@ -39,6 +43,23 @@ static int check_passed, check_failed;
               #a, #b, check_a_, check_b_, (double)(tol));                                    \
     }                                                                                        \
   } while (0)
+
+/* A named test: CHECK_TEST(NAME) is {"NAME", test_NAME}. */
+typedef struct check_test {
+  const char *name;
+  void (*run)(void);
+} check_test;
+#define CHECK_TEST(name) {#name, test_##name}
+
+/* Runs the test named by argv[i] when there is one (an unknown name runs none),
+ * else every test in order. */
+static inline void check_run_tests(int argc, char **argv, int i, const check_test *tests,
+                                   size_t count) {
+  for (size_t k = 0; k < count; k++)
+    if (i >= argc || strcmp(argv[i], tests[k].name) == 0) tests[k].run();
+}
+#define CHECK_RUN(argc, argv, i, tests) \
+  check_run_tests((argc), (argv), (i), (tests), sizeof(tests) / sizeof((tests)[0]))
 
 /* Ends a suite: prints the summary line and gives the exit status. A suite in
  * which no check ran fails too (an unknown test name selects nothing). */

@@ -15,7 +15,7 @@
  * A failure the library absorbs (a cache or a shrink it can do without) lets the
  * call succeed; the transient run must still end with the same bytes.
  *
- *   test_alloc SCENARIO_DIR SCENARIO ITERATIONS_BEFORE_SAVE ITERATIONS_AFTER_LOAD */
+ *   test_alloc SCENARIO_DIR SCENARIO ITERATIONS_BEFORE_SAVE ITERATIONS_AFTER_LOAD [TEST] */
 #include <stdint.h>
 #include <string.h>
 #include <time.h>
@@ -273,50 +273,87 @@ static long sweep(const sylva_scenario *sc, int before_save, int after_load, boo
   return n - 1;
 }
 
-int main(int argc, char **argv) {
-  if (argc != 5) {
-    fprintf(stderr, "usage: test_alloc SCENARIO_DIR SCENARIO BEFORE_SAVE AFTER_LOAD\n");
-    return 2;
-  }
-  sylva_scenario *sc = scenario_file(argv[1], argv[2]);
-  int before_save = atoi(argv[3]), after_load = atoi(argv[4]);
+/* ---- the tests ----------------------------------------------------------------- */
 
-  /* a hook left out is refused and changes nothing */
-  sylva_allocator partial = {f_malloc, NULL, f_free, NULL};
-  CHECK_INT(sylva_set_allocator(&partial), SYLVA_EINVAL);
+/* The run of every test (main sets it from the command line). */
+static struct {
+  const char *name;
+  sylva_scenario *sc;
+  int before_save, after_load;
+} cfg;
 
-  /* the reference: the same allocator, nothing refused */
+/* The reference run: the failing allocator, nothing refused; made once. */
+static outcome ref;
+static long ref_calls = -1; /* its allocations */
+
+static const outcome *reference(void) {
+  if (ref_calls >= 0) return &ref;
   faults none = {0};
   sylva_allocator a = {f_malloc, f_realloc, f_free, &none};
   CHECK_INT(sylva_set_allocator(&a), 0);
-  outcome ref;
-  run(sc, before_save, after_load, &none, &ref);
+  run(cfg.sc, cfg.before_save, cfg.after_load, &none, &ref);
   CHECK_INT(sylva_set_allocator(NULL), 0);
   CHECK(!ref.stopped && ref.enomem == 0 && ref.image != NULL);
-  /* which is the run of the C library's allocator */
-  outcome plain;
-  run(sc, before_save, after_load, &none, &plain);
-  CHECK(plain.digest == ref.digest && plain.image_size == ref.image_size &&
-        memcmp(plain.image, ref.image, ref.image_size) == 0);
-  sylva_free(plain.image);
-  printf("alloc: %s, %d + %d iterations: %ld allocations, %d iterations grown\n", argv[2],
-         before_save, after_load, none.calls, ref.iteration);
+  ref_calls = none.calls;
+  printf("alloc: %s, %d + %d iterations: %ld allocations, %d iterations grown\n", cfg.name,
+         cfg.before_save, cfg.after_load, ref_calls, ref.iteration);
+  return &ref;
+}
 
+/* An allocator with a hook left out is refused and changes nothing. */
+static void test_partial_allocator(void) {
+  sylva_allocator partial = {f_malloc, NULL, f_free, NULL};
+  CHECK_INT(sylva_set_allocator(&partial), SYLVA_EINVAL);
+}
+
+/* The reference run completes, and is the run of the C library's allocator. */
+static void test_reference(void) {
+  const outcome *r = reference();
+  faults none = {0};
+  outcome plain;
+  run(cfg.sc, cfg.before_save, cfg.after_load, &none, &plain);
+  CHECK(plain.digest == r->digest && plain.image_size == r->image_size &&
+        memcmp(plain.image, r->image, r->image_size) == 0);
+  sylva_free(plain.image);
+}
+
+/* Each allocation failing once: SYLVA_ENOMEM, no change, and retried the same bytes. */
+static void test_transient(void) {
+  const outcome *r = reference();
   double t0 = seconds();
-  long absorbed = 0, persistent_absorbed = 0;
-  long transient = sweep(sc, before_save, after_load, false, &ref, &absorbed);
-  double t1 = seconds();
-  long persistent = sweep(sc, before_save, after_load, true, &ref, &persistent_absorbed);
-  double t2 = seconds();
+  long absorbed = 0;
+  long transient = sweep(cfg.sc, cfg.before_save, cfg.after_load, false, r, &absorbed);
   printf("alloc: transient failures at %ld points (%ld absorbed, the rest SYLVA_ENOMEM and "
          "retried), %.1f s\n",
-         transient, absorbed, t1 - t0);
+         transient, absorbed, seconds() - t0);
+  CHECK_INT(transient, ref_calls);
+}
+
+/* All allocations failing from one on: SYLVA_ENOMEM, no change, no leak once destroyed. */
+static void test_persistent(void) {
+  const outcome *r = reference();
+  double t0 = seconds();
+  long absorbed = 0;
+  long persistent = sweep(cfg.sc, cfg.before_save, cfg.after_load, true, r, &absorbed);
   printf("alloc: persistent failures from %ld points (%ld absorbed to the end, the rest "
          "SYLVA_ENOMEM and destroyed), %.1f s\n",
-         persistent, persistent_absorbed, t2 - t1);
-  CHECK_INT(transient, none.calls);
-  CHECK_INT(persistent, none.calls);
+         persistent, absorbed, seconds() - t0);
+  CHECK_INT(persistent, ref_calls);
+}
+
+int main(int argc, char **argv) {
+  if (argc != 5 && argc != 6) {
+    fprintf(stderr, "usage: test_alloc SCENARIO_DIR SCENARIO BEFORE_SAVE AFTER_LOAD [TEST]\n");
+    return 2;
+  }
+  cfg.name = argv[2];
+  cfg.sc = scenario_file(argv[1], argv[2]);
+  cfg.before_save = atoi(argv[3]), cfg.after_load = atoi(argv[4]);
+  static const check_test tests[] = {
+      CHECK_TEST(partial_allocator), CHECK_TEST(reference), CHECK_TEST(transient),
+      CHECK_TEST(persistent)};
+  CHECK_RUN(argc, argv, 5, tests);
   sylva_free(ref.image);
-  sylva_scenario_free(sc);
+  sylva_scenario_free(cfg.sc);
   return check_summary("alloc");
 }

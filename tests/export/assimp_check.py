@@ -129,22 +129,31 @@ def main():
         print("%d passed, %d failed" % (chk.passed, chk.failed))
         return 1
     with tempfile.TemporaryDirectory(prefix="sylva-mesh-") as out:
-        proc = subprocess.run([sys.argv[1], out], capture_output=True, timeout=300)
-        if proc.returncode != 0:
-            chk.fail("%s %s: exit status %d\n%s%s" % (
-                sys.argv[1], out, proc.returncode, proc.stdout.decode("utf-8", "replace"),
-                proc.stderr.decode("utf-8", "replace")))
-        manifest = os.path.join(out, "expected.tsv")
-        if not os.path.exists(manifest):
-            chk.fail("%s wrote no expected.tsv" % sys.argv[1])
-        else:
-            files, objects = read_manifest(manifest)
-            chk.eq("files in expected.tsv", len(files) > 0, True)
-            for name, fmt, vertices, faces in files:
-                check_file(chk, os.path.join(out, name), fmt, vertices, faces,
-                           objects.get(name, []))
+        write_meshes(chk, sys.argv[1], out)
+        check_manifest(chk, sys.argv[1], out)
     print("%d passed, %d failed" % (chk.passed, chk.failed))
     return 1 if chk.failed else 0
+
+
+def write_meshes(chk, test_mesh, out):
+    """`test_mesh OUTDIR` writes the meshes and expected.tsv into out."""
+    proc = subprocess.run([test_mesh, out], capture_output=True, timeout=300)
+    if proc.returncode != 0:
+        chk.fail("%s %s: exit status %d\n%s%s" % (
+            test_mesh, out, proc.returncode, proc.stdout.decode("utf-8", "replace"),
+            proc.stderr.decode("utf-8", "replace")))
+
+
+def check_manifest(chk, test_mesh, out):
+    """Every file of expected.tsv as assimp reads it."""
+    manifest = os.path.join(out, "expected.tsv")
+    if not os.path.exists(manifest):
+        chk.fail("%s wrote no expected.tsv" % test_mesh)
+        return
+    files, objects = read_manifest(manifest)
+    chk.eq("files in expected.tsv", len(files) > 0, True)
+    for name, fmt, vertices, faces in files:
+        check_file(chk, os.path.join(out, name), fmt, vertices, faces, objects.get(name, []))
 
 
 if __name__ == "__main__":

@@ -6,8 +6,8 @@
  * radius perpendicular to its internode, frames carried by parallel transport,
  * outward faces. Write errors and bad options are checked too.
  *
- * Usage: test_mesh [OUTDIR]. With OUTDIR, the files are also written there with a
- * manifest expected.tsv for assimp_check.py:
+ * Usage: test_mesh [OUTDIR|- [TEST]]; TEST runs one test alone. With OUTDIR (not -),
+ * the files are also written there with a manifest expected.tsv for assimp_check.py:
  *   file <TAB> NAME <TAB> obj|ply <TAB> VERTICES <TAB> FACES
  *   object <TAB> NAME <TAB> OBJECT <TAB> FACES <TAB> VERTICES   (OBJ, one per object) */
 #include <errno.h>
@@ -353,22 +353,19 @@ static void face_normal(const parsed *p, size_t f, double n[3], double centroid[
   cross3(e1, e2, n);
   for (int k = 0; k < 3; k++) centroid[k] = (a[k] + b[k] + c[k]) / 3;
 }
-
-/* Checks the branch geometry of a parsed file against the model. */
-static void check_geometry(const model *m, const parsed *p, int sides, bool boxes,
-                           const sylva_world *w) {
-  size_t bad_finite = 0, bad_radius = 0, bad_plane = 0, bad_frame = 0, bad_side = 0,
-         bad_cap = 0, bad_box = 0, sharp_bends = 0;
+/* The rings of a parsed file against the model: finite vertices, each ring of its
+ * node's radius in the plane across its internode, frames carried along by parallel
+ * transport. */
+static void check_rings(const model *m, const parsed *p, int sides) {
+  size_t bad_finite = 0, bad_radius = 0, bad_plane = 0, bad_frame = 0;
   for (size_t i = 0; i < p->nv; i++)
     for (int k = 0; k < 3; k++)
       if (!isfinite(p->v[i][k])) bad_finite++;
   size_t k = (size_t)sides;
   double (*u)[3] = calloc(m->n + 1, sizeof *u); /* u per node, from vertex 0 of its ring */
-  size_t *ring_of = calloc(m->n + 1, sizeof *ring_of);
-  if (!u || !ring_of) exit(1);
+  if (!u) exit(1);
   for (size_t r = 0; r < m->rings; r++) {
     size_t i = m->layout[r];
-    ring_of[i] = r;
     double c[3], t[3], d[3], rad = m->node[i].radius;
     pos_of(&m->node[i], c);
     tangent(m, i, t);
@@ -390,40 +387,62 @@ static void check_geometry(const model *m, const parsed *p, int sides, bool boxe
       if (norm3(diff) > 0.03) bad_frame++;
     }
   }
-  /* faces in layout order: per node its internode's 2 * sides, then its cap */
-  size_t f = 0;
+  CHECK_INT(bad_finite, 0);
+  CHECK_INT(bad_radius, 0);
+  CHECK_INT(bad_plane, 0);
+  CHECK_INT(bad_frame, 0);
+  free(u);
+}
+
+/* Counts the side triangles of node i's internode (ring r, its parent's ring pr)
+ * that face inwards or use another ring; *f is the first, and is moved past them. */
+static size_t bad_side_faces(const model *m, const parsed *p, size_t k, size_t r, size_t pr,
+                             bool sharp, size_t *f) {
+  size_t i = m->layout[r], bad = 0;
+  double a[3], c[3], axis[3];
+  pos_of(&m->node[m->parent[i]], a);
+  pos_of(&m->node[i], c);
+  sub3(c, a, axis);
+  double len2 = dot3(axis, axis);
+  for (size_t j = 0; j < 2 * k; j++, ++*f) {
+    double n[3], g[3], ga[3], out[3];
+    face_normal(p, *f, n, g);
+    /* outwards: away from the nearest point of the internode's axis */
+    sub3(g, a, ga);
+    double s = len2 > 0 ? dot3(ga, axis) / len2 : 0;
+    s = s < 0 ? 0 : s > 1 ? 1 : s;
+    for (int q = 0; q < 3; q++) out[q] = g[q] - (a[q] + s * axis[q]);
+    if (!(dot3(n, out) > 0) && !sharp) bad++;
+    /* each side triangle uses the parent's ring and the node's */
+    for (int q = 0; q < 3; q++) {
+      size_t ring = p->f[*f][q] / k;
+      if (ring != r && ring != pr) bad++;
+    }
+  }
+  return bad;
+}
+
+/* The branch faces of a parsed file, in layout order: per node its internode's
+ * 2 * sides facing outwards, then its cap (a tip's facing along its internode, a
+ * root's against it); then 12 per box. */
+static void check_branch_faces(const model *m, const parsed *p, int sides, bool boxes) {
+  size_t k = (size_t)sides, f = 0, bad_side = 0, bad_cap = 0, sharp_bends = 0;
+  size_t *ring_of = calloc(m->n + 1, sizeof *ring_of);
+  if (!ring_of) exit(1);
+  for (size_t r = 0; r < m->rings; r++) ring_of[m->layout[r]] = r;
   for (size_t r = 0; r < m->rings; r++) {
     size_t i = m->layout[r];
-    double c[3], t[3];
-    pos_of(&m->node[i], c);
+    double t[3];
     tangent(m, i, t);
     if (m->parent[i] >= 0) {
-      double a[3], axis[3];
-      pos_of(&m->node[m->parent[i]], a);
-      sub3(c, a, axis);
-      double len2 = dot3(axis, axis), tp[3];
       /* at a bend near a right angle the parent's ring, shared with the bent child,
        * is seen edge-on from the child's internode, and some of its side triangles
        * face inwards: orientation is checked up to 60 degrees of bend */
+      double tp[3];
       tangent(m, (size_t)m->parent[i], tp);
-      int sharp = dot3(tp, t) < 0.5;
+      bool sharp = dot3(tp, t) < 0.5;
       sharp_bends += sharp;
-      for (size_t j = 0; j < 2 * k; j++, f++) {
-        double n[3], g[3], ga[3], out[3];
-        face_normal(p, f, n, g);
-        /* outwards: away from the nearest point of the internode's axis */
-        sub3(g, a, ga);
-        double s = len2 > 0 ? dot3(ga, axis) / len2 : 0;
-        s = s < 0 ? 0 : s > 1 ? 1 : s;
-        for (int q = 0; q < 3; q++) out[q] = g[q] - (a[q] + s * axis[q]);
-        if (!(dot3(n, out) > 0) && sharp == 0) bad_side++;
-        /* each side triangle uses the parent's ring and the node's */
-        size_t pr = ring_of[m->parent[i]];
-        for (int q = 0; q < 3; q++) {
-          size_t ring = p->f[f][q] / k;
-          if (ring != r && ring != pr) bad_side++;
-        }
-      }
+      bad_side += bad_side_faces(m, p, k, r, ring_of[m->parent[i]], sharp, &f);
     }
     bool tip = m->parent[i] >= 0 && m->children[i] == 0, root = m->parent[i] < 0;
     if (tip || root) {
@@ -437,56 +456,172 @@ static void check_geometry(const model *m, const parsed *p, int sides, bool boxe
     }
   }
   CHECK_INT(f + (boxes ? 12 * (size_t)m->boxes : 0), p->nf);
-  if (boxes) {
-    for (int b = 0; b < m->boxes; b++) {
-      sylva_obstacle_def o;
-      sylva_world_obstacle_at(w, b, NULL, &o);
-      double mid[3];
-      for (int q = 0; q < 3; q++) mid[q] = (o.min[q] + o.max[q]) / 2;
-      for (int j = 0; j < 12 && f < p->nf; j++, f++) {
-        double n[3], g[3], out[3];
-        face_normal(p, f, n, g);
-        sub3(g, mid, out);
-        if (!(dot3(n, out) > 0)) bad_box++;
-        for (int q = 0; q < 3; q++) {
-          size_t vi = p->f[f][q];
-          if (vi < m->rings * k + 8 * (size_t)b || vi >= m->rings * k + 8 * (size_t)b + 8)
-            bad_box++;
-          else
-            for (int a = 0; a < 3; a++)
-              if (fabs(p->v[vi][a] - o.max[a]) > 1e-5 && fabs(p->v[vi][a] - o.min[a]) > 1e-5)
-                bad_box++;
-        }
+  /* most internodes bend less than 60 degrees, so the orientation check has teeth */
+  CHECK(sharp_bends * 4 < m->internodes);
+  CHECK_INT(bad_side, 0);
+  CHECK_INT(bad_cap, 0);
+  free(ring_of);
+}
+
+/* The boxes' faces after the branches': 12 per box facing outwards, each on the
+ * box's own 8 vertices at its corners. */
+static void check_box_faces(const model *m, const parsed *p, int sides, bool boxes,
+                            const sylva_world *w) {
+  size_t k = (size_t)sides, bad_box = 0, v, f;
+  expected_counts(m, sides, false, &v, &f); /* the branches' faces come first */
+  for (int b = 0; boxes && b < m->boxes; b++) {
+    sylva_obstacle_def o;
+    sylva_world_obstacle_at(w, b, NULL, &o);
+    double mid[3];
+    for (int q = 0; q < 3; q++) mid[q] = (o.min[q] + o.max[q]) / 2;
+    for (int j = 0; j < 12 && f < p->nf; j++, f++) {
+      double n[3], g[3], out[3];
+      face_normal(p, f, n, g);
+      sub3(g, mid, out);
+      if (!(dot3(n, out) > 0)) bad_box++;
+      for (int q = 0; q < 3; q++) {
+        size_t vi = p->f[f][q];
+        if (vi < m->rings * k + 8 * (size_t)b || vi >= m->rings * k + 8 * (size_t)b + 8)
+          bad_box++;
+        else
+          for (int a = 0; a < 3; a++)
+            if (fabs(p->v[vi][a] - o.max[a]) > 1e-5 && fabs(p->v[vi][a] - o.min[a]) > 1e-5)
+              bad_box++;
       }
     }
   }
-  /* most internodes bend less than 60 degrees, so the orientation check has teeth */
-  CHECK(sharp_bends * 4 < m->internodes);
-  CHECK_INT(bad_finite, 0);
-  CHECK_INT(bad_radius, 0);
-  CHECK_INT(bad_plane, 0);
-  CHECK_INT(bad_frame, 0);
-  CHECK_INT(bad_side, 0);
-  CHECK_INT(bad_cap, 0);
   CHECK_INT(bad_box, 0);
-  free(u);
-  free(ring_of);
 }
 
 /* ---- the cases ---- */
 
-static FILE *manifest;
-static const char *outdir;
+/* The world every test exports (made once): a tree, a two-root shrub and a wall,
+ * grown six iterations; and its model. */
+static sylva_world *world;
+static model world_model;
 
-static void save(const char *name, const blob *b) {
-  if (!outdir) return;
-  char path[4096];
-  snprintf(path, sizeof path, "%s/%s", outdir, name);
-  FILE *f = fopen(path, "wb");
-  CHECK(f != NULL);
-  if (!f) return;
-  CHECK_INT(fwrite(b->data, 1, b->size, f), b->size);
-  CHECK_INT(fclose(f), 0);
+static const sylva_world *the_world(void) {
+  if (!world) {
+    world = make_world(6);
+    CHECK(world != NULL);
+    if (!world) exit(check_summary("export-mesh"));
+    model_build(&world_model, world);
+  }
+  return world;
+}
+
+/* An export of the world with a number of sides, with or without its boxes: the
+ * counts derived from the model, the OBJ and PLY files written and parsed back. */
+typedef struct mesh_case {
+  int sides;
+  bool boxes;
+  sylva_mesh_options opt;
+  size_t ev, ef; /* the vertices and faces expected */
+  blob obj, ply;
+  parsed po, pp;
+} mesh_case;
+
+enum { CASES = 6 };
+static mesh_case cases[CASES];
+static bool cases_made;
+
+/* The six cases: 3, 8 and 64 sides, each without and with the boxes (made once). */
+static mesh_case *mesh_cases(void) {
+  if (cases_made) return cases;
+  const sylva_world *w = the_world();
+  static const int sides[] = {3, 8, 64};
+  for (int c = 0; c < CASES; c++) {
+    mesh_case *k = &cases[c];
+    k->sides = sides[c / 2];
+    k->boxes = c % 2;
+    k->opt = sylva_mesh_default_options();
+    k->opt.sides = k->sides;
+    k->opt.obstacles = k->boxes;
+    expected_counts(&world_model, k->sides, k->boxes, &k->ev, &k->ef);
+    k->obj = write_blob(w, SYLVA_MESH_OBJ, &k->opt);
+    k->ply = write_blob(w, SYLVA_MESH_PLY, &k->opt);
+    k->po = parse_obj(&k->obj);
+    k->pp = parse_ply(&k->ply);
+  }
+  cases_made = true;
+  return cases;
+}
+
+/* Whether a case's OBJ parsed with the expected counts (its geometry can be checked). */
+static bool parsed_as_expected(const mesh_case *k) {
+  return k->po.ok && k->po.nv == k->ev && k->po.nf == k->ef;
+}
+
+/* The world has what the export must handle: three stems, branching, tips. */
+static void test_world(void) {
+  the_world();
+  const model *m = &world_model;
+  CHECK_INT(m->stems, 3);
+  CHECK_INT(m->roots, 3);
+  size_t branching = 0;
+  for (size_t i = 0; i < m->n; i++) branching += m->children[i] > 1;
+  CHECK(branching > 0);
+  CHECK(m->tips > 3);
+  printf("world: %zu nodes, %zu internodes, %zu tips, %zu branching nodes\n", m->n, m->internodes,
+         m->tips, branching);
+}
+
+/* sylva_mesh_count gives the counts derived from the nodes, for both formats. */
+static void test_counts(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++) {
+    size_t cv = 1, cf = 1;
+    CHECK_INT(sylva_mesh_count(world, SYLVA_MESH_OBJ, &k->opt, &cv, &cf), 0);
+    CHECK_INT(cv, k->ev);
+    CHECK_INT(cf, k->ef);
+    CHECK_INT(sylva_mesh_count(world, SYLVA_MESH_PLY, &k->opt, &cv, &cf), 0);
+    CHECK_INT(cv, k->ev);
+    CHECK_INT(cf, k->ef);
+  }
+}
+
+/* Both formats are written, and the same world gives the same bytes again. */
+static void test_deterministic(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++) {
+    blob obj2 = write_blob(world, SYLVA_MESH_OBJ, &k->opt);
+    blob ply2 = write_blob(world, SYLVA_MESH_PLY, &k->opt);
+    CHECK_INT(k->obj.rc, 0);
+    CHECK_INT(k->ply.rc, 0);
+    CHECK(k->obj.size == obj2.size && memcmp(k->obj.data, obj2.data, obj2.size) == 0);
+    CHECK(k->ply.size == ply2.size && memcmp(k->ply.data, ply2.data, ply2.size) == 0);
+    free(obj2.data);
+    free(ply2.data);
+  }
+}
+
+/* Both files parse back, with the counts derived from the nodes. */
+static void test_parse_back(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++) {
+    CHECK(k->po.ok);
+    CHECK(k->pp.ok);
+    CHECK_INT(k->po.nv, k->ev);
+    CHECK_INT(k->po.nf, k->ef);
+    CHECK_INT(k->pp.header_v, k->ev);
+    CHECK_INT(k->pp.header_f, k->ef);
+    CHECK_INT(k->pp.nv, k->ev);
+    CHECK_INT(k->pp.nf, k->ef);
+  }
+}
+
+/* One layout: the same vertices and faces in both formats. */
+static void test_same_layout(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++) {
+    const parsed *po = &k->po, *pp = &k->pp;
+    bool same = po->nv == pp->nv && po->nf == pp->nf;
+    for (size_t i = 0; same && i < po->nv; i++)
+      same = memcmp(po->v[i], pp->v[i], sizeof po->v[i]) == 0;
+    for (size_t i = 0; same && i < po->nf; i++)
+      same = memcmp(po->f[i], pp->f[i], sizeof po->f[i]) == 0;
+    CHECK(same);
+  }
 }
 
 static void stem_name(const sylva_world *w, int s, char *buf, size_t size) {
@@ -501,109 +636,122 @@ static void stem_name(const sylva_world *w, int s, char *buf, size_t size) {
       }
 }
 
-static void check_case(const sylva_world *w, const model *m, int sides, bool boxes) {
-  sylva_mesh_options opt = sylva_mesh_default_options();
-  opt.sides = sides;
-  opt.obstacles = boxes;
-  size_t ev, ef;
-  expected_counts(m, sides, boxes, &ev, &ef);
-  size_t cv = 1, cf = 1;
-  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_OBJ, &opt, &cv, &cf), 0);
-  CHECK_INT(cv, ev);
-  CHECK_INT(cf, ef);
-  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_PLY, &opt, &cv, &cf), 0);
-  CHECK_INT(cv, ev);
-  CHECK_INT(cf, ef);
 
-  blob obj = write_blob(w, SYLVA_MESH_OBJ, &opt), obj2 = write_blob(w, SYLVA_MESH_OBJ, &opt);
-  blob ply = write_blob(w, SYLVA_MESH_PLY, &opt), ply2 = write_blob(w, SYLVA_MESH_PLY, &opt);
-  CHECK_INT(obj.rc, 0);
-  CHECK_INT(ply.rc, 0);
-  /* deterministic: the same world gives the same bytes */
-  CHECK(obj.size == obj2.size && memcmp(obj.data, obj2.data, obj.size) == 0);
-  CHECK(ply.size == ply2.size && memcmp(ply.data, ply2.data, ply.size) == 0);
-
-  parsed po = parse_obj(&obj), pp = parse_ply(&ply);
-  CHECK(po.ok);
-  CHECK(pp.ok);
-  CHECK_INT(po.nv, ev);
-  CHECK_INT(po.nf, ef);
-  CHECK_INT(pp.header_v, ev);
-  CHECK_INT(pp.header_f, ef);
-  CHECK_INT(pp.nv, ev);
-  CHECK_INT(pp.nf, ef);
-
-  /* one layout: the same vertices and faces in both formats */
-  bool same = po.nv == pp.nv && po.nf == pp.nf;
-  for (size_t i = 0; same && i < po.nv; i++)
-    same = memcmp(po.v[i], pp.v[i], sizeof po.v[i]) == 0;
-  for (size_t i = 0; same && i < po.nf; i++)
-    same = memcmp(po.f[i], pp.f[i], sizeof po.f[i]) == 0;
-  CHECK(same);
-
-  /* objects: one per stem with geometry, then one per obstacle; the PLY stem
-   * property names the same stem (or -1 - i for obstacle i) */
-  size_t expect_obj = 0;
-  for (int s = 0; s < m->stems; s++) expect_obj += m->stem_rings[s] > 0;
-  CHECK_INT(po.nobj, expect_obj + (boxes ? (size_t)m->boxes : 0));
-  size_t o = 0;
-  for (int s = 0; s < m->stems && o < po.nobj; s++) {
-    if (!m->stem_rings[s]) continue;
-    char name[96];
-    stem_name(w, s, name, sizeof name);
-    CHECK(strcmp(po.obj_name[o], name) == 0);
-    size_t faces = 2 * (size_t)sides * m->stem_internodes[s] + (size_t)(sides - 2) * m->stem_caps[s];
-    CHECK_INT(po.obj_faces[o], faces);
-    size_t mismatched = 0;
-    for (size_t f = 0; f < po.nf && f < pp.nf; f++)
-      if ((size_t)po.face_tag[f] == o && pp.face_tag[f] != s) mismatched++;
-    CHECK_INT(mismatched, 0);
-    o++;
-  }
-  for (int b = 0; boxes && b < m->boxes && o < po.nobj; b++, o++) {
-    sylva_obstacle_def od;
-    sylva_world_obstacle_at(w, b, NULL, &od);
-    char name[96];
-    snprintf(name, sizeof name, "obstacle_%s", od.label);
-    CHECK(strcmp(po.obj_name[o], name) == 0);
-    CHECK_INT(po.obj_faces[o], 12);
-    size_t mismatched = 0;
-    for (size_t f = 0; f < po.nf && f < pp.nf; f++)
-      if ((size_t)po.face_tag[f] == o && pp.face_tag[f] != -1 - b) mismatched++;
-    CHECK_INT(mismatched, 0);
-  }
-
-  if (po.ok && po.nv == ev && po.nf == ef) check_geometry(m, &po, sides, boxes, w);
-
-  char name[64];
-  snprintf(name, sizeof name, "mesh_s%d%s.obj", sides, boxes ? "_obstacles" : "");
-  save(name, &obj);
-  if (manifest) {
-    fprintf(manifest, "file\t%s\tobj\t%zu\t%zu\n", name, ev, ef);
-    /* objects as expected (checked above): stems with geometry, then obstacles */
-    size_t i = 0;
-    for (int st = 0; st < m->stems && i < po.nobj; st++) {
-      if (!m->stem_rings[st]) continue;
-      fprintf(manifest, "object\t%s\t%s\t%zu\t%zu\n", name, po.obj_name[i], po.obj_faces[i],
-              (size_t)sides * m->stem_rings[st]);
-      i++;
-    }
-    for (; i < po.nobj; i++)
-      fprintf(manifest, "object\t%s\t%s\t%zu\t8\n", name, po.obj_name[i], po.obj_faces[i]);
-  }
-  snprintf(name, sizeof name, "mesh_s%d%s.ply", sides, boxes ? "_obstacles" : "");
-  save(name, &ply);
-  if (manifest) fprintf(manifest, "file\t%s\tply\t%zu\t%zu\n", name, ev, ef);
-
-  parsed_free(&po);
-  parsed_free(&pp);
-  free(obj.data);
-  free(obj2.data);
-  free(ply.data);
-  free(ply2.data);
+/* The faces of OBJ object o all have PLY stem tag `tag`: the mismatches. */
+static size_t tag_mismatches(const mesh_case *k, size_t o, int tag) {
+  size_t mismatched = 0;
+  for (size_t f = 0; f < k->po.nf && f < k->pp.nf; f++)
+    if ((size_t)k->po.face_tag[f] == o && k->pp.face_tag[f] != tag) mismatched++;
+  return mismatched;
 }
 
-static void test_options(const sylva_world *w) {
+/* OBJ objects: each stem with geometry, then each box; PLY's stem tags name the same. */
+static void test_objects(void) {
+  /* the PLY stem property is the stem's index, or -1 - i for box i */
+  const mesh_case *k = mesh_cases();
+  const model *m = &world_model;
+  for (int c = 0; c < CASES; c++, k++) {
+    size_t expect_obj = 0;
+    for (int s = 0; s < m->stems; s++) expect_obj += m->stem_rings[s] > 0;
+    CHECK_INT(k->po.nobj, expect_obj + (k->boxes ? (size_t)m->boxes : 0));
+    size_t o = 0;
+    for (int s = 0; s < m->stems && o < k->po.nobj; s++) {
+      if (!m->stem_rings[s]) continue;
+      char name[96];
+      stem_name(world, s, name, sizeof name);
+      CHECK(strcmp(k->po.obj_name[o], name) == 0);
+      CHECK_INT(k->po.obj_faces[o], 2 * (size_t)k->sides * m->stem_internodes[s] +
+                                        (size_t)(k->sides - 2) * m->stem_caps[s]);
+      CHECK_INT(tag_mismatches(k, o, s), 0);
+      o++;
+    }
+    for (int b = 0; k->boxes && b < m->boxes && o < k->po.nobj; b++, o++) {
+      sylva_obstacle_def od;
+      sylva_world_obstacle_at(world, b, NULL, &od);
+      char name[96];
+      snprintf(name, sizeof name, "obstacle_%s", od.label);
+      CHECK(strcmp(k->po.obj_name[o], name) == 0);
+      CHECK_INT(k->po.obj_faces[o], 12);
+      CHECK_INT(tag_mismatches(k, o, -1 - b), 0);
+    }
+  }
+}
+
+/* Rings of the node's radius across its internode, frames by parallel transport. */
+static void test_rings(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++)
+    if (parsed_as_expected(k)) check_rings(&world_model, &k->po, k->sides);
+}
+
+/* Side and cap triangles in layout order, facing outwards. */
+static void test_branch_faces(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++)
+    if (parsed_as_expected(k)) check_branch_faces(&world_model, &k->po, k->sides, k->boxes);
+}
+
+/* The boxes' triangles at their corners, facing outwards. */
+static void test_box_faces(void) {
+  const mesh_case *k = mesh_cases();
+  for (int c = 0; c < CASES; c++, k++)
+    if (parsed_as_expected(k)) check_box_faces(&world_model, &k->po, k->sides, k->boxes, world);
+}
+
+static FILE *manifest;
+static const char *outdir;
+
+static void save(const char *name, const blob *b) {
+  char path[4096];
+  snprintf(path, sizeof path, "%s/%s", outdir, name);
+  FILE *f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (!f) return;
+  CHECK_INT(fwrite(b->data, 1, b->size, f), b->size);
+  CHECK_INT(fclose(f), 0);
+}
+
+/* With OUTDIR: every case's files written there and listed in expected.tsv. */
+static void test_files(void) {
+  if (!outdir) return;
+  const mesh_case *k = mesh_cases();
+  const model *m = &world_model;
+  for (int c = 0; c < CASES; c++, k++) {
+    char name[64];
+    snprintf(name, sizeof name, "mesh_s%d%s.obj", k->sides, k->boxes ? "_obstacles" : "");
+    save(name, &k->obj);
+    fprintf(manifest, "file\t%s\tobj\t%zu\t%zu\n", name, k->ev, k->ef);
+    size_t i = 0;
+    for (int st = 0; st < m->stems && i < k->po.nobj; st++) {
+      if (!m->stem_rings[st]) continue;
+      fprintf(manifest, "object\t%s\t%s\t%zu\t%zu\n", name, k->po.obj_name[i],
+              k->po.obj_faces[i], (size_t)k->sides * m->stem_rings[st]);
+      i++;
+    }
+    for (; i < k->po.nobj; i++)
+      fprintf(manifest, "object\t%s\t%s\t%zu\t8\n", name, k->po.obj_name[i], k->po.obj_faces[i]);
+    snprintf(name, sizeof name, "mesh_s%d%s.ply", k->sides, k->boxes ? "_obstacles" : "");
+    save(name, &k->ply);
+    fprintf(manifest, "file\t%s\tply\t%zu\t%zu\n", name, k->ev, k->ef);
+  }
+}
+
+static void mesh_cases_free(void) {
+  for (int c = 0; cases_made && c < CASES; c++) {
+    parsed_free(&cases[c].po);
+    parsed_free(&cases[c].pp);
+    free(cases[c].obj.data);
+    free(cases[c].ply.data);
+  }
+  if (world) {
+    model_free(&world_model);
+    sylva_world_destroy(world);
+  }
+}
+
+/* Options: 3 to 64 sides (else nothing written), a known format, NULL as the defaults. */
+static void test_options(void) {
+  const sylva_world *w = the_world();
   sylva_mesh_options d = sylva_mesh_default_options();
   CHECK_INT(d.sides, 8);
   CHECK(!d.obstacles);
@@ -632,7 +780,9 @@ static void test_options(const sylva_world *w) {
   free(b.data);
 }
 
-static void test_write_error(const sylva_world *w) {
+/* A failed write is SYLVA_MESH_EWRITE with errno kept. */
+static void test_write_error(void) {
+  const sylva_world *w = the_world();
   /* /dev/full fails every write with ENOSPC once the stream's buffer is flushed */
   FILE *f = fopen("/dev/full", "w");
   CHECK(f != NULL);
@@ -643,6 +793,7 @@ static void test_write_error(const sylva_world *w) {
   fclose(f);
 }
 
+/* An empty world exports nothing; with a box, the box alone. */
 static void test_empty(void) {
   sylva_world_def wd = sylva_default_world_def();
   sylva_world *w;
@@ -672,12 +823,13 @@ static void test_empty(void) {
   sylva_world_destroy(w);
 }
 
+
 int main(int argc, char **argv) {
-  if (argc > 2) {
-    fprintf(stderr, "usage: %s [OUTDIR]\n", argv[0]);
+  if (argc > 3) {
+    fprintf(stderr, "usage: %s [OUTDIR|- [TEST]]\n", argv[0]);
     return 2;
   }
-  if (argc == 2) {
+  if (argc >= 2 && strcmp(argv[1], "-") != 0) {
     outdir = argv[1];
     char path[4096];
     snprintf(path, sizeof path, "%s/expected.tsv", outdir);
@@ -687,30 +839,13 @@ int main(int argc, char **argv) {
       return 1;
     }
   }
-  sylva_world *w = make_world(6);
-  CHECK(w != NULL);
-  if (!w) return check_summary("export-mesh");
-  model m;
-  model_build(&m, w);
-  /* the world has what the export must handle: three stems, branching, tips */
-  CHECK_INT(m.stems, 3);
-  CHECK_INT(m.roots, 3);
-  size_t branching = 0;
-  for (size_t i = 0; i < m.n; i++) branching += m.children[i] > 1;
-  CHECK(branching > 0);
-  CHECK(m.tips > 3);
-  printf("world: %zu nodes, %zu internodes, %zu tips, %zu branching nodes\n", m.n, m.internodes,
-         m.tips, branching);
-
-  int sides[] = {3, 8, 64};
-  for (int s = 0; s < 3; s++)
-    for (int b = 0; b < 2; b++) check_case(w, &m, sides[s], b);
-  test_options(w);
-  test_write_error(w);
-  test_empty();
-
+  static const check_test tests[] = {
+      CHECK_TEST(world), CHECK_TEST(counts), CHECK_TEST(deterministic), CHECK_TEST(parse_back),
+      CHECK_TEST(same_layout), CHECK_TEST(objects), CHECK_TEST(rings), CHECK_TEST(branch_faces),
+      CHECK_TEST(box_faces), CHECK_TEST(files), CHECK_TEST(options), CHECK_TEST(write_error),
+      CHECK_TEST(empty)};
+  CHECK_RUN(argc, argv, 2, tests);
   if (manifest) CHECK_INT(fclose(manifest), 0);
-  model_free(&m);
-  sylva_world_destroy(w);
+  mesh_cases_free();
   return check_summary("export-mesh");
 }

@@ -120,63 +120,84 @@ def main():
     args = ap.parse_args()
 
     jobs = []  # (label, function, arguments)
-    failures = []
-    expect = load_expect(args.bad)
-    bad_files = sorted(f for f in os.listdir(args.bad) if f.endswith(".json"))
-    for name in bad_files:
-        if name not in expect:
-            failures.append(("bad/" + name, "no line in EXPECT.tsv"))
-            continue
-        jobs.append(("bad/" + name, check_bad, (os.path.join(args.bad, name), expect[name])))
-    for name in sorted(set(expect) - set(bad_files)):
-        failures.append(("bad/" + name, "listed in EXPECT.tsv but missing"))
-
-    # without a JSONTestSuite copy (meson option jsontestsuite) that part is left out
-    suite_files = sorted(os.listdir(args.suite)) if os.path.isdir(args.suite) else []
-    if not suite_files and os.path.isdir(args.suite):
-        failures.append(("JSONTestSuite", "no files in " + args.suite))
-    for name in suite_files:
-        jobs.append(("JSONTestSuite/" + name, check_not_scenario, (os.path.join(args.suite, name),)))
-
-    scenarios = sorted(f for f in os.listdir(args.scenarios) if f.endswith(".json"))
-    if not scenarios:
-        failures.append(("scenarios", "no scenarios in " + args.scenarios))
+    failures = []  # (label, problem)
+    bad_jobs(args.bad, jobs, failures)
+    suite_jobs(args.suite, jobs, failures)
     tmp = tempfile.TemporaryDirectory(prefix="sylva-fuzz-")
-    rng = random.Random(20170601)
-    for name in scenarios:
-        path = os.path.join(args.scenarios, name)
-        jobs.append(("scenarios/" + name, check_good, (path,)))
-        with open(path, "rb") as f:
-            data = f.read()
-        for k in range(12):
-            cut = rng.randrange(len(data))
-            mutant = os.path.join(tmp.name, "%s.cut%d" % (name, cut))
-            with open(mutant, "wb") as f:
-                f.write(data[:cut])
-            jobs.append(("truncated scenarios/%s at byte %d" % (name, cut), check_mutant, (mutant,)))
-        for k in range(12):
-            at = rng.randrange(len(data))
-            byte = rng.choice(b'"{}[],:0123456789.eE-+ \\\x00\x0c\xff\xc0ax')
-            mutant = os.path.join(tmp.name, "%s.flip%d" % (name, k))
-            with open(mutant, "wb") as f:
-                f.write(data[:at] + bytes([byte]) + data[at + 1:])
-            jobs.append(("scenarios/%s with byte %d = 0x%02x" % (name, at, byte), check_mutant, (mutant,)))
-
-    passed = 0
-    with concurrent.futures.ThreadPoolExecutor(max_workers=os.cpu_count() or 4) as pool:
-        futures = [(label, pool.submit(fn, args.sylva, *fn_args)) for label, fn, fn_args in jobs]
-        for label, future in futures:
-            problem = future.result()
-            if problem:
-                failures.append((label, problem))
-            else:
-                passed += 1
+    scenario_jobs(args.scenarios, tmp.name, jobs, failures)
+    passed = run_jobs(args.sylva, jobs, failures)
     tmp.cleanup()
 
     for label, problem in failures:
         print("FAIL %s: %s" % (label, problem))
     print("%d passed, %d failed" % (passed, len(failures)))
     return 1 if failures else 0
+
+
+def bad_jobs(bad_dir, jobs, failures):
+    """Every bad/*.json with its line of EXPECT.tsv, and every line with its file."""
+    expect = load_expect(bad_dir)
+    bad_files = sorted(f for f in os.listdir(bad_dir) if f.endswith(".json"))
+    for name in bad_files:
+        if name not in expect:
+            failures.append(("bad/" + name, "no line in EXPECT.tsv"))
+            continue
+        jobs.append(("bad/" + name, check_bad, (os.path.join(bad_dir, name), expect[name])))
+    for name in sorted(set(expect) - set(bad_files)):
+        failures.append(("bad/" + name, "listed in EXPECT.tsv but missing"))
+
+
+def suite_jobs(suite_dir, jobs, failures):
+    """Every JSONTestSuite file; without a copy (meson option jsontestsuite) none."""
+    suite_files = sorted(os.listdir(suite_dir)) if os.path.isdir(suite_dir) else []
+    if not suite_files and os.path.isdir(suite_dir):
+        failures.append(("JSONTestSuite", "no files in " + suite_dir))
+    for name in suite_files:
+        jobs.append(("JSONTestSuite/" + name, check_not_scenario,
+                     (os.path.join(suite_dir, name),)))
+
+
+def scenario_jobs(scenario_dir, tmp, jobs, failures):
+    """Every scenario, and 12 truncated and 12 byte-flipped copies of each (written
+    into tmp) from a fixed pseudo-random sample."""
+    scenarios = sorted(f for f in os.listdir(scenario_dir) if f.endswith(".json"))
+    if not scenarios:
+        failures.append(("scenarios", "no scenarios in " + scenario_dir))
+    rng = random.Random(20170601)
+    for name in scenarios:
+        path = os.path.join(scenario_dir, name)
+        jobs.append(("scenarios/" + name, check_good, (path,)))
+        with open(path, "rb") as f:
+            data = f.read()
+        for k in range(12):
+            cut = rng.randrange(len(data))
+            mutant = os.path.join(tmp, "%s.cut%d" % (name, cut))
+            with open(mutant, "wb") as f:
+                f.write(data[:cut])
+            jobs.append(("truncated scenarios/%s at byte %d" % (name, cut), check_mutant,
+                         (mutant,)))
+        for k in range(12):
+            at = rng.randrange(len(data))
+            byte = rng.choice(b'"{}[],:0123456789.eE-+ \\\x00\x0c\xff\xc0ax')
+            mutant = os.path.join(tmp, "%s.flip%d" % (name, k))
+            with open(mutant, "wb") as f:
+                f.write(data[:at] + bytes([byte]) + data[at + 1:])
+            jobs.append(("scenarios/%s with byte %d = 0x%02x" % (name, at, byte), check_mutant,
+                         (mutant,)))
+
+
+def run_jobs(sylva, jobs, failures):
+    """Runs the jobs in parallel; adds each problem to failures; returns the passes."""
+    passed = 0
+    with concurrent.futures.ThreadPoolExecutor(max_workers=os.cpu_count() or 4) as pool:
+        futures = [(label, pool.submit(fn, sylva, *fn_args)) for label, fn, fn_args in jobs]
+        for label, future in futures:
+            problem = future.result()
+            if problem:
+                failures.append((label, problem))
+            else:
+                passed += 1
+    return passed
 
 
 if __name__ == "__main__":

@@ -1,17 +1,15 @@
 /* sylva_json_check against JSONTestSuite (y_* accepted, n_* rejected, i_* pinned)
  * and against hand-written cases for each leniency of cJSON 1.7.15. */
 #include <dirent.h>
-
-#include "../list_dir.h"
-#include "../read_file.h"
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "../check.h"
+#include "../list_dir.h"
+#include "../read_file.h"
 #include "sylva/json_check.h"
-
-static int passed, failed;
 
 /* i_* files (implementation-defined) that we accept; every other i_* is rejected
  * (invalid UTF-8, unpaired surrogates, BOM, and i_structure_500_nested_arrays
@@ -30,125 +28,34 @@ static bool pinned_accept(const char *name) {
   return false;
 }
 
+/* A check that names what failed and how. */
 static void record(bool ok, const char *what, const char *detail) {
   if (ok) {
-    passed++;
+    check_passed++;
   } else {
-    failed++;
+    check_failed++;
     printf("FAIL %s: %s\n", what, detail);
   }
 }
 
-/* JSONTestSuite's y_ (accept), n_ (reject) and i_ (either) files */
-static bool suite_file(const char *name) {
-  return name[0] == 'y' || name[0] == 'n' || name[0] == 'i';
-}
-
-static void run_suite(const char *dir) {
-  size_t count;
-  char **names = list_dir(dir, suite_file, &count);
-  if (!names) {
-    record(false, dir, "cannot list the JSONTestSuite directory");
-    return;
-  }
-  int i_accepted = 0, i_rejected = 0;
-  for (size_t i = 0; i < count; i++) {
-    char path[4096], err[256];
-    snprintf(path, sizeof path, "%s/%s", dir, names[i]);
-    size_t len = 0;
-    char *text = read_file(path, &len);
-    if (!text) {
-      record(false, names[i], "cannot read");
-      continue;
-    }
-    int rc = sylva_json_check(text, len, 64, err, sizeof err);
-    free(text);
-    char detail[400];
-    switch (names[i][0]) {
-    case 'y':
-      snprintf(detail, sizeof detail, "rejected: %s", err);
-      record(rc == 0, names[i], detail);
-      break;
-    case 'n':
-      record(rc != 0, names[i], "accepted, must be rejected");
-      break;
-    default:
-      if (rc == 0) i_accepted++;
-      else i_rejected++;
-      snprintf(detail, sizeof detail, "%s, pinned as %s (%s)", rc == 0 ? "accepted" : "rejected",
-               pinned_accept(names[i]) ? "accepted" : "rejected", rc ? err : "");
-      record((rc == 0) == pinned_accept(names[i]), names[i], detail);
-      break;
-    }
-  }
-  list_dir_free(names, count);
-  printf("JSONTestSuite: %zu files (i_*: %d accepted, %d rejected)\n", count, i_accepted,
-         i_rejected);
-}
+/* ---- hand-written cases: cJSON 1.7.15 accepts every one that must be rejected ---- */
 
 typedef struct text_case {
   const char *text;
-  size_t len; /* 0: strlen(text) */
-  int depth;
-  unsigned flags;
+  size_t len;
   const char *expect; /* NULL: must be accepted; else a substring of the error */
 } text_case;
+/* text: a string literal (it may hold NUL bytes) */
+#define CASE(text, expect) {text, sizeof text - 1, expect}
 
-static const text_case cases[] = {
-    /* cJSON 1.7.15 accepts all of these. */
-    {"-01", 0, 64, 0, "line 1, column 1 (byte 0): leading zero in number"},
-    {"[2.]", 0, 64, 0, "column 4 (byte 3): digit expected after the decimal point"},
-    {"2.e3", 0, 64, 0, "digit expected after the decimal point"},
-    {"1e", 0, 64, 0, "digit expected in the exponent"},
-    {"\"a\tb\"", 0, 64, 0, "control character U+0009 must be escaped"},
-    {"\"\\u12G4\"", 0, 64, 0, "four hex digits"},
-    {"\"\\x41\"", 0, 64, 0, "invalid escape"},
-    {"\f[]", 0, 64, 0, "expected a value, got byte 0x0C"},
-    {"[]\f", 0, 64, 0, "unexpected byte 0x0C after the JSON value"},
-    {"[1]\0", 4, 64, 0, "unexpected byte 0x00 after the JSON value"},
-    {"[\0]", 3, 64, 0, "expected a value, got byte 0x00"},
-    {"\"\xC0\xAF\"", 0, 64, 0, "overlong"},
-    {"\"\xE0\x80\xAF\"", 0, 64, 0, "overlong"},
-    {"\"\xED\xA0\x80\"", 0, 64, 0, "encoded surrogate U+D800"},
-    {"\"\xF4\x90\x80\x80\"", 0, 64, 0, "above U+10FFFF"},
-    {"\"\xF5\x80\x80\x80\"", 0, 64, 0, "invalid UTF-8"},
-    {"\"\xE2\x82\"", 0, 64, 0, "truncated 3-byte sequence"},
-    {"\"\\uD800\"", 0, 64, 0, "unpaired surrogate escape \\uD800"},
-    {"\"\\uDC00\\uD800\"", 0, 64, 0, "unpaired surrogate escape \\uDC00"},
-    {"\"\\uD800\\u0041\"", 0, 64, 0, "unpaired surrogate"},
-    {"\"\\uD834\\uDD1E\"", 0, 64, 0, NULL},
-    {"\"a\\u0000b\"", 0, 64, 0, NULL},
-    {"\"a\\u0000b\"", 0, 64, SYLVA_JSON_NO_NUL_ESCAPE, "\\u0000 (NUL)"},
-    {"\xEF\xBB\xBF{}", 0, 64, 0, "byte order mark"},
-    {"", 0, 64, 0, "line 1, column 1 (byte 0): empty document"},
-    {" \r\n\t ", 0, 64, 0, "empty document"},
-    {"{}{}", 0, 64, 0, "unexpected '{' after the JSON value"},
-    {"[1,]", 0, 64, 0, "trailing comma before ']'"},
-    {"{\"a\":1,}", 0, 64, 0, "trailing comma before '}'"},
-    {"{\"a\" 1}", 0, 64, 0, "expected ':' after the key, got '1'"},
-    {"{1:1}", 0, 64, 0, "expected a string key, got '1'"},
-    {"[1 2]", 0, 64, 0, "expected ',' or ']', got '2'"},
-    {"[tru]", 0, 64, 0, "invalid literal (expected true)"},
-    {"[NaN]", 0, 64, 0, "expected a value, got 'N'"},
-    {"\"abc", 0, 64, 0, "unterminated string"},
-    {"[", 0, 64, 0, "unexpected end of input, expected a value"},
-    {"{\n  \"a\": [\n    1,\n    01\n  ]\n}", 0, 64, 0, "line 4, column 5 (byte 22): leading zero"},
-    {"{\"\xC3\xA9t\xC3\xA9\": -x}", 0, 64, 0, "line 1, column 10 (byte 11): '-' must be followed"},
-    {"[[[[]]]]", 0, 4, 0, NULL},
-    {"[[[[[]]]]]", 0, 4, 0, "column 5 (byte 4): nesting deeper than 4"},
-    {"{\"a\":{\"b\":{}}}", 0, 2, 0, "nesting deeper than 2"},
-    {"  {\"a\": [1, -0.5e+3, true, false, null, \"\\u00e9\\n\"]}\r\n", 0, 64, 0, NULL},
-    {"0", 0, 0, 0, NULL},
-    {"[]", 0, 0, 0, "nesting deeper than 0"},
-};
-
-static void run_cases(void) {
-  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+/* Checks each case at the depth limit with the flags; test and table name them. */
+static void run_table(const char *test, const char *table, const text_case *cases, size_t n,
+                      int depth, unsigned flags) {
+  for (size_t i = 0; i < n; i++) {
     const text_case *t = &cases[i];
-    size_t len = t->len ? t->len : strlen(t->text);
-    char err[256], what[64], detail[400];
-    int rc = sylva_json_check_ex(t->text, len, t->depth, t->flags, err, sizeof err);
-    snprintf(what, sizeof what, "case %zu", i);
+    char err[256], what[128], detail[400];
+    int rc = sylva_json_check_ex(t->text, t->len, depth, flags, err, sizeof err);
+    snprintf(what, sizeof what, "%s, %s case %zu", test, table, i);
     if (!t->expect) {
       snprintf(detail, sizeof detail, "rejected: %s", err);
       record(rc == 0, what, detail);
@@ -157,12 +64,133 @@ static void run_cases(void) {
       record(rc != 0 && strstr(err, t->expect) != NULL, what, detail);
     }
   }
-  /* A tiny error buffer truncates, a NULL one is allowed. */
+}
+#define RUN_TABLE(cases, depth, flags) \
+  run_table(__func__, #cases, cases, sizeof cases / sizeof cases[0], depth, flags)
+
+/* Numbers: no leading zero, digits after the point and in the exponent, no NaN. */
+static void test_numbers(void) {
+  static const text_case cases[] = {
+      CASE("-01", "line 1, column 1 (byte 0): leading zero in number"),
+      CASE("[2.]", "column 4 (byte 3): digit expected after the decimal point"),
+      CASE("2.e3", "digit expected after the decimal point"),
+      CASE("1e", "digit expected in the exponent"),
+      CASE("[NaN]", "expected a value, got 'N'"),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* Strings: escaped control characters, valid escapes, a closing quote. */
+static void test_strings(void) {
+  static const text_case cases[] = {
+      CASE("\"a\tb\"", "control character U+0009 must be escaped"),
+      CASE("\"\\u12G4\"", "four hex digits"),
+      CASE("\"\\x41\"", "invalid escape"),
+      CASE("\"abc", "unterminated string"),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* \u0000 is allowed unless SYLVA_JSON_NO_NUL_ESCAPE. */
+static void test_nul_escape(void) {
+  static const text_case allowed[] = {CASE("\"a\\u0000b\"", NULL)};
+  static const text_case refused[] = {CASE("\"a\\u0000b\"", "\\u0000 (NUL)")};
+  RUN_TABLE(allowed, 64, 0);
+  RUN_TABLE(refused, 64, SYLVA_JSON_NO_NUL_ESCAPE);
+}
+
+/* Form feeds and NUL bytes are no whitespace, before, inside or after the value. */
+static void test_stray_bytes(void) {
+  static const text_case cases[] = {
+      CASE("\f[]", "expected a value, got byte 0x0C"),
+      CASE("[]\f", "unexpected byte 0x0C after the JSON value"),
+      CASE("[1]\0", "unexpected byte 0x00 after the JSON value"),
+      CASE("[\0]", "expected a value, got byte 0x00"),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* UTF-8: no overlong form, encoded surrogate, code point above U+10FFFF or cut sequence. */
+static void test_utf8(void) {
+  static const text_case cases[] = {
+      CASE("\"\xC0\xAF\"", "overlong"),
+      CASE("\"\xE0\x80\xAF\"", "overlong"),
+      CASE("\"\xED\xA0\x80\"", "encoded surrogate U+D800"),
+      CASE("\"\xF4\x90\x80\x80\"", "above U+10FFFF"),
+      CASE("\"\xF5\x80\x80\x80\"", "invalid UTF-8"),
+      CASE("\"\xE2\x82\"", "truncated 3-byte sequence"),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* Surrogate escapes come in pairs, high then low. */
+static void test_surrogates(void) {
+  static const text_case cases[] = {
+      CASE("\"\\uD800\"", "unpaired surrogate escape \\uD800"),
+      CASE("\"\\uDC00\\uD800\"", "unpaired surrogate escape \\uDC00"),
+      CASE("\"\\uD800\\u0041\"", "unpaired surrogate"),
+      CASE("\"\\uD834\\uDD1E\"", NULL),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* A document is one value in optional whitespace: no BOM, not empty, nothing after it. */
+static void test_documents(void) {
+  static const text_case cases[] = {
+      CASE("\xEF\xBB\xBF{}", "byte order mark"),
+      CASE("", "line 1, column 1 (byte 0): empty document"),
+      CASE(" \r\n\t ", "empty document"),
+      CASE("{}{}", "unexpected '{' after the JSON value"),
+      CASE("  {\"a\": [1, -0.5e+3, true, false, null, \"\\u00e9\\n\"]}\r\n", NULL),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* Arrays and objects: no trailing comma; string keys, separators, whole literals, an end. */
+static void test_structure(void) {
+  static const text_case cases[] = {
+      CASE("[1,]", "trailing comma before ']'"),
+      CASE("{\"a\":1,}", "trailing comma before '}'"),
+      CASE("{\"a\" 1}", "expected ':' after the key, got '1'"),
+      CASE("{1:1}", "expected a string key, got '1'"),
+      CASE("[1 2]", "expected ',' or ']', got '2'"),
+      CASE("[tru]", "invalid literal (expected true)"),
+      CASE("[", "unexpected end of input, expected a value"),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* An error names its line, its column in characters and its byte. */
+static void test_positions(void) {
+  static const text_case cases[] = {
+      CASE("{\n  \"a\": [\n    1,\n    01\n  ]\n}", "line 4, column 5 (byte 22): leading zero"),
+      CASE("{\"\xC3\xA9t\xC3\xA9\": -x}", "line 1, column 10 (byte 11): '-' must be followed"),
+  };
+  RUN_TABLE(cases, 64, 0);
+}
+
+/* The depth limit: arrays and objects nested up to it, not deeper. */
+static void test_depths(void) {
+  static const text_case four[] = {CASE("[[[[]]]]", NULL),
+                                   CASE("[[[[[]]]]]", "column 5 (byte 4): nesting deeper than 4")};
+  static const text_case two[] = {CASE("{\"a\":{\"b\":{}}}", "nesting deeper than 2")};
+  static const text_case none[] = {CASE("0", NULL), CASE("[]", "nesting deeper than 0")};
+  RUN_TABLE(four, 4, 0);
+  RUN_TABLE(two, 2, 0);
+  RUN_TABLE(none, 0, 0);
+}
+
+/* A tiny error buffer truncates, a NULL one is allowed. */
+static void test_error_buffer(void) {
   char small[8];
   record(sylva_json_check("[01]", 4, 64, small, sizeof small) != 0 && strlen(small) == 7,
          "small buffer", small);
   record(sylva_json_check("[01]", 4, 64, NULL, 0) != 0, "null buffer", "accepted");
-  /* Nesting far beyond the limit neither recurses nor overflows. */
+}
+
+/* Nesting far beyond the limit neither recurses nor overflows. */
+static void test_deep_nesting(void) {
+  char small[8];
   size_t n = 200000;
   char *deep = malloc(n);
   if (deep) {
@@ -173,20 +201,100 @@ static void run_cases(void) {
   }
 }
 
+/* ---- JSONTestSuite ---- */
+
+static const char *suite_dir;
+
+/* Checks every JSONTestSuite file whose name keep() accepts: check(name, rc, err)
+ * with sylva_json_check's result at depth 64; returns the number of files. */
+static size_t check_files(bool (*keep)(const char *name),
+                          void (*check)(const char *name, int rc, const char *err)) {
+  size_t count;
+  char **names = list_dir(suite_dir, keep, &count);
+  if (!names) {
+    record(false, suite_dir, "cannot list the JSONTestSuite directory");
+    return 0;
+  }
+  for (size_t i = 0; i < count; i++) {
+    char path[4096], err[256] = "";
+    snprintf(path, sizeof path, "%s/%s", suite_dir, names[i]);
+    size_t len = 0;
+    char *text = read_file(path, &len);
+    if (!text) {
+      record(false, names[i], "cannot read");
+      continue;
+    }
+    int rc = sylva_json_check(text, len, 64, err, sizeof err);
+    free(text);
+    check(names[i], rc, err);
+  }
+  list_dir_free(names, count);
+  return count;
+}
+
+static bool y_file(const char *name) { return name[0] == 'y'; }
+static bool n_file(const char *name) { return name[0] == 'n'; }
+static bool i_file(const char *name) { return name[0] == 'i'; }
+
+static void accepted(const char *name, int rc, const char *err) {
+  char detail[400];
+  snprintf(detail, sizeof detail, "rejected: %s", err);
+  record(rc == 0, name, detail);
+}
+
+static void rejected(const char *name, int rc, const char *err) {
+  (void)err;
+  record(rc != 0, name, "accepted, must be rejected");
+}
+
+static int i_accepted, i_rejected;
+
+static void as_pinned(const char *name, int rc, const char *err) {
+  char detail[400];
+  if (rc == 0) i_accepted++;
+  else i_rejected++;
+  snprintf(detail, sizeof detail, "%s, pinned as %s (%s)", rc == 0 ? "accepted" : "rejected",
+           pinned_accept(name) ? "accepted" : "rejected", rc ? err : "");
+  record((rc == 0) == pinned_accept(name), name, detail);
+}
+
+/* Every y_* file is accepted. */
+static void test_suite_y(void) {
+  printf("JSONTestSuite: %zu y_* files\n", check_files(y_file, accepted));
+}
+
+/* Every n_* file is rejected. */
+static void test_suite_n(void) {
+  printf("JSONTestSuite: %zu n_* files\n", check_files(n_file, rejected));
+}
+
+/* Every i_* file is accepted or rejected as pinned in accepted_i. */
+static void test_suite_i(void) {
+  size_t count = check_files(i_file, as_pinned);
+  printf("JSONTestSuite: %zu i_* files (%d accepted, %d rejected)\n", count, i_accepted,
+         i_rejected);
+}
+
 int main(int argc, char **argv) {
-  if (argc != 2) {
-    fprintf(stderr, "usage: %s JSONTestSuite/test_parsing\n", argv[0]);
+  if (argc != 2 && argc != 3) {
+    fprintf(stderr, "usage: %s JSONTestSuite/test_parsing [TEST]\n", argv[0]);
     return 2;
   }
-  run_cases();
+  static const check_test fixed[] = {
+      CHECK_TEST(numbers), CHECK_TEST(strings), CHECK_TEST(nul_escape), CHECK_TEST(stray_bytes),
+      CHECK_TEST(utf8), CHECK_TEST(surrogates), CHECK_TEST(documents), CHECK_TEST(structure),
+      CHECK_TEST(positions), CHECK_TEST(depths), CHECK_TEST(error_buffer),
+      CHECK_TEST(deep_nesting)};
+  static const check_test suite[] = {CHECK_TEST(suite_y), CHECK_TEST(suite_n), CHECK_TEST(suite_i)};
+  CHECK_RUN(argc, argv, 2, fixed);
   DIR *d = opendir(argv[1]);
   if (!d) { /* the fixed cases ran; without a JSONTestSuite copy the rest is skipped */
-    printf("%d passed, %d failed; skip: no JSONTestSuite at %s (meson option jsontestsuite)\n",
-           passed, failed, argv[1]);
-    return failed ? 1 : 77;
+    printf("skip: no JSONTestSuite at %s (meson option jsontestsuite)\n", argv[1]);
+    int rc = check_summary("json-check");
+    return rc ? rc : 77;
   }
   closedir(d);
-  run_suite(argv[1]);
-  printf("%d passed, %d failed\n", passed, failed);
-  return failed ? 1 : 0;
+  suite_dir = argv[1];
+  CHECK_RUN(argc, argv, 2, suite);
+  return check_summary("json-check");
 }

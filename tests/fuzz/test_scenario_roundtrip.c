@@ -1,26 +1,26 @@
 /* Replays the shipped scenarios through parse -> canonical JSON -> parse, and
  * checks that both forms build the same world and grow it identically; then a
  * few fixed cases of the scenario rules and of the encoders. */
-#include "../list_dir.h"
-#include "../read_file.h"
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "../check.h"
+#include "../list_dir.h"
+#include "../read_file.h"
 #include "sylva/encode.h"
 #include "sylva/json_check.h"
 #include "sylva/scenario.h"
 
-static int passed, failed;
-
+/* CHECK with a printf-style message. */
 #define EXPECT(cond, ...)                                                   \
   do {                                                                      \
     if (cond) {                                                             \
-      passed++;                                                             \
+      check_passed++;                                                       \
     } else {                                                                \
-      failed++;                                                             \
+      check_failed++;                                                       \
       printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                \
       printf(__VA_ARGS__);                                                  \
       printf("\n");                                                         \
@@ -93,15 +93,18 @@ static void roundtrip(const char *path) {
   sylva_scenario_free(b);
 }
 
-static void replay_dir(const char *dir) {
+static const char *scenario_dir;
+
+/* Every shipped scenario survives parse -> canonical JSON -> parse and grows alike. */
+static void test_shipped_scenarios(void) {
   size_t count;
-  char **names = list_dir(dir, list_dir_json, &count);
-  EXPECT(names != NULL, "cannot list %s", dir);
+  char **names = list_dir(scenario_dir, list_dir_json, &count);
+  EXPECT(names != NULL, "cannot list %s", scenario_dir);
   if (!names) return;
-  EXPECT(count > 0, "no scenarios in %s", dir);
+  EXPECT(count > 0, "no scenarios in %s", scenario_dir);
   for (size_t i = 0; i < count; i++) {
     char path[4096];
-    snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+    snprintf(path, sizeof path, "%s/%s", scenario_dir, names[i]);
     roundtrip(path);
   }
   list_dir_free(names, count);
@@ -109,19 +112,22 @@ static void replay_dir(const char *dir) {
 
 #define MINIMAL_WORLD "\"world\": {\"min\": [-2, -2, 0], \"max\": [2, 2, 4]}"
 
-static void fixed_cases(void) {
-  /* Defaults. */
+/* A minimal scenario gets the default name, seed, iterations and voxel. */
+static void test_defaults(void) {
   const char *minimal = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD "}";
   sylva_scenario *s = parse_ok("minimal", minimal, strlen(minimal));
-  if (s) {
-    EXPECT(strcmp(s->name, "untitled") == 0, "name %s", s->name);
-    EXPECT(s->seed == 1 && s->iterations == 40, "seed %llu iterations %d",
-           (unsigned long long)s->seed, s->iterations);
-    EXPECT(s->voxel == 0.05, "voxel %g", s->voxel);
-    sylva_scenario_free(s);
-  }
-  /* The voxel follows the smallest rho among planted species only; the initial
-   * trunk follows the final growth equation; growth overrides keep the rest. */
+  if (!s) return;
+  EXPECT(strcmp(s->name, "untitled") == 0, "name %s", s->name);
+  EXPECT(s->seed == 1 && s->iterations == 40, "seed %llu iterations %d",
+         (unsigned long long)s->seed, s->iterations);
+  EXPECT(s->voxel == 0.05, "voxel %g", s->voxel);
+  sylva_scenario_free(s);
+}
+
+/* Species resolved: the voxel, the initial trunk, growth overrides on a preset. */
+static void test_species_resolution(void) {
+  /* The voxel follows the smallest rho among planted species only; the initial trunk
+   * follows the final growth equation; growth overrides keep the rest of a preset. */
   const char *text =
       "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD ", \"species\": {"
       "\"tiny\": {\"rho\": 0.01},"
@@ -129,20 +135,22 @@ static void fixed_cases(void) {
       "\"b\": {\"growth\": {\"equation\": \"weibull\", \"omega1\": 60, \"omega2\": 0.01, \"omega3\": 2}}},"
       "\"plants\": [{\"id\": \"p\", \"species\": \"a\", \"roots\": [[0, 0, 0]]},"
       "{\"id\": \"q\", \"species\": \"b\", \"roots\": [[1, 1, 0]]}]}";
-  s = parse_ok("resolution", text, strlen(text));
-  if (s) {
-    EXPECT(s->voxel == 0.04, "voxel %g, want 0.04", s->voxel);
-    const sylva_species_def *a = &s->species[1].def, *b = &s->species[2].def;
-    EXPECT(a->growth.p[0] == 4.6 && a->growth.p[1] == 70 && a->growth.p[2] == 0.34,
-           "growth %g %g %g", a->growth.p[0], a->growth.p[1], a->growth.p[2]);
-    EXPECT(a->initial_nodes == 5, "initial_nodes %d, want round(4.6) = 5", a->initial_nodes);
-    EXPECT(a->lambda == 0.48 && a->alpha == 3 && a->r_s == 0.20 && a->b_max == 2.5,
-           "preset igm-fig15-left not applied");
-    EXPECT(b->growth.kind == SYLVA_EQ_WEIBULL && b->initial_nodes == 2, "kind %d initial %d",
-           (int)b->growth.kind, b->initial_nodes);
-    sylva_scenario_free(s);
-  }
-  /* Every preset exists and passes the core's range check. */
+  sylva_scenario *s = parse_ok("resolution", text, strlen(text));
+  if (!s) return;
+  EXPECT(s->voxel == 0.04, "voxel %g, want 0.04", s->voxel);
+  const sylva_species_def *a = &s->species[1].def, *b = &s->species[2].def;
+  EXPECT(a->growth.p[0] == 4.6 && a->growth.p[1] == 70 && a->growth.p[2] == 0.34,
+         "growth %g %g %g", a->growth.p[0], a->growth.p[1], a->growth.p[2]);
+  EXPECT(a->initial_nodes == 5, "initial_nodes %d, want round(4.6) = 5", a->initial_nodes);
+  EXPECT(a->lambda == 0.48 && a->alpha == 3 && a->r_s == 0.20 && a->b_max == 2.5,
+         "preset igm-fig15-left not applied");
+  EXPECT(b->growth.kind == SYLVA_EQ_WEIBULL && b->initial_nodes == 2, "kind %d initial %d",
+         (int)b->growth.kind, b->initial_nodes);
+  sylva_scenario_free(s);
+}
+
+/* Every preset exists and passes the core's range check; no other name is one. */
+static void test_presets(void) {
   EXPECT(sylva_preset_count() == 10, "%d presets", sylva_preset_count());
   for (int i = 0; i < sylva_preset_count(); i++) {
     sylva_species_def d;
@@ -152,17 +160,21 @@ static void fixed_cases(void) {
   }
   EXPECT(sylva_preset_find("nope", NULL) < 0, "unknown preset found");
   EXPECT(sylva_preset_name(-1) == NULL && sylva_preset_name(10) == NULL, "name out of range");
+}
 
-  /* Errors leave *out NULL and a NUL-terminated message, even in a tiny buffer. */
+/* Errors leave *out NULL and a NUL-terminated message, even in a tiny buffer. */
+static void test_parse_errors(void) {
   char small[12];
-  s = (sylva_scenario *)1;
+  sylva_scenario *s = (sylva_scenario *)1;
   EXPECT(sylva_scenario_parse("{", 1, &s, small, sizeof small) < 0 && s == NULL &&
              strlen(small) == sizeof small - 1,
          "tiny buffer: '%s'", small);
   EXPECT(sylva_scenario_parse("[]", 2, &s, NULL, 0) < 0 && s == NULL, "NULL buffer");
+}
 
-  /* No plants: an empty site by default (the daemon plants it by edits); refused
-   * with SYLVA_SCENARIO_NEED_PLANTS (a scenario to grow as it is). */
+/* No plants: an empty site, but refused with SYLVA_SCENARIO_NEED_PLANTS. */
+static void test_no_plants(void) {
+  /* (the daemon plants an empty site by edits; a scenario to grow as it is needs plants) */
   static const char *const no_plants[][2] = {
       {"", "/plants: required"},
       {", \"plants\": []", "/plants: nothing to grow (the list is empty)"}};
@@ -172,7 +184,7 @@ static void fixed_cases(void) {
              "{\"format\": \"sylva.scenario/1\", \"world\": {\"min\": [0, 0, 0], "
              "\"max\": [1, 1, 1]}%s}",
              no_plants[i][0]);
-    s = parse_ok("no plants", text, strlen(text));
+    sylva_scenario *s = parse_ok("no plants", text, strlen(text));
     EXPECT(s && s->plant_count == 0, "%s", text);
     sylva_scenario_free(s);
     EXPECT(sylva_scenario_parse_ex(text, strlen(text), SYLVA_SCENARIO_NEED_PLANTS, &s, err,
@@ -180,8 +192,10 @@ static void fixed_cases(void) {
                s == NULL && strcmp(err, no_plants[i][1]) == 0,
            "%s: '%s'", text, err);
   }
+}
 
-  /* Formatters. */
+/* sylva_fmt_fixed: the decimals asked at most, no trailing zero or "-0", null if not finite. */
+static void test_fmt_fixed(void) {
   char buf[SYLVA_FMT_BUFSIZE];
   struct {
     double v;
@@ -195,6 +209,11 @@ static void fixed_cases(void) {
     EXPECT(strcmp(buf, fixed[i].want) == 0, "fixed(%g, %d) = %s, want %s", fixed[i].v,
            fixed[i].decimals, buf, fixed[i].want);
   }
+}
+
+/* sylva_fmt_shortest: the shortest text that reads back, null for NaN. */
+static void test_fmt_shortest(void) {
+  char buf[SYLVA_FMT_BUFSIZE];
   struct {
     double v;
     const char *want;
@@ -205,16 +224,22 @@ static void fixed_cases(void) {
     EXPECT(strcmp(buf, shortest[i].want) == 0, "shortest(%g) = %s, want %s", shortest[i].v, buf,
            shortest[i].want);
   }
+}
+
+/* The done line names the iterations and the reason. */
+static void test_done_line(void) {
   char *done = sylva_encode_done_line(24, "finished");
   EXPECT(done && strcmp(done, "{\"done\": true, \"iterations\": 24, \"reason\": \"finished\"}") == 0,
          "%s", done ? done : "(null)");
   free(done);
+}
 
-  /* A label with quotes, a backslash and a newline is escaped in the stats line. */
+/* A label with quotes, a backslash and a newline is escaped in the stats line. */
+static void test_odd_label(void) {
   const char *odd = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD
                     ", \"species\": {\"s\": {}}, \"plants\": [{\"id\": \"a\\\"b\\\\c\\nd\", "
                     "\"species\": \"s\", \"roots\": [[0, 0, 0]]}]}";
-  s = parse_ok("odd label", odd, strlen(odd));
+  sylva_scenario *s = parse_ok("odd label", odd, strlen(odd));
   sylva_world *w = NULL;
   char err[256] = "";
   if (s) EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
@@ -232,12 +257,16 @@ static void fixed_cases(void) {
 }
 
 int main(int argc, char **argv) {
-  if (argc != 2) {
-    fprintf(stderr, "usage: %s SCENARIO_DIR\n", argv[0]);
+  if (argc != 2 && argc != 3) {
+    fprintf(stderr, "usage: %s SCENARIO_DIR [TEST]\n", argv[0]);
     return 2;
   }
-  fixed_cases();
-  replay_dir(argv[1]);
-  printf("%d passed, %d failed\n", passed, failed);
-  return failed ? 1 : 0;
+  scenario_dir = argv[1];
+  static const check_test tests[] = {
+      CHECK_TEST(defaults), CHECK_TEST(species_resolution), CHECK_TEST(presets),
+      CHECK_TEST(parse_errors), CHECK_TEST(no_plants), CHECK_TEST(fmt_fixed),
+      CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label),
+      CHECK_TEST(shipped_scenarios)};
+  CHECK_RUN(argc, argv, 2, tests);
+  return check_summary("scenario-roundtrip");
 }

@@ -4,7 +4,7 @@
  * light slice.
  *
  * With --jsontestsuite DIR: the JSONTestSuite test_parsing files only (exit 77,
- * skipped, when DIR is missing). */
+ * skipped, when DIR is missing). A test's name as the last argument runs it alone. */
 #include "../read_file.h"
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -103,7 +103,6 @@ static double num_of(const cJSON *obj, const char *key) {
   return cJSON_IsNumber(item) ? item->valuedouble : NAN;
 }
 
-
 /* ---- valid messages ---- */
 
 static const char *const small_scenario =
@@ -111,10 +110,9 @@ static const char *const small_scenario =
     "\"species\":{\"oak\":{\"preset\":\"igm-fig11\"}},"
     "\"plants\":[{\"id\":\"t1\",\"species\":\"oak\",\"roots\":[[0,0,0]]}]}";
 
-static void test_valid(void) {
+/* hello, without and with a token; the id is kept as its JSON text. */
+static void test_valid_hello(void) {
   sylva_msg m;
-  char text[4096];
-
   if (PARSE_OK("{\"type\":\"hello\"}", &m)) {
     CHECK_INT(m.type, SYLVA_MSG_HELLO);
     CHECK(m.token == NULL);
@@ -126,6 +124,11 @@ static void test_valid(void) {
     CHECK_STR(m.ref, "\"a\\\"b\"");
   }
   sylva_msg_free(&m);
+}
+
+/* A numeric id is kept as its shortest number text. */
+static void test_valid_numeric_ids(void) {
+  sylva_msg m;
   if (PARSE_OK("{\"id\":12,\"type\":\"list\"}", &m)) {
     CHECK_INT(m.type, SYLVA_MSG_LIST);
     CHECK_STR(m.ref, "12");
@@ -138,7 +141,12 @@ static void test_valid(void) {
   sylva_msg_free(&m);
   if (PARSE_OK("{\"id\":1.25,\"type\":\"list\"}", &m)) CHECK_STR(m.ref, "1.25");
   sylva_msg_free(&m);
+}
 
+/* create: the scenario parsed; name, start and id when given. */
+static void test_valid_create(void) {
+  sylva_msg m;
+  char text[4096];
   snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s}", small_scenario);
   if (PARSE_OK(text, &m)) {
     CHECK_INT(m.type, SYLVA_MSG_CREATE);
@@ -161,10 +169,15 @@ static void test_valid(void) {
     CHECK_STR(m.ref, "\"c1\"");
   }
   sylva_msg_free(&m);
-  /* An empty site, to be planted by edits: no plants, or an empty list (a
-   * scenario file needs plants: `sylva run` and `validate` refuse both). */
+}
+
+/* create of an empty site, to be planted by edits: no plants, or an empty list. */
+static void test_valid_create_empty_site(void) {
+  /* (a scenario file needs plants: `sylva run` and `validate` refuse both) */
   static const char *const empty_sites[] = {"", ",\"plants\":[]"};
   for (size_t i = 0; i < sizeof empty_sites / sizeof empty_sites[0]; i++) {
+    sylva_msg m;
+    char text[4096];
     snprintf(text, sizeof text,
              "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/1\","
              "\"world\":{\"min\":[-2,-2,0],\"max\":[2,2,4]}%s}}",
@@ -175,7 +188,11 @@ static void test_valid(void) {
     }
     sylva_msg_free(&m);
   }
+}
 
+/* subscribe with and without since, runs up to 2^53 - 1; unsubscribe. */
+static void test_valid_subscribe(void) {
+  sylva_msg m;
   if (PARSE_OK("{\"type\":\"subscribe\",\"run\":3}", &m)) {
     CHECK_INT(m.type, SYLVA_MSG_SUBSCRIBE);
     CHECK_INT(m.run, 3);
@@ -198,10 +215,15 @@ static void test_valid(void) {
     CHECK_INT(m.run, 2);
   }
   sylva_msg_free(&m);
+}
 
+/* control: every action, a count of 1 by default and up to 100000 for step. */
+static void test_valid_control(void) {
   static const char *const actions[] = {"start", "pause", "step", "stop"};
   static const sylva_control_action codes[] = {SYLVA_CONTROL_START, SYLVA_CONTROL_PAUSE,
                                                SYLVA_CONTROL_STEP, SYLVA_CONTROL_STOP};
+  sylva_msg m;
+  char text[4096];
   for (int i = 0; i < 4; i++) {
     snprintf(text, sizeof text, "{\"type\":\"control\",\"run\":5,\"action\":\"%s\"}", actions[i]);
     if (PARSE_OK(text, &m)) {
@@ -215,7 +237,11 @@ static void test_valid(void) {
   if (PARSE_OK("{\"type\":\"control\",\"run\":5,\"action\":\"step\",\"count\":100000}", &m))
     CHECK_INT(m.count, 100000);
   sylva_msg_free(&m);
+}
 
+/* edit: plants, obstacles and removals, each list optional and possibly empty. */
+static void test_valid_edit(void) {
+  sylva_msg m;
   if (PARSE_OK("{\"type\":\"edit\",\"run\":4}", &m)) {
     CHECK_INT(m.type, SYLVA_MSG_EDIT);
     CHECK_INT(m.add_plant_count + m.add_obstacle_count + m.remove_obstacle_count, 0);
@@ -252,7 +278,11 @@ static void test_valid(void) {
                &m))
     CHECK_INT(m.add_plant_count + m.add_obstacle_count + m.remove_obstacle_count, 0);
   sylva_msg_free(&m);
+}
 
+/* fork, get and light with their fields. */
+static void test_valid_fork_get_light(void) {
+  sylva_msg m;
   if (PARSE_OK("{\"type\":\"fork\",\"run\":7,\"iteration\":0,\"name\":\"branch\"}", &m)) {
     CHECK_INT(m.type, SYLVA_MSG_FORK);
     CHECK_INT(m.run, 7);
@@ -270,9 +300,12 @@ static void test_valid(void) {
     CHECK(m.z == -0.15);
   }
   sylva_msg_free(&m);
+}
 
-  /* 255-byte names are fine, as is every type's name round trip. */
-  char name[300];
+/* 255-byte names are fine; every type has a name, and only the types. */
+static void test_valid_names(void) {
+  sylva_msg m;
+  char text[4096], name[300];
   memset(name, 'n', 255);
   name[255] = '\0';
   snprintf(text, sizeof text, "{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"%s\"}",
@@ -288,10 +321,8 @@ static void test_valid(void) {
 
 /* ---- bad messages ---- */
 
-static void test_invalid(void) {
-  char text[8192];
-
-  /* top level, type, id */
+/* The top level is an object with a known type; an id is a short string or number. */
+static void test_invalid_type_and_id(void) {
   PARSE_BAD("[]", "(root): expected an object, got an array");
   PARSE_BAD("\"hello\"", "(root): expected an object, got a string");
   PARSE_BAD("null", "(root): expected an object, got null");
@@ -303,20 +334,24 @@ static void test_invalid(void) {
   PARSE_BAD("{\"type\":\"list\",\"id\":null}", "/id: expected a string or a number, got null");
   PARSE_BAD("{\"type\":\"list\",\"id\":1e400}", "/id: number out of range");
   PARSE_BAD("{\"type\":\"list\",\"id\":true}", "/id: expected a string or a number, got a boolean");
-  {
-    char id[400];
-    memset(id, 'i', 300);
-    id[300] = '\0';
-    snprintf(text, sizeof text, "{\"type\":\"list\",\"id\":\"%s\"}", id);
-    PARSE_BAD(text, "/id: 302 bytes of JSON; at most 256");
-  }
+  char id[400], text[512];
+  memset(id, 'i', 300);
+  id[300] = '\0';
+  snprintf(text, sizeof text, "{\"type\":\"list\",\"id\":\"%s\"}", id);
+  PARSE_BAD(text, "/id: 302 bytes of JSON; at most 256");
+}
+
+/* Unknown keys (with a suggestion for a near miss) and duplicate keys. */
+static void test_invalid_keys(void) {
   PARSE_BAD("{\"type\":\"list\",\"run\":1}", "/run: unknown key");
   PARSE_BAD("{\"type\":\"list\",\"typo\":1}", "/typo: unknown key");
   PARSE_BAD("{\"type\":\"hello\",\"tokn\":\"x\"}", "/tokn: unknown key (did you mean \"token\"?)");
   PARSE_BAD("{\"type\":\"list\",\"type\":\"list\"}", "/type: duplicate key");
   PARSE_BAD("{\"type\":\"scenarios\",\"x\":{}}", "/x: unknown key");
+}
 
-  /* syntax */
+/* Syntax errors name their line and column. */
+static void test_invalid_syntax(void) {
   PARSE_BAD("", "(syntax) line 1, column 1");
   PARSE_BAD("{\"type\":\"list\",}", "(syntax)");
   PARSE_BAD("{\"type\": list}", "(syntax) line 1, column 10");
@@ -326,34 +361,39 @@ static void test_invalid(void) {
   PARSE_BAD("{\"type\":\"list\"\n,\"id\":NaN}", "(syntax) line 2");
   parse_bad_at("{\"type\":\"list\"}\0", 16, "(syntax)", __LINE__);
   PARSE_BAD("{\"type\":\"hello\",\"token\":\"\xff\"}", "invalid UTF-8");
+}
 
-  /* hello */
+/* hello's token is a string. */
+static void test_invalid_hello(void) {
   PARSE_BAD("{\"type\":\"hello\",\"token\":5}", "/token: expected a string, got a number");
   PARSE_BAD("{\"type\":\"hello\",\"token\":null}", "/token: expected a string, got null");
+}
 
-  /* create */
+/* create: a scenario object, a name of 1 to 255 bytes and no control, a boolean start. */
+static void test_invalid_create(void) {
   PARSE_BAD("{\"type\":\"create\"}", "/scenario: required");
   PARSE_BAD("{\"type\":\"create\",\"scenario\":[]}", "/scenario: expected an object, got an array");
   PARSE_BAD("{\"type\":\"create\",\"scenario\":{}}", "/scenario/format: required");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"\"}",
-           small_scenario);
-  PARSE_BAD(text, "/name: must be 1 to 255 bytes long, got 0");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":7}", small_scenario);
-  PARSE_BAD(text, "/name: expected a string, got a number");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"a\\nb\"}",
-           small_scenario);
-  PARSE_BAD(text, "/name: must not contain control characters (byte 1)");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"ab\\u007f\"}",
-           small_scenario);
-  PARSE_BAD(text, "/name: must not contain control characters (byte 2)");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"name\":\"\\u0085\"}",
-           small_scenario);
-  PARSE_BAD(text, "/name: must not contain control characters (byte 0)");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"start\":1}", small_scenario);
-  PARSE_BAD(text, "/start: expected a boolean, got a number");
-  snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s,\"start\":\"true\"}",
-           small_scenario);
-  PARSE_BAD(text, "/start: expected a boolean, got a string");
+  /* what follows the small scenario, and the error */
+  static const char *const bad[][2] = {
+      {",\"name\":\"\"", "/name: must be 1 to 255 bytes long, got 0"},
+      {",\"name\":7", "/name: expected a string, got a number"},
+      {",\"name\":\"a\\nb\"", "/name: must not contain control characters (byte 1)"},
+      {",\"name\":\"ab\\u007f\"", "/name: must not contain control characters (byte 2)"},
+      {",\"name\":\"\\u0085\"", "/name: must not contain control characters (byte 0)"},
+      {",\"start\":1", "/start: expected a boolean, got a number"},
+      {",\"start\":\"true\"", "/start: expected a boolean, got a string"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    char text[4096];
+    snprintf(text, sizeof text, "{\"type\":\"create\",\"scenario\":%s%s}", small_scenario,
+             bad[i][0]);
+    PARSE_BAD(text, bad[i][1]);
+  }
+}
+
+/* create: the scenario's own errors, with pointers into it. */
+static void test_invalid_create_scenario(void) {
   PARSE_BAD(
       "{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/"
       "1\",\"world\":{\"min\":[0,0,0],"
@@ -390,38 +430,39 @@ static void test_invalid(void) {
   PARSE_BAD("{\"type\":\"create\",\"scenario\":{\"format\":\"sylva.scenario/1\",\"seed\":2e400,"
             "\"world\":{\"min\":[0,0,0],\"max\":[1,1,1]}}}",
             "/scenario/seed: number out of range");
+}
 
-  /* run of every type that has one */
+/* Every type that has a run: required, an integer in [1, 2^53 - 1]; no other key. */
+static void test_invalid_run(void) {
   static const char *const with_run[] = {"subscribe", "unsubscribe", "control", "edit",
                                          "fork",      "get",         "light"};
-  for (size_t i = 0; i < sizeof with_run / sizeof with_run[0]; i++) {
-    snprintf(text, sizeof text, "{\"type\":\"%s\"}", with_run[i]);
-    PARSE_BAD(text, "/run: required");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":0}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1, got 0");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":-3}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1, got -3");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1.5}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1, got 1.5");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":\"1\"}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1, got a string");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1e400}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1, got a number out of range");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":-1e400}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1, got a number out of range");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":9223372036854775808}", with_run[i]);
-    PARSE_BAD(text, "/run: expected an integer >= 1 and <= 9007199254740991 (2^53 - 1), got "
-                    "9.223372036854776e+18");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":9007199254740993}", with_run[i]);
-    PARSE_BAD(text, "(2^53 - 1), got 9007199254740992");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1,\"bogus\":1}", with_run[i]);
-    PARSE_BAD(text, "/bogus: unknown key");
-    snprintf(text, sizeof text, "{\"type\":\"%s\",\"run\":1%s}", with_run[i],
-             "0000000000000000000000000000000000000000000000000000000000000000000");
-    PARSE_BAD(text, "(syntax) line 1, column");
-  }
+  /* what follows the type, and the error */
+  static const char *const bad[][2] = {
+      {"", "/run: required"},
+      {",\"run\":0", "/run: expected an integer >= 1, got 0"},
+      {",\"run\":-3", "/run: expected an integer >= 1, got -3"},
+      {",\"run\":1.5", "/run: expected an integer >= 1, got 1.5"},
+      {",\"run\":\"1\"", "/run: expected an integer >= 1, got a string"},
+      {",\"run\":1e400", "/run: expected an integer >= 1, got a number out of range"},
+      {",\"run\":-1e400", "/run: expected an integer >= 1, got a number out of range"},
+      {",\"run\":9223372036854775808", "/run: expected an integer >= 1 and <= 9007199254740991 "
+                                       "(2^53 - 1), got 9.223372036854776e+18"},
+      {",\"run\":9007199254740993", "(2^53 - 1), got 9007199254740992"},
+      {",\"run\":1,\"bogus\":1", "/bogus: unknown key"},
+      {",\"run\":1"
+       "0000000000000000000000000000000000000000000000000000000000000000000",
+       "(syntax) line 1, column"},
+  };
+  for (size_t i = 0; i < sizeof with_run / sizeof with_run[0]; i++)
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+      char text[256];
+      snprintf(text, sizeof text, "{\"type\":\"%s\"%s}", with_run[i], bad[k][0]);
+      PARSE_BAD(text, bad[k][1]);
+    }
+}
 
-  /* subscribe */
+/* subscribe: since is an integer in [0, 2^53 - 1]. */
+static void test_invalid_subscribe(void) {
   PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":-1}",
             "/since: must be in [0, 9007199254740991], got -1");
   PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":0.5}",
@@ -430,8 +471,10 @@ static void test_invalid(void) {
             "/since: expected a number, got null");
   PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":1e308}",
             "/since: must be in [0, 9007199254740991]");
+}
 
-  /* control */
+/* control: a known action; a count in [1, 100000], for step only. */
+static void test_invalid_control(void) {
   PARSE_BAD("{\"type\":\"control\",\"run\":1}", "/action: required");
   PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"go\"}", "/action: unknown action \"go\"");
   PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":1}",
@@ -446,8 +489,10 @@ static void test_invalid(void) {
             "/count: expected a number, got a string");
   PARSE_BAD("{\"type\":\"control\",\"run\":1,\"action\":\"start\",\"count\":2}",
             "/count: only allowed with \"action\": \"step\"");
+}
 
-  /* edit */
+/* edit's add_plants: unique ids, a species and at least one [x, y, z] root each. */
+static void test_invalid_edit_plants(void) {
   PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":{}}",
             "/add_plants: expected an array, got an object");
   PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[1]}",
@@ -480,6 +525,10 @@ static void test_invalid(void) {
             "{\"id\":\"b\",\"species\":\"o\",\"roots\":[[1,0,0]]},{\"id\":\"a\",\"species\":\"o\","
             "\"roots\":[[2,0,0]]}]}",
             "/add_plants/2/id: duplicate plant id \"a\" (also /add_plants/0/id)");
+}
+
+/* edit's add_obstacles: boxes, max above min, unique ids; remove_obstacles: unique ids. */
+static void test_invalid_edit_obstacles(void) {
   PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_obstacles\":[{\"id\":\"w\",\"kind\":\"sphere\","
             "\"min\":[0,0,0],\"max\":[1,1,1]}]}",
             "/add_obstacles/0/kind: unknown obstacle kind \"sphere\"");
@@ -503,44 +552,49 @@ static void test_invalid(void) {
             "/remove_obstacles/2: duplicate obstacle id \"a\" (also /remove_obstacles/0)");
   PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"remove_obstacles\":\"a\"}",
             "/remove_obstacles: expected an array, got a string");
-  {
-    /* 1001 elements of each list */
-    static const char *const lists[] = {"add_plants", "add_obstacles", "remove_obstacles"};
-    static const char *const elements[] = {
-        "{\"id\":\"p\",\"species\":\"o\",\"roots\":[[0,0,0]]}",
-        "{\"id\":\"o\",\"kind\":\"box\",\"min\":[0,0,0],\"max\":[1,1,1]}", "\"x\""};
-    for (int l = 0; l < 3; l++) {
-      size_t cap = 1001 * 64 + 256, n = 0;
-      char *big = malloc(cap);
-      if (!big) continue;
-      n += (size_t)snprintf(big + n, cap - n, "{\"type\":\"edit\",\"run\":1,\"%s\":[", lists[l]);
-      for (int i = 0; i < 1001; i++)
-        n += (size_t)snprintf(big + n, cap - n, "%s%s", i ? "," : "", elements[l]);
-      snprintf(big + n, cap - n, "]}");
-      char want[80];
-      snprintf(want, sizeof want, "/%s: 1001 elements; at most 1000", lists[l]);
-      PARSE_BAD(big, want);
-      free(big);
-    }
-  }
+}
 
-  /* fork, get, light */
+/* Each of edit's lists holds at most 1000 elements. */
+static void test_invalid_edit_list_sizes(void) {
+  static const char *const lists[] = {"add_plants", "add_obstacles", "remove_obstacles"};
+  static const char *const elements[] = {
+      "{\"id\":\"p\",\"species\":\"o\",\"roots\":[[0,0,0]]}",
+      "{\"id\":\"o\",\"kind\":\"box\",\"min\":[0,0,0],\"max\":[1,1,1]}", "\"x\""};
+  for (int l = 0; l < 3; l++) {
+    size_t cap = 1001 * 64 + 256, n = 0;
+    char *big = malloc(cap);
+    if (!big) continue;
+    n += (size_t)snprintf(big + n, cap - n, "{\"type\":\"edit\",\"run\":1,\"%s\":[", lists[l]);
+    for (int i = 0; i < 1001; i++)
+      n += (size_t)snprintf(big + n, cap - n, "%s%s", i ? "," : "", elements[l]);
+    snprintf(big + n, cap - n, "]}");
+    char want[80];
+    snprintf(want, sizeof want, "/%s: 1001 elements; at most 1000", lists[l]);
+    PARSE_BAD(big, want);
+    free(big);
+  }
+}
+
+/* fork: an iteration in [0, 2^31 - 1], a name of 1 to 255 bytes and no control. */
+static void test_invalid_fork(void) {
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"name\":\"x\"}", "/iteration: required");
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":2}", "/name: required");
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":-1,\"name\":\"x\"}",
             "/iteration: must be in [0, 2147483647], got -1");
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":2147483648,\"name\":\"x\"}",
             "/iteration: must be in [0, 2147483647]");
-  {
-    char name[300];
-    memset(name, 'n', 256);
-    name[256] = '\0';
-    snprintf(text, sizeof text, "{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"%s\"}",
-             name);
-    PARSE_BAD(text, "/name: must be 1 to 255 bytes long, got 256");
-  }
+  char name[300], text[512];
+  memset(name, 'n', 256);
+  name[256] = '\0';
+  snprintf(text, sizeof text, "{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"%s\"}",
+           name);
+  PARSE_BAD(text, "/name: must be 1 to 255 bytes long, got 256");
   PARSE_BAD("{\"type\":\"fork\",\"run\":1,\"iteration\":3,\"name\":\"\\t\"}",
             "/name: must not contain control characters");
+}
+
+/* get: an integer iteration and nothing else; light: a finite number z. */
+static void test_invalid_get_light(void) {
   PARSE_BAD("{\"type\":\"get\",\"run\":1}", "/iteration: required");
   PARSE_BAD("{\"type\":\"get\",\"run\":1,\"iteration\":\"3\"}",
             "/iteration: expected a number, got a string");
@@ -552,46 +606,52 @@ static void test_invalid(void) {
   PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":1e400}", "/z: number out of range");
   PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":-1e400}", "/z: number out of range");
   PARSE_BAD("{\"type\":\"light\",\"run\":1,\"z\":[1]}", "/z: expected a number, got an array");
+}
 
-  /* The ref survives a failure so that the error can echo it; nothing else does. */
-  {
-    sylva_msg m;
-    char err[256];
-    const char *bad = "{\"id\":\"r1\",\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\","
-                      "\"species\":\"o\","
-                      "\"roots\":[[0,0,0]]},{\"id\":\"b\",\"species\":\"o\",\"roots\":[[0,0]]}]}";
-    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, err, sizeof err), SYLVA_EINVAL);
-    CHECK_STR(m.ref, "\"r1\"");
-    CHECK(m.add_plants == NULL && m.add_plant_count == 0 && m.add_plant_species == NULL);
-    CHECK(strstr(err, "/add_plants/1/roots/0: expected [x, y, z]") != NULL);
-    sylva_msg_free(&m);
-    CHECK(m.ref == NULL);
-    /* err may be NULL */
-    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, NULL, 0), SYLVA_EINVAL);
-    sylva_msg_free(&m);
-    CHECK_INT(sylva_msg_parse("[", 1, &m, NULL, 0), SYLVA_EINVAL);
-    sylva_msg_free(&m);
-    /* a short err buffer is cut, still NUL-terminated */
-    char tiny[8];
-    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, tiny, sizeof tiny), SYLVA_EINVAL);
-    CHECK_INT(strlen(tiny), 7);
-    sylva_msg_free(&m);
-  }
+/* A bad edit whose second plant's root is not [x, y, z]. */
+static const char *const bad_edit =
+    "{\"id\":\"r1\",\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+    "\"roots\":[[0,0,0]]},{\"id\":\"b\",\"species\":\"o\",\"roots\":[[0,0]]}]}";
 
-  /* A key so long that the pointer is cut stays valid UTF-8 in the message. */
-  {
-    size_t n = 0;
-    n += (size_t)snprintf(text + n, sizeof text - n, "{\"type\":\"list\",\"");
-    for (int i = 0; i < 700; i++) n += (size_t)snprintf(text + n, sizeof text - n, "\xc3\xa9");
-    snprintf(text + n, sizeof text - n, "\":1}");
-    sylva_msg m;
-    char err[2048];
-    CHECK_INT(sylva_msg_parse(text, strlen(text), &m, err, sizeof err), SYLVA_EINVAL);
-    char quoted[2200];
-    snprintf(quoted, sizeof quoted, "\"%s\"", err);
-    CHECK_INT(sylva_json_check(quoted, strlen(quoted), 1, NULL, 0), 0);
-    sylva_msg_free(&m);
-  }
+/* The ref survives a failure so that the error can echo it; nothing else does. */
+static void test_invalid_keeps_ref(void) {
+  sylva_msg m;
+  char err[256];
+  CHECK_INT(sylva_msg_parse(bad_edit, strlen(bad_edit), &m, err, sizeof err), SYLVA_EINVAL);
+  CHECK_STR(m.ref, "\"r1\"");
+  CHECK(m.add_plants == NULL && m.add_plant_count == 0 && m.add_plant_species == NULL);
+  CHECK(strstr(err, "/add_plants/1/roots/0: expected [x, y, z]") != NULL);
+  sylva_msg_free(&m);
+  CHECK(m.ref == NULL);
+}
+
+/* The error buffer may be NULL, or short: the message is then cut and NUL-terminated. */
+static void test_invalid_error_buffer(void) {
+  sylva_msg m;
+  CHECK_INT(sylva_msg_parse(bad_edit, strlen(bad_edit), &m, NULL, 0), SYLVA_EINVAL);
+  sylva_msg_free(&m);
+  CHECK_INT(sylva_msg_parse("[", 1, &m, NULL, 0), SYLVA_EINVAL);
+  sylva_msg_free(&m);
+  char tiny[8];
+  CHECK_INT(sylva_msg_parse(bad_edit, strlen(bad_edit), &m, tiny, sizeof tiny), SYLVA_EINVAL);
+  CHECK_INT(strlen(tiny), 7);
+  sylva_msg_free(&m);
+}
+
+/* A key so long that the pointer is cut stays valid UTF-8 in the message. */
+static void test_invalid_long_key(void) {
+  char text[8192];
+  size_t n = 0;
+  n += (size_t)snprintf(text + n, sizeof text - n, "{\"type\":\"list\",\"");
+  for (int i = 0; i < 700; i++) n += (size_t)snprintf(text + n, sizeof text - n, "\xc3\xa9");
+  snprintf(text + n, sizeof text - n, "\":1}");
+  sylva_msg m;
+  char err[2048];
+  CHECK_INT(sylva_msg_parse(text, strlen(text), &m, err, sizeof err), SYLVA_EINVAL);
+  char quoted[2200];
+  snprintf(quoted, sizeof quoted, "\"%s\"", err);
+  CHECK_INT(sylva_json_check(quoted, strlen(quoted), 1, NULL, 0), 0);
+  sylva_msg_free(&m);
 }
 
 /* Deep nesting: 64 levels pass the syntax check, 65 do not. */
@@ -622,31 +682,21 @@ static void test_depth(void) {
 
 /* ---- JSONTestSuite, raw and wrapped ---- */
 
-static void test_suite(const char *dir) {
+static const char *suite_dir;
+
+/* Calls check(name, data, len) for every JSONTestSuite file; returns their number. */
+static size_t each_suite_file(void (*check)(const char *name, const char *data, size_t len)) {
   size_t count;
-  char **names = list_dir(dir, list_dir_json, &count);
+  char **names = list_dir(suite_dir, list_dir_json, &count);
   if (!names) {
     check_failed++;
-    fprintf(stderr, "cannot list the JSONTestSuite directory %s\n", dir);
-    return;
+    fprintf(stderr, "cannot list the JSONTestSuite directory %s\n", suite_dir);
+    return 0;
   }
   CHECK(count >= 300);
-
-  static const char *const wraps[][2] = {
-      {"{\"type\":\"create\",\"id\":7,\"scenario\":", "}"},
-      {"{\"type\":\"list\",\"id\":7,\"x\":", "}"},
-      {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"add_plants\":", "}"},
-      {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"add_obstacles\":[", "]}"},
-      {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"remove_obstacles\":", "}"},
-      {"{\"type\":\"hello\",\"id\":7,\"token\":", "}"},
-      {"{\"type\":\"light\",\"id\":7,\"run\":1,\"z\":", "}"},
-      {"{\"type\":\"control\",\"id\":7,\"run\":1,\"action\":\"step\",\"count\":", "}"},
-      {"{\"type\":\"list\",\"id\":", "}"},
-  };
-  size_t raw_errors = 0, wrapped_runs = 0;
   for (size_t f = 0; f < count; f++) {
     char path[4096];
-    snprintf(path, sizeof path, "%s/%s", dir, names[f]);
+    snprintf(path, sizeof path, "%s/%s", suite_dir, names[f]);
     size_t len = 0;
     char *data = read_file(path, &len);
     if (!data) {
@@ -654,87 +704,130 @@ static void test_suite(const char *dir) {
       fprintf(stderr, "cannot read %s\n", path);
       continue;
     }
-    sylva_msg m;
-    char err[512];
-    int rc = sylva_msg_parse(data, len, &m, err, sizeof err);
-    if (rc == SYLVA_EINVAL && err[0]) {
-      raw_errors++;
-    } else {
-      check_failed++;
-      fprintf(stderr, "JSONTestSuite %s raw: expected an error, got %d\n", names[f], rc);
-    }
-    sylva_msg_free(&m);
-
-    for (size_t w = 0; w < sizeof wraps / sizeof wraps[0]; w++) {
-      size_t n1 = strlen(wraps[w][0]), n2 = strlen(wraps[w][1]);
-      char *text = malloc(n1 + len + n2 + 1);
-      if (!text) continue;
-      memcpy(text, wraps[w][0], n1);
-      memcpy(text + n1, data, len);
-      memcpy(text + n1 + len, wraps[w][1], n2);
-      text[n1 + len + n2] = '\0';
-      rc = sylva_msg_parse(text, n1 + len + n2, &m, err, sizeof err);
-      wrapped_runs++;
-      bool valid_json = sylva_json_check_ex(text, n1 + len + n2, 64,
-                                            SYLVA_JSON_NO_NUL_ESCAPE | SYLVA_JSON_CJSON_NUMBERS,
-                                            NULL, 0) == 0;
-      /* An accepted message has no error text; a rejected one has, and a
-       * rejected message that is well-formed JSON still carries the ref. */
-      if (rc == 0) {
-        if (w < 2) {
-          check_failed++;
-          fprintf(stderr, "JSONTestSuite %s in wrap %zu: accepted\n", names[f], w);
-        }
-      } else if (rc != SYLVA_EINVAL || !err[0]) {
-        check_failed++;
-        fprintf(stderr, "JSONTestSuite %s in wrap %zu: status %d\n", names[f], w, rc);
-      } else if (valid_json && w + 1 < sizeof wraps / sizeof wraps[0] &&
-                 !(m.ref && strcmp(m.ref, "7") == 0)) {
-        check_failed++;
-        fprintf(stderr, "JSONTestSuite %s in wrap %zu: ref lost (%s)\n", names[f], w, err);
-      }
-      sylva_msg_free(&m);
-      free(text);
-    }
+    check(names[f], data, len);
     free(data);
   }
-  CHECK_INT(raw_errors, count);
-  CHECK_INT(wrapped_runs, count * (sizeof wraps / sizeof wraps[0]));
   list_dir_free(names, count);
+  return count;
+}
+
+static size_t raw_errors;
+
+static void check_raw(const char *name, const char *data, size_t len) {
+  sylva_msg m;
+  char err[512];
+  int rc = sylva_msg_parse(data, len, &m, err, sizeof err);
+  if (rc == SYLVA_EINVAL && err[0]) {
+    raw_errors++;
+  } else {
+    check_failed++;
+    fprintf(stderr, "JSONTestSuite %s raw: expected an error, got %d\n", name, rc);
+  }
+  sylva_msg_free(&m);
+}
+
+/* No file of the suite is a message: each one is an error with its text. */
+static void test_suite_raw(void) {
+  size_t count = each_suite_file(check_raw);
+  CHECK_INT(raw_errors, count);
+}
+
+/* Each file as the value of a field of a message (the first two must be refused). */
+static const char *const wraps[][2] = {
+    {"{\"type\":\"create\",\"id\":7,\"scenario\":", "}"},
+    {"{\"type\":\"list\",\"id\":7,\"x\":", "}"},
+    {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"add_plants\":", "}"},
+    {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"add_obstacles\":[", "]}"},
+    {"{\"type\":\"edit\",\"id\":7,\"run\":1,\"remove_obstacles\":", "}"},
+    {"{\"type\":\"hello\",\"id\":7,\"token\":", "}"},
+    {"{\"type\":\"light\",\"id\":7,\"run\":1,\"z\":", "}"},
+    {"{\"type\":\"control\",\"id\":7,\"run\":1,\"action\":\"step\",\"count\":", "}"},
+    {"{\"type\":\"list\",\"id\":", "}"},
+};
+#define WRAPS (sizeof wraps / sizeof wraps[0])
+static size_t wrapped_runs;
+
+/* An accepted message has no error text; a rejected one has, and a rejected message
+ * that is well-formed JSON still carries the ref 7 (the last wrap makes the file the
+ * id itself). */
+static void check_wrapped(const char *name, const char *data, size_t len) {
+  for (size_t w = 0; w < WRAPS; w++) {
+    size_t n1 = strlen(wraps[w][0]), n2 = strlen(wraps[w][1]);
+    char *text = malloc(n1 + len + n2 + 1);
+    if (!text) continue;
+    memcpy(text, wraps[w][0], n1);
+    memcpy(text + n1, data, len);
+    memcpy(text + n1 + len, wraps[w][1], n2);
+    text[n1 + len + n2] = '\0';
+    sylva_msg m;
+    char err[512];
+    int rc = sylva_msg_parse(text, n1 + len + n2, &m, err, sizeof err);
+    wrapped_runs++;
+    bool valid_json = sylva_json_check_ex(text, n1 + len + n2, 64,
+                                          SYLVA_JSON_NO_NUL_ESCAPE | SYLVA_JSON_CJSON_NUMBERS,
+                                          NULL, 0) == 0;
+    if (rc == 0) {
+      if (w < 2) {
+        check_failed++;
+        fprintf(stderr, "JSONTestSuite %s in wrap %zu: accepted\n", name, w);
+      }
+    } else if (rc != SYLVA_EINVAL || !err[0]) {
+      check_failed++;
+      fprintf(stderr, "JSONTestSuite %s in wrap %zu: status %d\n", name, w, rc);
+    } else if (valid_json && w + 1 < WRAPS && !(m.ref && strcmp(m.ref, "7") == 0)) {
+      check_failed++;
+      fprintf(stderr, "JSONTestSuite %s in wrap %zu: ref lost (%s)\n", name, w, err);
+    }
+    sylva_msg_free(&m);
+    free(text);
+  }
+}
+
+/* Each file wrapped into every message: refused where it must be, the ref kept. */
+static void test_suite_wrapped(void) {
+  size_t count = each_suite_file(check_wrapped);
+  CHECK_INT(wrapped_runs, count * WRAPS);
 }
 
 /* ---- encoders ---- */
 
-static void test_encoders(void) {
-  char *text = sylva_msg_welcome("0.1.0", SYLVA_AUTH_ALL, NULL);
-  CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
-                  "\"0.1.0\"},\"auth\":true,\"public_read\":false}");
+/* The encoder's text is exactly want and valid JSON; frees it. */
+static void check_encoded(char *text, const char *want) {
+  CHECK_STR(text, want);
+  cJSON_Delete(VALID_JSON(text));
   free(text);
-  text = sylva_msg_welcome("0.1.0", SYLVA_AUTH_CHANGES, NULL);
-  CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
-                  "\"0.1.0\"},\"auth\":true,\"public_read\":true}");
-  free(text);
-  text = sylva_msg_welcome("0.1.0", SYLVA_AUTH_NONE, "\"h1\"");
-  CHECK_STR(text, "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
-                  "\"0.1.0\"},\"auth\":false,\"public_read\":true,\"ref\":\"h1\"}");
+}
+
+/* welcome: protocol, server, auth and public_read for each token rule, and the
+ * ref when given. */
+static void test_encode_welcome(void) {
+  check_encoded(sylva_msg_welcome("0.1.0", SYLVA_AUTH_ALL, NULL),
+                "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
+                "\"0.1.0\"},\"auth\":true,\"public_read\":false}");
+  check_encoded(sylva_msg_welcome("0.1.0", SYLVA_AUTH_CHANGES, NULL),
+                "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
+                "\"0.1.0\"},\"auth\":true,\"public_read\":true}");
+  check_encoded(sylva_msg_welcome("0.1.0", SYLVA_AUTH_NONE, "\"h1\""),
+                "{\"type\":\"welcome\",\"protocol\":1,\"server\":{\"name\":\"sylva\",\"version\":"
+                "\"0.1.0\"},\"auth\":false,\"public_read\":true,\"ref\":\"h1\"}");
+  char *text = sylva_msg_welcome(NULL, SYLVA_AUTH_NONE, NULL);
   cJSON *j = VALID_JSON(text);
-  cJSON_Delete(j);
-  free(text);
-  text = sylva_msg_welcome(NULL, SYLVA_AUTH_NONE, NULL);
-  j = VALID_JSON(text);
   if (j) {
     CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(j, "auth")));
     CHECK_INT(num_of(j, "protocol"), 1);
   }
   cJSON_Delete(j);
   free(text);
+}
 
+/* error: every code; the message escaped, cut UTF-8 replaced; the ref when given. */
+static void test_encode_error(void) {
   static const char *const codes[] = {"bad_request", "unknown_run", "unauthorized",
                                       "too_large",   "busy",        "internal"};
   for (size_t i = 0; i < 6; i++) {
-    text = sylva_msg_error(codes[i], "/run: expected an integer >= 1, got \"x\"\n\t\x01",
-                           i % 2 ? "\"r\\\"1\"" : NULL);
-    j = VALID_JSON(text);
+    char *text = sylva_msg_error(codes[i], "/run: expected an integer >= 1, got \"x\"\n\t\x01",
+                                 i % 2 ? "\"r\\\"1\"" : NULL);
+    cJSON *j = VALID_JSON(text);
     if (j) {
       CHECK_STR(str_of(j, "type"), "error");
       CHECK_STR(str_of(j, "code"), codes[i]);
@@ -745,52 +838,47 @@ static void test_encoders(void) {
     cJSON_Delete(j);
     free(text);
   }
-  text = sylva_msg_error("bad_request", "cut \xc3", "12");
-  CHECK_STR(text,
-            "{\"type\":\"error\",\"code\":\"bad_request\",\"message\":\"cut \\ufffd\",\"ref\":12}");
-  j = VALID_JSON(text);
-  cJSON_Delete(j);
-  free(text);
+  check_encoded(sylva_msg_error("bad_request", "cut \xc3", "12"),
+                "{\"type\":\"error\",\"code\":\"bad_request\",\"message\":\"cut \\ufffd\","
+                "\"ref\":12}");
+}
 
-  /* a parse error echoed through the encoder is valid JSON */
-  {
-    sylva_msg m;
-    char err[512];
-    const char *bad = "{\"id\":\"\\u00e9\\ud83c\\udf33\",\"type\":\"nope\\u00e9\"}";
-    CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, err, sizeof err), SYLVA_EINVAL);
-    text = sylva_msg_error("bad_request", err, m.ref);
-    j = VALID_JSON(text);
-    if (j) {
-      CHECK_STR(str_of(j, "ref"), "\xc3\xa9\xf0\x9f\x8c\xb3");
-      CHECK(strstr(str_of(j, "message") ? str_of(j, "message") : "", "unknown message type") !=
-            NULL);
-    }
-    cJSON_Delete(j);
-    free(text);
-    sylva_msg_free(&m);
+/* A parse error echoed through the encoder is valid JSON, with the ref decoded. */
+static void test_encode_parse_error(void) {
+  sylva_msg m;
+  char err[512];
+  const char *bad = "{\"id\":\"\\u00e9\\ud83c\\udf33\",\"type\":\"nope\\u00e9\"}";
+  CHECK_INT(sylva_msg_parse(bad, strlen(bad), &m, err, sizeof err), SYLVA_EINVAL);
+  char *text = sylva_msg_error("bad_request", err, m.ref);
+  cJSON *j = VALID_JSON(text);
+  if (j) {
+    CHECK_STR(str_of(j, "ref"), "\xc3\xa9\xf0\x9f\x8c\xb3");
+    CHECK(strstr(str_of(j, "message") ? str_of(j, "message") : "", "unknown message type") !=
+          NULL);
   }
-
-  text = sylva_msg_created(3, "oak \"stand\"", "\"c\"");
-  CHECK_STR(text, "{\"type\":\"created\",\"run\":3,\"name\":\"oak \\\"stand\\\"\",\"ref\":\"c\"}");
-  j = VALID_JSON(text);
   cJSON_Delete(j);
   free(text);
+  sylva_msg_free(&m);
+}
 
-  text = sylva_msg_status(9007199254740992LL, SYLVA_RUN_PAUSED, 12, NULL);
-  CHECK_STR(
-      text,
+/* created: the run and its name, escaped. */
+static void test_encode_created(void) {
+  check_encoded(sylva_msg_created(3, "oak \"stand\"", "\"c\""),
+                "{\"type\":\"created\",\"run\":3,\"name\":\"oak \\\"stand\\\"\",\"ref\":\"c\"}");
+}
+
+/* status: runs beyond 2^53, each status by its one name (run_status.h), parsed back. */
+static void test_encode_status(void) {
+  check_encoded(
+      sylva_msg_status(9007199254740992LL, SYLVA_RUN_PAUSED, 12, NULL),
       "{\"type\":\"status\",\"run\":9007199254740992,\"status\":\"paused\",\"iteration\":12}");
-  j = VALID_JSON(text);
-  cJSON_Delete(j);
-  free(text);
-  /* every status by its one name (sylva/run_status.h), and the names parse back */
   static const char *const statuses[] = {"paused", "running", "finished", "failed"};
   for (int i = 0; i < 4; i++) {
     sylva_run_status parsed;
     CHECK_INT(sylva_run_status_parse(statuses[i], &parsed), 0);
     CHECK_INT(parsed, i);
-    text = sylva_msg_status(2, (sylva_run_status)i, i, "5");
-    j = VALID_JSON(text);
+    char *text = sylva_msg_status(2, (sylva_run_status)i, i, "5");
+    cJSON *j = VALID_JSON(text);
     if (j) {
       CHECK_STR(str_of(j, "status"), statuses[i]);
       CHECK_INT(num_of(j, "iteration"), i);
@@ -802,14 +890,17 @@ static void test_encoders(void) {
   sylva_run_status none;
   CHECK_INT(sylva_run_status_parse("stopped", &none), -1);
   CHECK_STR(sylva_run_status_name((sylva_run_status)99), "unknown");
+}
 
+/* runs, and the same list alone: names escaped (a missing one empty), big node counts. */
+static void test_encode_runs(void) {
   sylva_run_summary runs[] = {
       {1, "wall", SYLVA_RUN_RUNNING, 4, 5, 1234, false},
       {2, "tab\there \xe2\x9c\x93", SYLVA_RUN_FINISHED, 40, 1, 9000000000LL, false},
       {3, NULL, SYLVA_RUN_PAUSED, 0, 0, 0, true},
   };
-  text = sylva_msg_runs(runs, 3, "\"L\"");
-  j = VALID_JSON(text);
+  char *text = sylva_msg_runs(runs, 3, "\"L\"");
+  cJSON *j = VALID_JSON(text);
   if (j) {
     CHECK_STR(str_of(j, "type"), "runs");
     const cJSON *arr = cJSON_GetObjectItemCaseSensitive(j, "runs");
@@ -838,18 +929,17 @@ static void test_encoders(void) {
   text = sylva_msg_runs(NULL, 0, NULL);
   CHECK_STR(text, "{\"type\":\"runs\",\"runs\":[]}");
   free(text);
+}
 
+/* scenarios: the ready scenarios with their titles (the name when there is none). */
+static void test_encode_scenarios(void) {
   const char *names[] = {"wall", "urban"};
   const char *titles[] = {"Tree beside a wall", NULL};
-  text = sylva_msg_scenarios(names, titles, 2, "1");
-  CHECK_STR(
-      text,
+  check_encoded(
+      sylva_msg_scenarios(names, titles, 2, "1"),
       "{\"type\":\"scenarios\",\"scenarios\":[{\"name\":\"wall\",\"title\":\"Tree beside a wall\"},"
       "{\"name\":\"urban\",\"title\":\"urban\"}],\"ref\":1}");
-  j = VALID_JSON(text);
-  cJSON_Delete(j);
-  free(text);
-  text = sylva_msg_scenarios(names, NULL, 0, NULL);
+  char *text = sylva_msg_scenarios(names, NULL, 0, NULL);
   CHECK_STR(text, "{\"type\":\"scenarios\",\"scenarios\":[]}");
   free(text);
 }
@@ -1030,16 +1120,17 @@ static void check_snapshot_matches_skeleton(const char *snapshot, const sylva_wo
   free(skeleton);
 }
 
-static void test_snapshot_deltas(void) {
+/* The world of the snapshot tests: a wall, a tree and a two-root shrub of one
+ * species, and a species no plant uses yet (still offered; its label needs escaping). */
+static sylva_world *snapshot_world(void) {
   sylva_world_def def = sylva_default_world_def();
   sylva_world *w = NULL;
   CHECK_INT(sylva_world_create(&def, &w), 0);
-  if (!w) return;
+  if (!w) return NULL;
   sylva_species_def sp = sylva_default_species_def();
   sp.tropism[0] = 0, sp.tropism[1] = 0, sp.tropism[2] = 1;
   int species = sylva_world_add_species(w, &sp, "oak");
   CHECK(species >= 0);
-  /* a species no plant uses yet is still offered; its label needs escaping */
   CHECK_INT(sylva_world_add_species(w, &sp, "big \"leaf\""), species + 1);
   sylva_obstacle_def wall = {.label = "wall", .min = {1.0, -5, 0}, .max = {1.2, 5, 4}};
   CHECK(sylva_world_add_obstacle(w, &wall) >= 0);
@@ -1049,7 +1140,28 @@ static void test_snapshot_deltas(void) {
   sylva_plant_def shrub = {species, "s\"1", shrub_roots, 2};
   CHECK_INT(sylva_world_add_plant(w, &tree, NULL), 0);
   CHECK_INT(sylva_world_add_plant(w, &shrub, NULL), 1);
+  return w;
+}
 
+/* Grows w n iterations. */
+static void grow(sylva_world *w, int n) {
+  for (int i = 0; i < n; i++) CHECK_INT(sylva_world_step(w, NULL), 0);
+}
+
+/* The model must hold exactly the nodes of w's skeleton. */
+static void compare_with_skeleton(model *m, const sylva_world *w, int iteration) {
+  char *skel = sylva_encode_skeleton(w);
+  cJSON *kj = skel ? cJSON_Parse(skel) : NULL;
+  CHECK(kj != NULL);
+  model_compare(m, kj, iteration);
+  cJSON_Delete(kj);
+  free(skel);
+}
+
+/* A first snapshot: its header, stats and species; nodes, obstacles, plants as the skeleton's. */
+static void test_snapshot(void) {
+  sylva_world *w = snapshot_world();
+  if (!w) return;
   char *snap = sylva_msg_snapshot(4, 10, w, "\"sub\"");
   cJSON *sj = VALID_JSON(snap);
   model m = {0};
@@ -1073,71 +1185,88 @@ static void test_snapshot_deltas(void) {
     model_load(&m, sj);
   }
   check_snapshot_matches_skeleton(snap, w);
-  char *skel = sylva_encode_skeleton(w);
-  cJSON *kj = skel ? cJSON_Parse(skel) : NULL;
-  model_compare(&m, kj, 0);
-  cJSON_Delete(kj);
-  free(skel);
+  compare_with_skeleton(&m, w, 0);
   cJSON_Delete(sj);
   free(snap);
+  free(m.nodes);
+  sylva_world_destroy(w);
+}
 
-  size_t total_added = 0, total_radii = 0, total_shed = 0;
+typedef struct delta_totals {
+  size_t added, radii, shed;
+} delta_totals;
+
+/* The delta of iteration it: its header and stats (those of the stats line); applied
+ * to the model. */
+static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, int it,
+                        delta_totals *t) {
+  char *delta = sylva_msg_delta(4, 10 + it, w, j);
+  cJSON *dj = VALID_JSON(delta);
+  if (dj) {
+    CHECK_STR(str_of(dj, "type"), "delta");
+    CHECK_INT(num_of(dj, "run"), 4);
+    CHECK_INT(num_of(dj, "seq"), 10 + it);
+    CHECK_INT(num_of(dj, "iteration"), it);
+    CHECK(cJSON_GetObjectItemCaseSensitive(dj, "ref") == NULL);
+    t->added += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "added"));
+    t->radii += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "radii"));
+    t->shed += model_apply(m, dj);
+    char *line = sylva_encode_stats_line(w, j, 0);
+    cJSON *lj = line ? cJSON_Parse(line) : NULL;
+    CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"),
+                              cJSON_GetObjectItemCaseSensitive(dj, "stats"), true));
+    cJSON_Delete(lj);
+    free(line);
+  }
+  cJSON_Delete(dj);
+  free(delta);
+}
+
+/* The first snapshot plus 15 deltas rebuild the skeleton after every iteration. */
+static void test_deltas(void) {
+  sylva_world *w = snapshot_world();
+  if (!w) return;
+  char *snap = sylva_msg_snapshot(4, 10, w, "\"sub\"");
+  cJSON *sj = VALID_JSON(snap);
+  model m = {0};
+  model_load(&m, sj);
+  cJSON_Delete(sj);
+  free(snap);
+  delta_totals t = {0};
   for (int it = 1; it <= 15; it++) {
     const sylva_journal *j = NULL;
     int rc = sylva_world_step(w, &j);
     CHECK_INT(rc, 0);
     if (rc || !j) break;
-    char *delta = sylva_msg_delta(4, 10 + it, w, j);
-    cJSON *dj = VALID_JSON(delta);
-    if (dj) {
-      CHECK_STR(str_of(dj, "type"), "delta");
-      CHECK_INT(num_of(dj, "run"), 4);
-      CHECK_INT(num_of(dj, "seq"), 10 + it);
-      CHECK_INT(num_of(dj, "iteration"), it);
-      CHECK(cJSON_GetObjectItemCaseSensitive(dj, "ref") == NULL);
-      total_added += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "added"));
-      total_radii += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "radii"));
-      total_shed += model_apply(&m, dj);
-      /* the stats are those of the stats line */
-      char *line = sylva_encode_stats_line(w, j, 0);
-      cJSON *lj = line ? cJSON_Parse(line) : NULL;
-      CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"),
-                                cJSON_GetObjectItemCaseSensitive(dj, "stats"), true));
-      cJSON_Delete(lj);
-      free(line);
-    }
-    skel = sylva_encode_skeleton(w);
-    kj = skel ? cJSON_Parse(skel) : NULL;
-    CHECK(kj != NULL);
-    model_compare(&m, kj, it);
-    cJSON_Delete(kj);
-    free(skel);
-    cJSON_Delete(dj);
-    free(delta);
+    apply_delta(&m, w, j, it, &t);
+    compare_with_skeleton(&m, w, it);
   }
-  /* the journal's stats are also what a fresh snapshot reports */
-  snap = sylva_msg_snapshot(4, 25, w, NULL);
-  sj = VALID_JSON(snap);
+  printf("snapshot + 15 deltas: %zu nodes added, %zu radii, %zu subtrees shed\n", t.added,
+         t.radii, t.shed);
+  CHECK(t.added > 100);
+  CHECK(t.radii > 0);
+  free(m.nodes);
+  sylva_world_destroy(w);
+}
+
+/* A snapshot after 15 iterations holds the skeleton too. */
+static void test_later_snapshot(void) {
+  sylva_world *w = snapshot_world();
+  if (!w) return;
+  grow(w, 15);
+  char *snap = sylva_msg_snapshot(4, 25, w, NULL);
+  cJSON *sj = VALID_JSON(snap);
   check_snapshot_matches_skeleton(snap, w);
   if (sj) {
     CHECK_INT(num_of(sj, "iteration"), 15);
     CHECK(cJSON_GetObjectItemCaseSensitive(sj, "ref") == NULL);
     model fresh = {0};
     model_load(&fresh, sj);
-    skel = sylva_encode_skeleton(w);
-    kj = skel ? cJSON_Parse(skel) : NULL;
-    model_compare(&fresh, kj, 15);
-    cJSON_Delete(kj);
-    free(skel);
+    compare_with_skeleton(&fresh, w, 15);
     free(fresh.nodes);
   }
   cJSON_Delete(sj);
   free(snap);
-  printf("snapshot + 15 deltas: %zu nodes added, %zu radii, %zu subtrees shed\n", total_added,
-         total_radii, total_shed);
-  CHECK(total_added > 100);
-  CHECK(total_radii > 0);
-  free(m.nodes);
   sylva_world_destroy(w);
 }
 
@@ -1226,14 +1355,15 @@ static void check_slice(const sylva_world *w, double z, double want_z, const cha
   free(text);
 }
 
-static void test_light_slice(void) {
+/* The world of the light-slice tests, grown 3 iterations: a tree beside a board over
+ * x in [0, 2), y in [-1.5, 1.5), z in [2, 2.2). */
+static sylva_world *board_world(void) {
   sylva_world_def def = sylva_default_world_def();
   def.min[0] = -2, def.min[1] = -1.5, def.max[0] = 2, def.max[1] = 1.5, def.max[2] = 4;
   def.voxel = 0.1;
   sylva_world *w = NULL;
   CHECK_INT(sylva_world_create(&def, &w), 0);
-  if (!w) return;
-  /* a board over x in [0, 2), y in [-1.5, 1.5), z in [2, 2.2) */
+  if (!w) return NULL;
   sylva_obstacle_def board = {.label = "board", .min = {0, -1.5, 2}, .max = {2, 1.5, 2.2}};
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
   sylva_species_def sp = sylva_default_species_def();
@@ -1242,31 +1372,45 @@ static void test_light_slice(void) {
   const double roots[][3] = {{-1, 0, 0}};
   sylva_plant_def tree = {species, "t1", roots, 1};
   CHECK_INT(sylva_world_add_plant(w, &tree, NULL), 0);
-  for (int i = 0; i < 3; i++) CHECK_INT(sylva_world_step(w, NULL), 0);
+  grow(w, 3);
+  return w;
+}
 
+/* The cells of a slice over the board, x in [20, 40) and y in [0, 30), that are 0. */
+static size_t dark_over_board(const unsigned char *values, int nx) {
+  size_t dark = 0;
+  for (int y = 0; y < 30; y++)
+    for (int x = 20; x < 40; x++) dark += values[y * nx + x] == 0;
+  return dark;
+}
+
+/* Inside the board and just under it, dark over the board and light beside it. */
+static void test_light_slice_board(void) {
+  sylva_world *w = board_world();
+  if (!w) return;
+  static const struct {
+    double z, want_z;
+    const char *ref;
+  } slices[] = {{2.1, 2.15, "\"s\""}, {1.95, 1.95, NULL}};
+  for (size_t i = 0; i < sizeof slices / sizeof slices[0]; i++) {
+    unsigned char *values = NULL;
+    int nx = 0;
+    check_slice(w, slices[i].z, slices[i].want_z, slices[i].ref, &values, &nx);
+    if (values) {
+      CHECK_INT(dark_over_board(values, nx), 20 * 30);
+      CHECK(values[15 * nx + 2] > 0);
+    }
+    free(values);
+  }
+  sylva_world_destroy(w);
+}
+
+/* The top layer is in full light (z clamped into the world). */
+static void test_light_slice_top(void) {
+  sylva_world *w = board_world();
+  if (!w) return;
   unsigned char *values = NULL;
   int nx = 0;
-  /* inside the board: every cell over the board is 0 */
-  check_slice(w, 2.1, 2.15, "\"s\"", &values, &nx);
-  if (values) {
-    size_t zero = 0;
-    for (int y = 0; y < 30; y++)
-      for (int x = 20; x < 40; x++) zero += values[y * nx + x] == 0;
-    CHECK_INT(zero, 20 * 30);
-    CHECK(values[15 * nx + 2] > 0); /* beside the board, at the edge of the world */
-  }
-  free(values);
-  /* just under the board */
-  check_slice(w, 1.95, 1.95, NULL, &values, &nx);
-  if (values) {
-    size_t dark = 0;
-    for (int y = 0; y < 30; y++)
-      for (int x = 20; x < 40; x++) dark += values[y * nx + x] == 0;
-    CHECK_INT(dark, 20 * 30);
-    CHECK(values[15 * nx + 2] > 0);
-  }
-  free(values);
-  /* the top layer is in full light; z is clamped into the world */
   check_slice(w, 1e9, 3.95, NULL, &values, &nx);
   if (values) {
     size_t full = 0;
@@ -1274,24 +1418,35 @@ static void test_light_slice(void) {
     CHECK_INT(full, 40 * 30);
   }
   free(values);
-  check_slice(w, -7, 0.05, NULL, &values, &nx);
-  free(values);
-  check_slice(w, NAN, 0.05, NULL, &values, &nx);
-  free(values);
-  check_slice(w, 4.0, 3.95, NULL, &values, &nx);
-  free(values);
-  /* 0.3 / 0.1 is 2.9999999999999996: layer 2, as the core's voxel lookup has it */
-  check_slice(w, 0.3, 0.25, NULL, &values, &nx);
-  free(values);
   sylva_world_destroy(w);
+}
 
-  /* an odd number of cells exercises base64 padding: 3 x 1 and 1 x 1 and 2 x 1 */
+/* z is clamped into the world and taken to its layer as the core's voxel lookup does. */
+static void test_light_slice_layers(void) {
+  sylva_world *w = board_world();
+  if (!w) return;
+  unsigned char *values = NULL;
+  int nx = 0;
+  /* z asked, z of the layer's centre: 0.3 / 0.1 is 2.9999999999999996, layer 2 */
+  static const double z[][2] = {{-7, 0.05}, {NAN, 0.05}, {4.0, 3.95}, {0.3, 0.25}};
+  for (size_t i = 0; i < sizeof z / sizeof z[0]; i++) {
+    check_slice(w, z[i][0], z[i][1], NULL, &values, &nx);
+    free(values);
+  }
+  sylva_world_destroy(w);
+}
+
+/* An odd number of cells exercises base64 padding: 1 x 1, 2 x 1, 3 x 1 and 4 x 1. */
+static void test_light_slice_padding(void) {
   for (int cells = 1; cells <= 4; cells++) {
     sylva_world_def d = sylva_default_world_def();
     d.min[0] = 0, d.max[0] = cells * 0.5, d.min[1] = 0, d.max[1] = 0.5, d.max[2] = 1;
     d.voxel = 0.5;
+    sylva_world *w = NULL;
     CHECK_INT(sylva_world_create(&d, &w), 0);
     if (!w) continue;
+    unsigned char *values = NULL;
+    int nx = 0;
     check_slice(w, 0.2, 0.25, NULL, &values, &nx);
     CHECK(values != NULL);
     free(values);
@@ -1300,25 +1455,37 @@ static void test_light_slice(void) {
 }
 
 int main(int argc, char **argv) {
-  if (argc == 3 && strcmp(argv[1], "--jsontestsuite") == 0) {
+  if (argc >= 2 && strcmp(argv[1], "--jsontestsuite") == 0 && (argc == 3 || argc == 4)) {
     DIR *d = opendir(argv[2]);
     if (!d) {
       printf("skip: no JSONTestSuite at %s (meson option jsontestsuite)\n", argv[2]);
       return 77;
     }
     closedir(d);
-    test_suite(argv[2]);
+    suite_dir = argv[2];
+    static const check_test suite[] = {CHECK_TEST(suite_raw), CHECK_TEST(suite_wrapped)};
+    CHECK_RUN(argc, argv, 3, suite);
     return check_summary("protocol JSONTestSuite");
   }
-  if (argc != 1) {
-    fprintf(stderr, "usage: test-protocol [--jsontestsuite DIR]\n");
+  if (argc > 2 || (argc == 2 && argv[1][0] == '-')) {
+    fprintf(stderr, "usage: test-protocol [TEST] | test-protocol --jsontestsuite DIR [TEST]\n");
     return 2;
   }
-  test_valid();
-  test_invalid();
-  test_depth();
-  test_encoders();
-  test_snapshot_deltas();
-  test_light_slice();
+  static const check_test tests[] = {
+      CHECK_TEST(valid_hello), CHECK_TEST(valid_numeric_ids), CHECK_TEST(valid_create),
+      CHECK_TEST(valid_create_empty_site), CHECK_TEST(valid_subscribe), CHECK_TEST(valid_control),
+      CHECK_TEST(valid_edit), CHECK_TEST(valid_fork_get_light), CHECK_TEST(valid_names),
+      CHECK_TEST(invalid_type_and_id), CHECK_TEST(invalid_keys), CHECK_TEST(invalid_syntax),
+      CHECK_TEST(invalid_hello), CHECK_TEST(invalid_create), CHECK_TEST(invalid_create_scenario),
+      CHECK_TEST(invalid_run), CHECK_TEST(invalid_subscribe), CHECK_TEST(invalid_control),
+      CHECK_TEST(invalid_edit_plants), CHECK_TEST(invalid_edit_obstacles),
+      CHECK_TEST(invalid_edit_list_sizes), CHECK_TEST(invalid_fork), CHECK_TEST(invalid_get_light),
+      CHECK_TEST(invalid_keeps_ref), CHECK_TEST(invalid_error_buffer), CHECK_TEST(invalid_long_key),
+      CHECK_TEST(depth), CHECK_TEST(encode_welcome), CHECK_TEST(encode_error),
+      CHECK_TEST(encode_parse_error), CHECK_TEST(encode_created), CHECK_TEST(encode_status),
+      CHECK_TEST(encode_runs), CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
+      CHECK_TEST(deltas), CHECK_TEST(later_snapshot), CHECK_TEST(light_slice_board),
+      CHECK_TEST(light_slice_top), CHECK_TEST(light_slice_layers), CHECK_TEST(light_slice_padding)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("protocol");
 }

@@ -139,6 +139,14 @@ class RenderEnv(Env):
 def part_formats(env, c):
     if not env.stored_run(c):
         return
+    formats_written(env, c)
+    svg_and_pdf_read(env, c)
+    views_and_width(env, c)
+
+
+def formats_written(env, c):
+    """render -o run.png, .svg and .pdf: exit 0 silently, no .tmp left, the type `file`
+    names."""
     for ext, magic in (("png", "PNG image data"), ("svg", "SVG Scalable Vector Graphics image"),
                        ("pdf", "PDF document")):
         out = env.path("run." + ext)
@@ -151,6 +159,10 @@ def part_formats(env, c):
             continue
         kind = subprocess.run(["file", "-b", out], capture_output=True).stdout.decode()
         c.check(kind.startswith(magic), "file says %s is %s" % (out, magic), kind)
+
+
+def svg_and_pdf_read(env, c):
+    """rsvg-convert converts the SVG; pdfinfo reads the PDF, one page."""
     svg, pdf = env.path("run.svg"), env.path("run.pdf")
     if os.path.exists(svg):
         p = subprocess.run(["rsvg-convert", "-o", env.path("svg.png"), svg], capture_output=True)
@@ -161,7 +173,11 @@ def part_formats(env, c):
         info = p.stdout.decode()
         c.check(p.returncode == 0 and re.search(r"^Pages:\s+1$", info, re.M),
                 "pdfinfo reads the PDF: one page", info + p.stderr.decode())
-    # the default picture is 500 per view; --width, --view and --iteration are honoured
+
+
+def views_and_width(env, c):
+    """The default picture is 500 per view; --width, --view and --iteration are
+    honoured."""
     w, _ = png_size(env.path("run.png"))
     c.check(w == 1500, "all three views: 1500 pixels wide by default", w)
     for view in ("front", "side", "top"):
@@ -173,88 +189,105 @@ def part_formats(env, c):
             c.check(png_size(out)[0] == 640, "--width 640 gives 640 pixels (%s)" % view)
 
 
+class FrontView:
+    """A front view decoded, with render.h's mapping of metres to pixels (one panel,
+    x to the right, z up) and the colours the renderer uses."""
+
+    def __init__(self, path, k, world, width):
+        self.png = png = Png(path)
+        self.w, self.h = png.width, png.height
+        self.lo, self.hi = world["min"], world["max"]
+        self.left = k["RENDER_MARGIN_LEFT"]
+        self.scale = (width - k["RENDER_MARGIN_LEFT"] - k["RENDER_MARGIN_RIGHT"]) / (
+            self.hi[0] - self.lo[0])
+        self.top = k["RENDER_TITLE_HEIGHT"] + k["RENDER_PANEL_TITLE_HEIGHT"]
+        self.grey = round(255 * (1 - k["RENDER_OBSTACLE_ALPHA"] * (1 - k["RENDER_OBSTACLE_GREY"])))
+        self.tree = k["palette0"]
+        self.backgrounds = ((255, 255, 255), (self.grey, self.grey, self.grey))
+        self.seen = {}  # a picture has few distinct colours
+
+    def px(self, x):
+        return self.left + (x - self.lo[0]) * self.scale
+
+    def py(self, z):
+        return self.top + (self.hi[2] - z) * self.scale
+
+    def is_grey(self, p):
+        g = self.grey
+        return abs(p[0] - g) <= 3 and abs(p[1] - g) <= 3 and abs(p[2] - g) <= 3
+
+    def box(self, x0, x1, z0, z1, inset):
+        """Pixel columns and rows whose centres lie inside the box of metres,
+        shrunk by inset pixels, clipped to the picture."""
+        cols = range(max(0, int(self.px(x0) + inset)), min(self.w, int(self.px(x1) - inset)))
+        lines = range(max(0, int(self.py(z1) + inset)), min(self.h, int(self.py(z0) - inset)))
+        return [(x, y) for y in lines for x in cols]
+
+    def count_tree(self, pixels):
+        n = 0
+        for x, y in pixels:
+            p = self.png.pixel(x, y)
+            if p not in self.seen:
+                self.seen[p] = tree_coloured(p, self.tree, self.backgrounds)
+            n += self.seen[p]
+        return n
+
+
 def part_pixels(env, c):
     if not env.stored_run(c):
         return
     k = render_constants(env.server)
     with open(env.scenario(SCENARIO)) as f:
         scenario = json.load(f)
-    lo, hi = scenario["world"]["min"], scenario["world"]["max"]
-    wall = scenario["obstacles"][0]
     width = 800
     out = env.path("front.png")
     rc, _, err = env.render("--db", env.db, "--name", RUN, "--view", "front", "--width", width,
                             "-o", out)
     if not c.check(rc == 0, "render --view front", err):
         return
-    png = Png(out)
-    w, h = png.width, png.height
-    # render.h: one panel, x to the right, z up
-    scale = (width - k["RENDER_MARGIN_LEFT"] - k["RENDER_MARGIN_RIGHT"]) / (hi[0] - lo[0])
-    top = k["RENDER_TITLE_HEIGHT"] + k["RENDER_PANEL_TITLE_HEIGHT"]
+    view = FrontView(out, k, scenario["world"], width)
+    c.check(view.w == width and view.h == math.ceil(view.top + (view.hi[2] - view.lo[2]) *
+                                                    view.scale + k["RENDER_MARGIN_BOTTOM"]),
+            "the picture's size follows render.h", (view.w, view.h))
+    wall = scenario["obstacles"][0]
+    wall_is_grey(c, view, wall)
+    tree_beside_wall(c, view, wall)
 
-    def px(x):
-        return k["RENDER_MARGIN_LEFT"] + (x - lo[0]) * scale
 
-    def py(z):
-        return top + (hi[2] - z) * scale
-
-    c.check(w == width and h == math.ceil(top + (hi[2] - lo[2]) * scale
-                                          + k["RENDER_MARGIN_BOTTOM"]),
-            "the picture's size follows render.h", (w, h))
-    grey = round(255 * (1 - k["RENDER_OBSTACLE_ALPHA"] * (1 - k["RENDER_OBSTACLE_GREY"])))
-    tree = k["palette0"]
-    backgrounds = ((255, 255, 255), (grey, grey, grey))
-
-    def is_grey(p):
-        return abs(p[0] - grey) <= 3 and abs(p[1] - grey) <= 3 and abs(p[2] - grey) <= 3
-
-    def box(x0, x1, z0, z1, inset):
-        """Pixel columns and rows whose centres lie inside the box of metres,
-        shrunk by inset pixels, clipped to the picture."""
-        cols = range(max(0, int(px(x0) + inset)), min(w, int(px(x1) - inset)))
-        lines = range(max(0, int(py(z1) + inset)), min(h, int(py(z0) - inset)))
-        return [(x, y) for y in lines for x in cols]
-
-    # The wall's rectangle, where the mapping puts it, is the obstacle grey.
-    wall_px = box(wall["min"][0], wall["max"][0], wall["min"][2], wall["max"][2], 3)
-    greys = sum(1 for x, y in wall_px if is_grey(png.pixel(x, y)))
+def wall_is_grey(c, view, wall):
+    """The wall's rectangle, where the mapping puts it, is the obstacle grey, and the
+    grey pixels of the panel lie in that rectangle (the mapping agrees)."""
+    wall_px = view.box(wall["min"][0], wall["max"][0], wall["min"][2], wall["max"][2], 3)
+    greys = sum(1 for x, y in wall_px if view.is_grey(view.png.pixel(x, y)))
     c.check(wall_px and greys >= 0.95 * len(wall_px),
-            "the wall's projected rectangle is obstacle grey (%d)" % grey,
+            "the wall's projected rectangle is obstacle grey (%d)" % view.grey,
             "%d of %d pixels" % (greys, len(wall_px)))
-    # ... and the grey pixels of the panel lie in that rectangle (the mapping agrees)
-    panel = box(lo[0], hi[0], lo[2], hi[2], 2)
-    found = [(x, y) for x, y in panel if is_grey(png.pixel(x, y))]
+    lo, hi = view.lo, view.hi
+    panel = view.box(lo[0], hi[0], lo[2], hi[2], 2)
+    found = [(x, y) for x, y in panel if view.is_grey(view.png.pixel(x, y))]
     if c.check(found, "grey pixels in the panel"):
         xs = [x for x, _ in found]
         ys = [y for _, y in found]
-        expect = (px(wall["min"][0]), px(wall["max"][0]), py(wall["max"][2]), py(wall["min"][2]))
+        expect = (view.px(wall["min"][0]), view.px(wall["max"][0]), view.py(wall["max"][2]),
+                  view.py(wall["min"][2]))
         got = (min(xs), max(xs) + 1, min(ys), max(ys) + 1)
         c.check(all(abs(a - b) <= 3 for a, b in zip(got, expect)),
                 "the grey rectangle is where render.h maps the wall", "%s vs %s" % (got, expect))
 
-    seen = {}  # a picture has few distinct colours
 
-    def count_tree(pixels):
-        n = 0
-        for x, y in pixels:
-            p = png.pixel(x, y)
-            if p not in seen:
-                seen[p] = tree_coloured(p, tree, backgrounds)
-            n += seen[p]
-        return n
-
-    # Tree-coloured pixels on the open side of the wall, none inside it.
-    open_side = box(lo[0], wall["min"][0], lo[2], hi[2], 2)
-    inside = box(wall["min"][0], wall["max"][0], wall["min"][2], wall["max"][2], 2)
-    n_open, n_inside = count_tree(open_side), count_tree(inside)
+def tree_beside_wall(c, view, wall):
+    """Tree-coloured pixels on the open side of the wall, none inside it; the same count
+    finds the trunk (a rectangle of the wall's width at the root)."""
+    lo, hi = view.lo, view.hi
+    open_side = view.box(lo[0], wall["min"][0], lo[2], hi[2], 2)
+    inside = view.box(wall["min"][0], wall["max"][0], wall["min"][2], wall["max"][2], 2)
+    n_open, n_inside = view.count_tree(open_side), view.count_tree(inside)
     c.check(n_open >= 10, "tree-coloured pixels on the open side of the wall (x < %g)"
             % wall["min"][0], n_open)
     c.check(n_inside == 0, "no tree-coloured pixel inside the wall", n_inside)
-    # Control: the same count finds the trunk, a rectangle of the wall's width at the root.
-    trunk = box(-0.1, 0.1, lo[2], lo[2] + 0.2, 2)
-    c.check(count_tree(trunk) > 0, "control: the count finds the trunk at x = 0",
-            count_tree(trunk))
+    trunk = view.box(-0.1, 0.1, lo[2], lo[2] + 0.2, 2)
+    c.check(view.count_tree(trunk) > 0, "control: the count finds the trunk at x = 0",
+            view.count_tree(trunk))
 
 
 def part_errors(env, c):

@@ -353,16 +353,10 @@ static void test_golden(void) {
 }
 
 int main(int argc, char **argv) {
-  const char *only = argc > 1 ? argv[1] : NULL;
-#define RUN(name) \
-  if (!only || strcmp(only, #name) == 0) test_##name()
-  RUN(simplified);
-  RUN(wall);
-  RUN(board);
-  RUN(stand);
-  RUN(competition);
-  RUN(determinism_and_order);
-  RUN(snapshot_continuation);
-  RUN(golden);
+  static const check_test tests[] = {
+      CHECK_TEST(simplified), CHECK_TEST(wall), CHECK_TEST(board), CHECK_TEST(stand),
+      CHECK_TEST(competition), CHECK_TEST(determinism_and_order), CHECK_TEST(snapshot_continuation),
+      CHECK_TEST(golden)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("behaviour");
 }

@@ -118,106 +118,133 @@ def grow_killed(env, c, ref, ch, scenario, db):
         else:
             cmd = ["run", scenario, "--db", db, "--name", NAME, "--snapshot-every",
                    SNAPSHOT_EVERY, "--iterations", ITERATIONS, "--quiet-progress"]
-        delay, after_line, kind = None, None, None
+        delay = after_line = kind = None
         if ch.kills < ch.min_kills:
-            rng = ch.rng
-            r = rng.random()
-            # a target: one of the next iterations (mostly the next, so that the kills
-            # spread over the whole run)
-            j = max(k, 0) + 1
-            while j < ITERATIONS and rng.random() < 0.3:
-                j += 1
-            if ch.processes - first <= 2 or r < 0.1:
-                delay, kind = 0.0, "zero"
-            elif j < ITERATIONS and r < 0.8:
-                after_line = j
-                delay, kind = rng.uniform(0, ref.step[j] + ref.commit), "line"
-                if j + 1 == ITERATIONS:
-                    delay = min(delay, 0.8 * ref.step[j])
-            elif r < 0.6:
-                delay = ref.commit_time(k, snaps, j) * rng.uniform(0.7, 1.3)
-                kind = "aimed"
-            else:
-                delay, kind = rng.uniform(0, 0.3 * ch.slow), "short"
-            if after_line is None:
-                # not longer than the process is likely to live: the kills must happen
-                delay = min(delay, 0.8 * ref.remaining(k, snaps))
-        # unbuffered: readline() below must not read ahead, because communicate()
-        # reads the pipe itself and would never see what a buffer held (a lost line)
-        p = subprocess.Popen([env.exe] + [str(a) for a in cmd], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, bufsize=0)
-        head = b""
-        if after_line is not None:
-            while True:
-                line = p.stdout.readline()
-                head += line
-                if not line or line.startswith(b'{"iteration": %d, ' % after_line):
-                    break
-        if delay is not None:
-            if delay > 0:
-                time.sleep(delay)
-            if p.poll() is None:
-                p.send_signal(signal.SIGKILL)
-        try:
-            out, err = p.communicate(timeout=600)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.communicate()
-            c.check(False, "process %d (%s) ends within 600 s" % (ch.processes, cmd[0]))
+            delay, after_line, kind = choose_kill(ref, ch, k, snaps, ch.processes - first <= 2)
+        p, out, err = run_process(env, c, ch, cmd, delay, after_line)
+        if p is None:
             return False
-        out = (head + out).decode("utf-8", "replace")
-        err = err.decode("utf-8", "replace")
-
         if p.returncode != -signal.SIGKILL:
-            crash = crash_text(p.returncode, err)
-            c.check(not crash and p.returncode == 0,
-                    "process %d (%s after %d) exits 0" % (ch.processes, cmd[0], k),
-                    "exit %s: %s" % (p.returncode, err))
-            c.check(err == "", "process %d is silent on stderr" % ch.processes, err)
-            want = ref.lines[k:] if k >= 0 else ref.lines
-            got = [strip_elapsed(x) for x in out.splitlines()]
-            c.check(got == want, "the last %s (from stored iteration %d) prints exactly the "
-                    "reference lines after it and the done line" % (cmd[0], k),
-                    "got %d lines, want %d" % (len(got), len(want)))
-            if ch.kills < ch.min_kills:
-                print("note: process %d finished before its kill" % ch.processes, flush=True)
-            return p.returncode == 0
-
+            return check_finished(c, ref, ch, cmd, k, p, out, err)
         ch.kills += 1
         ch.kinds[kind] += 1
-        n = ch.kills
-        ok = integrity(db)
-        c.check(ok == "ok", "kill %d: integrity_check ok" % n, ok)
-        prev_k = k
-        exists, its, snaps = stored(db, NAME)
-        if not exists:
-            ch.before_first_commit += 1
-        k = its[-1] if its else -1
-        if k <= prev_k:
-            ch.no_progress += 1
-        print("kill %2d: %-6s from %2d, %-6s delay %.3f s%s -> stored 0..%d" % (
-            n, cmd[0], prev_k, kind, delay,
-            " after line %d" % after_line if after_line is not None else "", k), flush=True)
-        c.check(its == list(range(k + 1)),
-                "kill %d: the stored iterations are a consecutive prefix 0..%d" % (n, k), its)
-        want_snaps = [i for i in range(k + 1) if i % SNAPSHOT_EVERY == 0]
-        c.check(all(s in snaps for s in want_snaps) and set(snaps) <= set(its),
-                "kill %d: snapshots at 0 and every %d iterations" % (n, SNAPSHOT_EVERY),
-                "snapshots %s of %s" % (snaps, its))
-        if exists:
-            rows = stats_of_copy(db)
-            c.check([r[0] for r in rows] == [i for i in range(1, k + 1) for _ in range(ref.stems)],
-                    "kill %d: stats rows for iterations 1..%d" % (n, k))
-        printed = printed_iterations(out)
-        start = prev_k + 1 if cmd[0] == "resume" else 1
-        c.check(printed == list(range(start, start + len(printed))),
-                "kill %d: the lines printed continue at iteration %d" % (n, start), printed)
-        c.check(not printed or printed[-1] <= k, "kill %d: every printed iteration is stored" % n,
-                "printed up to %s, stored up to %d" % (printed[-1:], k))
-        lines = [x for x in out.splitlines() if x.endswith("}")]
-        c.check(all(strip_elapsed(x) == ref.lines[i - 1] for x, i in zip(lines, printed)),
-                "kill %d: the printed lines equal the reference" % n)
-        c.check(not crash_text(0, err), "kill %d: no sanitizer report" % n, err)
+        how = "%-6s delay %.3f s%s" % (
+            kind, delay, " after line %d" % after_line if after_line is not None else "")
+        exists, its, snaps = check_killed(c, ref, ch, cmd, db, k, out, err, how)
+
+
+def choose_kill(ref, ch, k, snaps, early):
+    """(delay, line to wait for or None, kind) of the kill of a process started at stored
+    iteration k; early: one of a run's first two processes."""
+    rng = ch.rng
+    r = rng.random()
+    # a target: one of the next iterations (mostly the next, so that the kills spread
+    # over the whole run)
+    j = max(k, 0) + 1
+    while j < ITERATIONS and rng.random() < 0.3:
+        j += 1
+    after_line = None
+    if early or r < 0.1:
+        delay, kind = 0.0, "zero"
+    elif j < ITERATIONS and r < 0.8:
+        after_line = j
+        delay, kind = rng.uniform(0, ref.step[j] + ref.commit), "line"
+        if j + 1 == ITERATIONS:
+            delay = min(delay, 0.8 * ref.step[j])
+    elif r < 0.6:
+        delay = ref.commit_time(k, snaps, j) * rng.uniform(0.7, 1.3)
+        kind = "aimed"
+    else:
+        delay, kind = rng.uniform(0, 0.3 * ch.slow), "short"
+    if after_line is None:
+        # not longer than the process is likely to live: the kills must happen
+        delay = min(delay, 0.8 * ref.remaining(k, snaps))
+    return delay, after_line, kind
+
+
+def run_process(env, c, ch, cmd, delay, after_line):
+    """Runs sylva cmd, killed with SIGKILL after delay seconds (after its line of
+    iteration after_line, if given; never if delay is None); returns (process, stdout,
+    stderr), or None for the process when it did not end within 600 s."""
+    # unbuffered: readline() below must not read ahead, because communicate()
+    # reads the pipe itself and would never see what a buffer held (a lost line)
+    p = subprocess.Popen([env.exe] + [str(a) for a in cmd], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, bufsize=0)
+    head = b""
+    if after_line is not None:
+        while True:
+            line = p.stdout.readline()
+            head += line
+            if not line or line.startswith(b'{"iteration": %d, ' % after_line):
+                break
+    if delay is not None:
+        if delay > 0:
+            time.sleep(delay)
+        if p.poll() is None:
+            p.send_signal(signal.SIGKILL)
+    try:
+        out, err = p.communicate(timeout=600)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.communicate()
+        c.check(False, "process %d (%s) ends within 600 s" % (ch.processes, cmd[0]))
+        return None, "", ""
+    return p, (head + out).decode("utf-8", "replace"), err.decode("utf-8", "replace")
+
+
+def check_finished(c, ref, ch, cmd, k, p, out, err):
+    """The process that was not killed: exit 0, silent, exactly the reference lines
+    after stored iteration k; returns whether it exited 0."""
+    crash = crash_text(p.returncode, err)
+    c.check(not crash and p.returncode == 0,
+            "process %d (%s after %d) exits 0" % (ch.processes, cmd[0], k),
+            "exit %s: %s" % (p.returncode, err))
+    c.check(err == "", "process %d is silent on stderr" % ch.processes, err)
+    want = ref.lines[k:] if k >= 0 else ref.lines
+    got = [strip_elapsed(x) for x in out.splitlines()]
+    c.check(got == want, "the last %s (from stored iteration %d) prints exactly the "
+            "reference lines after it and the done line" % (cmd[0], k),
+            "got %d lines, want %d" % (len(got), len(want)))
+    if ch.kills < ch.min_kills:
+        print("note: process %d finished before its kill" % ch.processes, flush=True)
+    return p.returncode == 0
+
+
+def check_killed(c, ref, ch, cmd, db, prev_k, out, err, how):
+    """The store and the output after a kill of a process started at stored iteration
+    prev_k (how: the kind of kill, for the log); returns stored(db, NAME)."""
+    n = ch.kills
+    ok = integrity(db)
+    c.check(ok == "ok", "kill %d: integrity_check ok" % n, ok)
+    exists, its, snaps = stored(db, NAME)
+    if not exists:
+        ch.before_first_commit += 1
+    k = its[-1] if its else -1
+    if k <= prev_k:
+        ch.no_progress += 1
+    print("kill %2d: %-6s from %2d, %s -> stored 0..%d" % (n, cmd[0], prev_k, how, k),
+          flush=True)
+    c.check(its == list(range(k + 1)),
+            "kill %d: the stored iterations are a consecutive prefix 0..%d" % (n, k), its)
+    want_snaps = [i for i in range(k + 1) if i % SNAPSHOT_EVERY == 0]
+    c.check(all(s in snaps for s in want_snaps) and set(snaps) <= set(its),
+            "kill %d: snapshots at 0 and every %d iterations" % (n, SNAPSHOT_EVERY),
+            "snapshots %s of %s" % (snaps, its))
+    if exists:
+        rows = stats_of_copy(db)
+        c.check([r[0] for r in rows] == [i for i in range(1, k + 1) for _ in range(ref.stems)],
+                "kill %d: stats rows for iterations 1..%d" % (n, k))
+    printed = printed_iterations(out)
+    start = prev_k + 1 if cmd[0] == "resume" else 1
+    c.check(printed == list(range(start, start + len(printed))),
+            "kill %d: the lines printed continue at iteration %d" % (n, start), printed)
+    c.check(not printed or printed[-1] <= k, "kill %d: every printed iteration is stored" % n,
+            "printed up to %s, stored up to %d" % (printed[-1:], k))
+    lines = [x for x in out.splitlines() if x.endswith("}")]
+    c.check(all(strip_elapsed(x) == ref.lines[i - 1] for x, i in zip(lines, printed)),
+            "kill %d: the printed lines equal the reference" % n)
+    c.check(not crash_text(0, err), "kill %d: no sanitizer report" % n, err)
+    return exists, its, snaps
 
 
 def check_result(env, c, ref, db):

@@ -96,43 +96,8 @@ def main():
         scenario = env.scenario("stand.json")
         clean = [strip_elapsed(x) for x in env.clean_lines(scenario, ITERATIONS)]
         stats = {"cases": 0, "failed": 0, "in_sqlite": 0}
-
-        # ---- the preload intercepts SQLite's calls ------------------------------------
-        db = env.path("probe.db")
-        rc, out, err = env.sylva("run", scenario, "--db", db, "--iterations", 2,
-                                 "--quiet-progress",
-                                 env=fiu.environ(["enable name=posix/io/sync/fdatasync",
-                                                  "enable name=posix/io/sync/fsync"], 1))
-        c.check(rc in (1, 2) and db in err and "disk I/O error" in err and not crash_text(rc, err),
-                "fdatasync failing always: the store reports a disk I/O error (libfiu "
-                "intercepts SQLite's calls)", "exit %s: %s" % (rc, err))
-
-        # ---- the cases ------------------------------------------------------------------
-        writes = ["enable_random name=posix/io/rw/pwrite,probability=%s"]
-        syncs = ["enable_random name=posix/io/sync/*,probability=%s"]
-        both = writes + syncs
-        rw = ["enable_random name=posix/io/rw/*,probability=%s"]
-        io = ["enable_random name=posix/io/*,probability=%s"]
-        reads = ["enable_random name=posix/io/rw/pread,probability=%s"]
-        cases = []  # (command, label, enable, seed)
-        for label, spec, probs in (("writes", writes, ("0.003", "0.01", "0.03")),
-                                   ("syncs", syncs, ("0.03", "0.1", "0.3")),
-                                   ("writes+syncs", both, ("0.005", "0.02", "0.05")),
-                                   ("all read/write", rw, ("0.005", "0.02")),
-                                   ("all I/O", io, ("0.005", "0.02"))):
-            kind = []
-            for p in probs:
-                for seed in (1, 2, 3):
-                    kind.append(("run", label, [s % p for s in spec], seed))
-            cases += kind[::3] if env.sanitized else kind
-        kind = [("resume", "writes+syncs", [s % p for s in both], seed)
-                for p in ("0.01", "0.05") for seed in (1, 2, 3)]
-        cases += kind[::3] if env.sanitized else kind
-        kind = [("export", "reads", [s % p for s in reads], seed)
-                for p in ("0.005", "0.02", "0.1") for seed in (1, 2)]
-        cases += kind[::3] if env.sanitized else kind
-
-        for n, (command, label, enable, seed) in enumerate(cases):
+        probe(env, c, fiu, scenario)
+        for n, (command, label, enable, seed) in enumerate(fault_cases(env.sanitized)):
             db = env.path("fault%d.db" % n)
             name = "f%d" % n
             what = "case %d (%s %s, seed %d)" % (n, command, " + ".join(
@@ -140,40 +105,9 @@ def main():
             stats["cases"] += 1
             if command == "export":
                 export_case(env, c, fiu, scenario, db, name, what, enable, seed, stats)
-                continue
-            start_k = -1
-            if command == "run":
-                args = ["run", scenario, "--db", db, "--name", name, "--snapshot-every",
-                        SNAPSHOT_EVERY, "--iterations", ITERATIONS, "--quiet-progress"]
             else:
-                rc, _, err = env.sylva("run", scenario, "--db", db, "--name", name,
-                                       "--snapshot-every", SNAPSHOT_EVERY, "--iterations", 4,
-                                       "--quiet-progress")
-                c.check(rc == 0, what + ": the clean first part", err)
-                start_k = 4
-                args = ["resume", "--db", db, "--name", name, "--iterations", ITERATIONS,
-                        "--quiet-progress"]
-            rc, out, err = env.sylva(*args, env=fiu.environ(enable, seed))
-            print("%s: exit %s%s" % (what, rc, (": " + err.strip().splitlines()[0]) if err.strip()
-                                     else ""), flush=True)
-            crash = crash_text(rc, err)
-            c.check(not crash and rc in (0, 1, 2), what + ": no crash, exit 0, 1 or 2",
-                    "exit %s: %s" % (rc, err))
-            got = [strip_elapsed(x) for x in out.splitlines()]
-            want = clean[start_k:] if start_k >= 0 else clean
-            if rc == 0:
-                c.check(got == want, what + ": exit 0 and the clean lines")
-            else:
-                stats["failed"] += 1
-                c.check(got == want[:len(got)] and (not got or "done" not in got[-1]),
-                        what + ": failed; what it printed is a prefix of the clean lines")
-                c.check(err.startswith("sylva: ") and (db in err or "store" in err),
-                        what + ": the message names the store", err)
-                if any(r in err for r in SQLITE_REASONS):
-                    stats["in_sqlite"] += 1
-                else:
-                    print("note: %s: exit %d: %s" % (what, rc, err.strip()), flush=True)
-            check_store(env, c, scenario, db, name, what, printed_iterations(out), start_k)
+                grow_case(env, c, fiu, scenario, clean, command, db, name, what, enable, seed,
+                          stats)
         print("%d cases, %d failed, %d of them inside SQLite" % (
             stats["cases"], stats["failed"], stats["in_sqlite"]), flush=True)
         c.check(stats["in_sqlite"] >= 1, "some failures came from inside SQLite",
@@ -184,6 +118,87 @@ def main():
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t_start))
     c.finish()
+
+
+def probe(env, c, fiu, scenario):
+    """The preload intercepts SQLite's calls: fdatasync failing always is a disk I/O
+    error of the store."""
+    db = env.path("probe.db")
+    rc, out, err = env.sylva("run", scenario, "--db", db, "--iterations", 2,
+                             "--quiet-progress",
+                             env=fiu.environ(["enable name=posix/io/sync/fdatasync",
+                                              "enable name=posix/io/sync/fsync"], 1))
+    c.check(rc in (1, 2) and db in err and "disk I/O error" in err and not crash_text(rc, err),
+            "fdatasync failing always: the store reports a disk I/O error (libfiu "
+            "intercepts SQLite's calls)", "exit %s: %s" % (rc, err))
+
+
+def fault_cases(sanitized):
+    """The cases, (command, label, libfiu's enable lines, seed): every third of each
+    kind in the sanitizer build."""
+    writes = ["enable_random name=posix/io/rw/pwrite,probability=%s"]
+    syncs = ["enable_random name=posix/io/sync/*,probability=%s"]
+    both = writes + syncs
+    rw = ["enable_random name=posix/io/rw/*,probability=%s"]
+    io = ["enable_random name=posix/io/*,probability=%s"]
+    reads = ["enable_random name=posix/io/rw/pread,probability=%s"]
+    cases = []
+    for label, spec, probs in (("writes", writes, ("0.003", "0.01", "0.03")),
+                               ("syncs", syncs, ("0.03", "0.1", "0.3")),
+                               ("writes+syncs", both, ("0.005", "0.02", "0.05")),
+                               ("all read/write", rw, ("0.005", "0.02")),
+                               ("all I/O", io, ("0.005", "0.02"))):
+        kind = []
+        for p in probs:
+            for seed in (1, 2, 3):
+                kind.append(("run", label, [s % p for s in spec], seed))
+        cases += kind[::3] if sanitized else kind
+    kind = [("resume", "writes+syncs", [s % p for s in both], seed)
+            for p in ("0.01", "0.05") for seed in (1, 2, 3)]
+    cases += kind[::3] if sanitized else kind
+    kind = [("export", "reads", [s % p for s in reads], seed)
+            for p in ("0.005", "0.02", "0.1") for seed in (1, 2)]
+    cases += kind[::3] if sanitized else kind
+    return cases
+
+
+def grow_case(env, c, fiu, scenario, clean, command, db, name, what, enable, seed, stats):
+    """`sylva run` (or `sylva resume` of a clean first part) with faults: no crash; the
+    clean lines, or a prefix of them and a message naming the store; then a sound
+    store (check_store)."""
+    start_k = -1
+    if command == "run":
+        args = ["run", scenario, "--db", db, "--name", name, "--snapshot-every",
+                SNAPSHOT_EVERY, "--iterations", ITERATIONS, "--quiet-progress"]
+    else:
+        rc, _, err = env.sylva("run", scenario, "--db", db, "--name", name,
+                               "--snapshot-every", SNAPSHOT_EVERY, "--iterations", 4,
+                               "--quiet-progress")
+        c.check(rc == 0, what + ": the clean first part", err)
+        start_k = 4
+        args = ["resume", "--db", db, "--name", name, "--iterations", ITERATIONS,
+                "--quiet-progress"]
+    rc, out, err = env.sylva(*args, env=fiu.environ(enable, seed))
+    print("%s: exit %s%s" % (what, rc, (": " + err.strip().splitlines()[0]) if err.strip()
+                             else ""), flush=True)
+    crash = crash_text(rc, err)
+    c.check(not crash and rc in (0, 1, 2), what + ": no crash, exit 0, 1 or 2",
+            "exit %s: %s" % (rc, err))
+    got = [strip_elapsed(x) for x in out.splitlines()]
+    want = clean[start_k:] if start_k >= 0 else clean
+    if rc == 0:
+        c.check(got == want, what + ": exit 0 and the clean lines")
+    else:
+        stats["failed"] += 1
+        c.check(got == want[:len(got)] and (not got or "done" not in got[-1]),
+                what + ": failed; what it printed is a prefix of the clean lines")
+        c.check(err.startswith("sylva: ") and (db in err or "store" in err),
+                what + ": the message names the store", err)
+        if any(r in err for r in SQLITE_REASONS):
+            stats["in_sqlite"] += 1
+        else:
+            print("note: %s: exit %d: %s" % (what, rc, err.strip()), flush=True)
+    check_store(env, c, scenario, db, name, what, printed_iterations(out), start_k)
 
 
 def check_store(env, c, scenario, db, name, what, printed, start_k):

@@ -46,108 +46,126 @@ def main():
             stems = sum(len(p["roots"]) for p in json.load(f)["plants"])
         db = env.path("a.db")
         final = env.path("final.json")
-
-        # ---- run with a store ---------------------------------------------------
-        rc, out, err = env.sylva("run", scenario, "--db", db, "--name", "rt",
-                                 "--snapshot-every", SNAPSHOT_EVERY, "--iterations", ITERATIONS,
-                                 "--export", final, "--quiet-progress")
-        if not c.check(rc == 0, "run --db exits 0", "exit %s: %s" % (rc, err)):
-            c.finish()
-        lines = out.splitlines()
-        c.check(len(lines) == ITERATIONS + 1, "run prints %d lines" % (ITERATIONS + 1), len(lines))
-        c.check(lines[-1] == '{"done": true, "iterations": %d, "reason": "limit"}' % ITERATIONS,
-                "done line", lines[-1])
-        plain = env.clean_lines(scenario, ITERATIONS)
-        c.check([strip_elapsed(x) for x in lines] == [strip_elapsed(x) for x in plain],
-                "the stats lines with a store equal those without")
-        c.check(read_bytes(final) == env.clean_export(scenario, ITERATIONS),
-                "--export with a store equals --export without")
-
-        rc, data, err = env.export(db, "rt")
-        c.check(rc == 0 and data == read_bytes(final),
-                "export of the last iteration equals the --export file byte for byte",
-                "exit %s: %s" % (rc, err))
-        rc, out2, err = env.sylva("export", "--db", db, "--name", "rt", "--format", "skeleton",
-                                  "-o", "-")
-        c.check(rc == 0 and out2.encode() == read_bytes(final), "export -o - (stdout) too",
-                "exit %s: %s" % (rc, err))
-        rc, data, err = env.export(db, "rt", iteration=ITERATIONS)
-        c.check(rc == 0 and data == read_bytes(final), "export --iteration %d too" % ITERATIONS,
-                "exit %s: %s" % (rc, err))
-
-        # snapshots at 0, 3, 6, 9, 10: 4, 5, 8 are regrown, 3 and 6 are restored
-        for t in (1, 3, 4, 5, 6, 8):
-            rc, data, err = env.export(db, "rt", iteration=t)
-            c.check(rc == 0 and data == env.clean_export(scenario, t),
-                    "export --iteration %d equals run --iterations %d --export" % (t, t),
-                    "exit %s: %s" % (rc, err))
-        rc, data, err = env.export(db, "rt", iteration=0)
-        c.check(rc == 0 and data is not None and json.loads(data)["iteration"] == 0,
-                "export --iteration 0 (the planted world)", "exit %s: %s" % (rc, err))
-        rc, data, err = env.export(db, "rt", iteration=ITERATIONS + 1)
-        c.check(rc == 2 and "no iteration %d" % (ITERATIONS + 1) in err and data is None,
-                "export of an iteration not stored: exit 2", "exit %s: %s" % (rc, err))
-
-        # ---- runs ---------------------------------------------------------------
-        rc, out, err = env.sylva("runs", "--db", db)
-        rows = [x.split() for x in out.splitlines()]
-        c.check(rc == 0 and len(rows) == 2 and rows[0][:2] == ["NAME", "STATUS"],
-                "runs: a header and one run", out + err)
-        last_nodes = sum(s["nodes"] for s in json.loads(lines[-2])["stems"])
-        c.check(len(rows) == 2 and rows[1][:5] == ["rt", "finished", "limit", "10/10",
-                                                     str(last_nodes)],
-                "runs: rt finished, limit, 10/10, its live nodes", out)
-
-        # ---- CSV ----------------------------------------------------------------
+        lines = run_with_store(env, c, scenario, db, final)
+        export_iterations(env, c, scenario, db)
+        runs_listed(env, c, db, lines)
         check_csv(env, c, db, "rt", lines, stems)
-
-        # ---- resume after a clean stop -----------------------------------------
         db_b = env.path("b.db")
-        rc, out, err = env.sylva("run", scenario, "--db", db_b, "--name", "rs",
-                                 "--snapshot-every", SNAPSHOT_EVERY, "--iterations", 5,
-                                 "--quiet-progress")
-        first = out.splitlines()
-        c.check(rc == 0 and [strip_elapsed(x) for x in first[:-1]] ==
-                [strip_elapsed(x) for x in lines[:5]] and
-                first[-1] == '{"done": true, "iterations": 5, "reason": "limit"}',
-                "run --iterations 5: lines 1..5 and a done line", "exit %s: %s" % (rc, err))
-        rc, out, err = env.sylva("runs", "--db", db_b)
-        c.check(rc == 0 and out.splitlines()[1].split()[:4] == ["rs", "finished", "limit", "5/5"],
-                "runs: rs finished at 5/5", out + err)
-        rc, out, err = env.sylva("resume", "--db", db_b, "--name", "rs", "--iterations",
-                                 ITERATIONS, "--quiet-progress")
-        c.check(rc == 0, "resume --iterations 10 exits 0", "exit %s: %s" % (rc, err))
-        c.check(err == "", "resume after a clean stop is silent on stderr", err)
-        got = [strip_elapsed(x) for x in out.splitlines()]
-        want = [strip_elapsed(x) for x in lines[5:]]
-        c.check(got == want, "resume prints exactly the lines 6..10 and the done line",
-                "got:\n%s\nwant:\n%s" % ("\n".join(x[:120] for x in got),
-                                          "\n".join(x[:120] for x in want)))
-        rc, data, err = env.export(db_b, "rs")
-        c.check(rc == 0 and data == read_bytes(final),
-                "the resumed run's final export equals the uninterrupted one",
-                "exit %s: %s" % (rc, err))
-        rc_a, csv_a, _ = env.export(db, "rt", fmt="csv")
-        rc_b, csv_b, _ = env.export(db_b, "rs", fmt="csv")
-        c.check(rc_a == 0 and rc_b == 0 and csv_a == csv_b,
-                "the resumed run's CSV equals the uninterrupted one")
-        c.check(query(db, "SELECT iteration, hash, nodes FROM iterations ORDER BY iteration") ==
-                query(db_b, "SELECT iteration, hash, nodes FROM iterations ORDER BY iteration"),
-                "the same world hashes and node counts are stored")
-        rc, out, err = env.sylva("runs", "--db", db_b)
-        c.check(rc == 0 and out.splitlines()[1].split()[:4] ==
-                ["rs", "finished", "limit", "10/10"], "runs: rs finished at 10/10", out + err)
-        rc, out, err = env.sylva("resume", "--db", db_b, "--name", "rs", "--quiet-progress")
-        c.check(rc == 0 and out == '{"done": true, "iterations": 10, "reason": "limit"}\n',
-                "resume of a run at its limit prints only the done line",
-                "exit %s: %r %s" % (rc, out, err))
-
-        # ---- bad cases ------------------------------------------------------------
+        stop_at_5(env, c, scenario, db_b, lines)
+        resume_to_10(env, c, db, db_b, final, lines)
         bad_cases(env, c, scenario, db)
     finally:
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t0))
     c.finish()
+
+
+def run_with_store(env, c, scenario, db, final):
+    """`sylva run --db --export`: the lines and skeleton of a run without a store, and
+    `sylva export` of the last iteration equal to the --export file; returns the lines."""
+    rc, out, err = env.sylva("run", scenario, "--db", db, "--name", "rt",
+                             "--snapshot-every", SNAPSHOT_EVERY, "--iterations", ITERATIONS,
+                             "--export", final, "--quiet-progress")
+    if not c.check(rc == 0, "run --db exits 0", "exit %s: %s" % (rc, err)):
+        c.finish()
+    lines = out.splitlines()
+    c.check(len(lines) == ITERATIONS + 1, "run prints %d lines" % (ITERATIONS + 1), len(lines))
+    c.check(lines[-1] == '{"done": true, "iterations": %d, "reason": "limit"}' % ITERATIONS,
+            "done line", lines[-1])
+    plain = env.clean_lines(scenario, ITERATIONS)
+    c.check([strip_elapsed(x) for x in lines] == [strip_elapsed(x) for x in plain],
+            "the stats lines with a store equal those without")
+    c.check(read_bytes(final) == env.clean_export(scenario, ITERATIONS),
+            "--export with a store equals --export without")
+
+    rc, data, err = env.export(db, "rt")
+    c.check(rc == 0 and data == read_bytes(final),
+            "export of the last iteration equals the --export file byte for byte",
+            "exit %s: %s" % (rc, err))
+    rc, out2, err = env.sylva("export", "--db", db, "--name", "rt", "--format", "skeleton",
+                              "-o", "-")
+    c.check(rc == 0 and out2.encode() == read_bytes(final), "export -o - (stdout) too",
+            "exit %s: %s" % (rc, err))
+    rc, data, err = env.export(db, "rt", iteration=ITERATIONS)
+    c.check(rc == 0 and data == read_bytes(final), "export --iteration %d too" % ITERATIONS,
+            "exit %s: %s" % (rc, err))
+    return lines
+
+
+def export_iterations(env, c, scenario, db):
+    """`sylva export --iteration T` of stored iterations equals `sylva run --iterations T
+    --export`; 0 is the planted world; one not stored is exit 2."""
+    # snapshots at 0, 3, 6, 9, 10: 4, 5, 8 are regrown, 3 and 6 are restored
+    for t in (1, 3, 4, 5, 6, 8):
+        rc, data, err = env.export(db, "rt", iteration=t)
+        c.check(rc == 0 and data == env.clean_export(scenario, t),
+                "export --iteration %d equals run --iterations %d --export" % (t, t),
+                "exit %s: %s" % (rc, err))
+    rc, data, err = env.export(db, "rt", iteration=0)
+    c.check(rc == 0 and data is not None and json.loads(data)["iteration"] == 0,
+            "export --iteration 0 (the planted world)", "exit %s: %s" % (rc, err))
+    rc, data, err = env.export(db, "rt", iteration=ITERATIONS + 1)
+    c.check(rc == 2 and "no iteration %d" % (ITERATIONS + 1) in err and data is None,
+            "export of an iteration not stored: exit 2", "exit %s: %s" % (rc, err))
+
+
+def runs_listed(env, c, db, lines):
+    """`sylva runs` lists the run: finished, limit, 10/10, its live nodes."""
+    rc, out, err = env.sylva("runs", "--db", db)
+    rows = [x.split() for x in out.splitlines()]
+    c.check(rc == 0 and len(rows) == 2 and rows[0][:2] == ["NAME", "STATUS"],
+            "runs: a header and one run", out + err)
+    last_nodes = sum(s["nodes"] for s in json.loads(lines[-2])["stems"])
+    c.check(len(rows) == 2 and rows[1][:5] == ["rt", "finished", "limit", "10/10",
+                                                 str(last_nodes)],
+            "runs: rt finished, limit, 10/10, its live nodes", out)
+
+
+def stop_at_5(env, c, scenario, db_b, lines):
+    """A run stopped cleanly at 5: the first 5 lines and a done line; finished at 5/5."""
+    rc, out, err = env.sylva("run", scenario, "--db", db_b, "--name", "rs",
+                             "--snapshot-every", SNAPSHOT_EVERY, "--iterations", 5,
+                             "--quiet-progress")
+    first = out.splitlines()
+    c.check(rc == 0 and [strip_elapsed(x) for x in first[:-1]] ==
+            [strip_elapsed(x) for x in lines[:5]] and
+            first[-1] == '{"done": true, "iterations": 5, "reason": "limit"}',
+            "run --iterations 5: lines 1..5 and a done line", "exit %s: %s" % (rc, err))
+    rc, out, err = env.sylva("runs", "--db", db_b)
+    c.check(rc == 0 and out.splitlines()[1].split()[:4] == ["rs", "finished", "limit", "5/5"],
+            "runs: rs finished at 5/5", out + err)
+
+
+def resume_to_10(env, c, db, db_b, final, lines):
+    """Resumed to 10: exactly the uninterrupted lines 6..10 and the done line, the same
+    skeleton, CSV and stored iterations; resumed at its limit, only the done line."""
+    rc, out, err = env.sylva("resume", "--db", db_b, "--name", "rs", "--iterations",
+                             ITERATIONS, "--quiet-progress")
+    c.check(rc == 0, "resume --iterations 10 exits 0", "exit %s: %s" % (rc, err))
+    c.check(err == "", "resume after a clean stop is silent on stderr", err)
+    got = [strip_elapsed(x) for x in out.splitlines()]
+    want = [strip_elapsed(x) for x in lines[5:]]
+    c.check(got == want, "resume prints exactly the lines 6..10 and the done line",
+            "got:\n%s\nwant:\n%s" % ("\n".join(x[:120] for x in got),
+                                      "\n".join(x[:120] for x in want)))
+    rc, data, err = env.export(db_b, "rs")
+    c.check(rc == 0 and data == read_bytes(final),
+            "the resumed run's final export equals the uninterrupted one",
+            "exit %s: %s" % (rc, err))
+    rc_a, csv_a, _ = env.export(db, "rt", fmt="csv")
+    rc_b, csv_b, _ = env.export(db_b, "rs", fmt="csv")
+    c.check(rc_a == 0 and rc_b == 0 and csv_a == csv_b,
+            "the resumed run's CSV equals the uninterrupted one")
+    c.check(query(db, "SELECT iteration, hash, nodes FROM iterations ORDER BY iteration") ==
+            query(db_b, "SELECT iteration, hash, nodes FROM iterations ORDER BY iteration"),
+            "the same world hashes and node counts are stored")
+    rc, out, err = env.sylva("runs", "--db", db_b)
+    c.check(rc == 0 and out.splitlines()[1].split()[:4] ==
+            ["rs", "finished", "limit", "10/10"], "runs: rs finished at 10/10", out + err)
+    rc, out, err = env.sylva("resume", "--db", db_b, "--name", "rs", "--quiet-progress")
+    c.check(rc == 0 and out == '{"done": true, "iterations": 10, "reason": "limit"}\n',
+            "resume of a run at its limit prints only the done line",
+            "exit %s: %r %s" % (rc, out, err))
 
 
 def check_csv(env, c, db, name, lines, stems):
@@ -203,7 +221,14 @@ def snapshot_dir(d):
 
 
 def bad_cases(env, c, scenario, good_db):
-    # a taken name: exit 2, nothing stored
+    taken_name(env, c, scenario, good_db)
+    unknown_run(env, c, good_db)
+    missing_store(env, c)
+    not_a_store(env, c, scenario, good_db)
+
+
+def taken_name(env, c, scenario, good_db):
+    """A run with a taken name: exit 2, nothing stored."""
     before = (query(good_db, "SELECT count(*) FROM iterations"),
               query(good_db, "SELECT * FROM stats"))
     runs_before = query(good_db, "SELECT * FROM runs")
@@ -216,7 +241,9 @@ def bad_cases(env, c, scenario, good_db):
             query(good_db, "SELECT * FROM runs") == runs_before,
             "run with a taken name changes nothing")
 
-    # an unknown run
+
+def unknown_run(env, c, good_db):
+    """resume and export of an unknown run: exit 2, and no output file."""
     for args in (["resume", "--db", good_db, "--name", "nosuch"],
                  ["export", "--db", good_db, "--name", "nosuch", "--format", "skeleton", "-o",
                   env.path("x.json")],
@@ -230,7 +257,9 @@ def bad_cases(env, c, scenario, good_db):
             not os.path.exists(env.path("x.csv.tmp")),
             "a failed export leaves no output file")
 
-    # a missing file is not created by the commands that only read
+
+def missing_store(env, c):
+    """A missing file is not created by the commands that only read."""
     missing = env.path("missing.db")
     for args in (["resume", "--db", missing, "--name", "rt"],
                  ["export", "--db", missing, "--name", "rt", "--format", "csv", "-o",
@@ -241,9 +270,17 @@ def bad_cases(env, c, scenario, good_db):
                 "%s of a missing store: exit 2, names it, creates nothing" % args[0],
                 "exit %s: %s" % (rc, err))
 
-    # files that are no sylva store (of this version)
-    bad_dir = env.path("bad")
-    os.mkdir(bad_dir)
+
+def sqlite_file(path, *statements):
+    con = sqlite3.connect(path)
+    for sql in statements:
+        con.execute(sql)
+    con.commit()
+    con.close()
+
+
+def foreign_files(c, bad_dir, good_db):
+    """Files that are no sylva store (of this version), with the reason each is refused."""
     text = os.path.join(bad_dir, "text.db")
     with open(text, "w") as f:
         f.write("this is not a database\n" * 200)
@@ -251,30 +288,28 @@ def bad_cases(env, c, scenario, good_db):
     with open(binary, "wb") as f:
         f.write(bytes((i * 7919 + 13) % 251 for i in range(16384)))
     other = os.path.join(bad_dir, "other.db")
-    con = sqlite3.connect(other)
-    con.execute("CREATE TABLE notes (id INTEGER PRIMARY KEY, text TEXT)")
-    con.execute("INSERT INTO notes (text) VALUES ('hello')")
-    con.commit()
-    con.close()
+    sqlite_file(other, "CREATE TABLE notes (id INTEGER PRIMARY KEY, text TEXT)",
+                "INSERT INTO notes (text) VALUES ('hello')")
     other_app = os.path.join(bad_dir, "other-app.db")
-    con = sqlite3.connect(other_app)
-    con.execute("PRAGMA application_id = 1234")
-    con.execute("CREATE TABLE t (x)")
-    con.commit()
-    con.close()
+    sqlite_file(other_app, "PRAGMA application_id = 1234", "CREATE TABLE t (x)")
     newer = os.path.join(bad_dir, "newer.db")
     with open(newer, "wb") as f:
         f.write(read_bytes(good_db))
-    con = sqlite3.connect(newer)
-    con.execute("PRAGMA user_version = 99")
-    con.commit()
-    con.close()
+    sqlite_file(newer, "PRAGMA user_version = 99")
     c.check(query(newer, "PRAGMA user_version") == [(99,)] and
             query(newer, "PRAGMA journal_mode") == [("wal",)],
             "the newer-schema store is a WAL sylva store with user_version 99")
-    cases = [(text, "not a sylva store"), (binary, "not a sylva store"),
-             (other, "not a sylva store"), (other_app, "not a sylva store"),
-             (newer, "newer sylva")]
+    return [(text, "not a sylva store"), (binary, "not a sylva store"),
+            (other, "not a sylva store"), (other_app, "not a sylva store"),
+            (newer, "newer sylva")]
+
+
+def not_a_store(env, c, scenario, good_db):
+    """Every command on a file that is no sylva store (of this version): exit 2, a
+    message naming the file and the problem, the file and its directory unchanged."""
+    bad_dir = env.path("bad")
+    os.mkdir(bad_dir)
+    cases = foreign_files(c, bad_dir, good_db)
     # older timestamps, so that a rewrite within the same clock tick would show
     for path, _ in cases:
         os.utime(path, ns=(1_000_000_000_000_000_000, 1_000_000_000_000_000_000))

@@ -225,12 +225,12 @@ static void test_phase_checks(void) {
 }
 #endif
 
-int main(void) {
+int main(int argc, char **argv) {
+  static const check_test tests[] = {
 #ifndef NDEBUG
-  test_phase_checks();
+      CHECK_TEST(phase_checks),
 #endif
-  test_bad_ids();
-  test_species_fields();
-  test_species_snapshot();
+      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");
 }

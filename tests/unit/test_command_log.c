@@ -193,13 +193,9 @@ static void test_store_replays_log(void) {
 }
 
 int main(int argc, char **argv) {
-  const char *only = argc > 1 ? argv[1] : NULL;
-#define RUN(name) \
-  if (!only || strcmp(only, #name) == 0) test_##name()
-  RUN(today_replays);
-  RUN(encoding_is_stable);
-  RUN(format0_replays);
-  RUN(bad_records);
-  RUN(store_replays_log);
+  static const check_test tests[] = {CHECK_TEST(today_replays), CHECK_TEST(encoding_is_stable),
+                                     CHECK_TEST(format0_replays), CHECK_TEST(bad_records),
+                                     CHECK_TEST(store_replays_log)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("command log");
 }

@@ -151,12 +151,17 @@ static void test_rng(void) {
   CHECK(ok);
 }
 
-/* One hand-worked allocation on a trunk a-b-c (apex c) with no laterals:
- * L = 1, 2, 4 -> Q = 7, 6, 4; R_trunk = 10; lambda 0.5, k 0.5, tau 0.
- * RBH: a = 7*.5*1/3.5 = 1, b = 6*.5*2/3 = 2, c = 4*.5*4/2 = 4; ranks c, b, a;
- * w = 1, 1, 0.6 - 0.3 * (2/3 - 1/2) / (1/2) = 0.5 -> weighted 4, 2, 0.5 (sum 6.5);
- * R = 6.15, 3.08, 0.77 -> the apex grows 6, b sprouts a lateral of 3, a nothing. */
-static void test_allocation_hand_worked(void) {
+/* The hand-worked allocations on a trunk a-b-c (apex c) with no laterals. */
+
+/* Sets the light of a, b, c and the flows Q of the root, a, b, c. */
+static void set_flows(sylva_world *w, const double light[3], const double q[4]) {
+  for (int i = 0; i < 3; i++) w->light[i + 1] = light[i];
+  for (int i = 0; i < 4; i++) w->q[i] = q[i];
+}
+
+/* The trunk: lambda 0.5, tau 0, every bud free to sprout (the apical zone has its
+ * own test); L = 1, 2, 4 and Q = 7, 6, 4 at a, b, c, and R_trunk 10. */
+static sylva_world *trunk(void) {
   sylva_world_def wd = sylva_default_world_def();
   sylva_world *w;
   CHECK_INT(sylva_world_create(&wd, &w), 0);
@@ -164,37 +169,57 @@ static void test_allocation_hand_worked(void) {
   sp.lambda = 0.5;
   sp.tau = 0;
   sp.initial_nodes = 3;
-  sp.apical_zone = 0; /* every bud may sprout; the zone has its own test below */
+  sp.apical_zone = 0;
   int s = sylva_world_add_species(w, &sp, "x");
   double root[1][3] = {{0, 0, 0}};
   sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1};
   CHECK_INT(sylva_world_add_plant(w, &pd, NULL), 0);
   CHECK_INT(sylva__reserve_scratch(w), 0);
-  sylva__skeleton *k = &w->nodes;
-  CHECK_INT(k->count, 4);
-  double L[4] = {0, 1, 2, 4};
-  for (int i = 1; i < 4; i++) w->light[i] = L[i];
-  w->q[3] = 4, w->q[2] = 6, w->q[1] = 7, w->q[0] = 10;
+  CHECK_INT(w->nodes.count, 4);
+  set_flows(w, (const double[]){1, 2, 4}, (const double[]){10, 7, 6, 4});
+  return w;
+}
+
+/* Sprout i of the last allocation: its slot, R and internodes. */
+static void check_sprout(const sylva_world *w, size_t i, int32_t slot, double r, int32_t n) {
+  if (i >= w->sprouts.len) return;
+  CHECK_INT(w->sprouts.data[i].slot, slot);
+  CHECK_NEAR(w->sprouts.data[i].r, r, 1e-12);
+  CHECK_INT(w->sprouts.data[i].n, n);
+}
+
+/* The hand-worked allocation: the apex grows 6, b sprouts a lateral of 3, a nothing. */
+static void test_allocation_hand_worked(void) {
+  /* L = 1, 2, 4 -> Q = 7, 6, 4; R_trunk = 10; lambda 0.5, k 0.5, tau 0.
+   * RBH: a = 7*.5*1/3.5 = 1, b = 6*.5*2/3 = 2, c = 4*.5*4/2 = 4; ranks c, b, a;
+   * w = 1, 1, 0.6 - 0.3 * (2/3 - 1/2) / (1/2) = 0.5 -> weighted 4, 2, 0.5 (sum 6.5);
+   * R = 6.15, 3.08, 0.77. */
+  sylva_world *w = trunk();
   CHECK_INT(sylva__allocate(w, 12), 0); /* c(12) = 8 */
   CHECK_INT(w->sprouts.len, 2);
   if (w->sprouts.len == 2) {
-    CHECK_INT(w->sprouts.data[0].slot, 3);
     CHECK(w->sprouts.data[0].apex);
-    CHECK_INT(w->sprouts.data[0].n, 6);
-    CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 6.5, 1e-12);
-    CHECK_INT(w->sprouts.data[1].slot, 2);
+    check_sprout(w, 0, 3, 10.0 * 4.0 / 6.5, 6);
     CHECK(!w->sprouts.data[1].apex);
-    CHECK_INT(w->sprouts.data[1].n, 3);
-    CHECK_NEAR(w->sprouts.data[1].r, 10.0 * 2.0 / 6.5, 1e-12);
+    check_sprout(w, 1, 2, 10.0 * 2.0 / 6.5, 3);
   }
-  /* the cap limits a rich shoot: c(3) = 1 */
+  sylva_world_destroy(w);
+}
+
+/* The cap limits a rich shoot: c(3) = 1. */
+static void test_allocation_cap(void) {
+  sylva_world *w = trunk();
   CHECK_INT(sylva__allocate(w, 3), 0);
   CHECK_INT(w->sprouts.len, 2);
   if (w->sprouts.len) CHECK_INT(w->sprouts.data[0].n, 1);
-  /* apical control (T <= tau): the apex is ranked first even with the least light */
+  sylva_world_destroy(w);
+}
+
+/* Apical control (T <= tau): the apex is ranked first even with the least light. */
+static void test_allocation_apical_control(void) {
+  sylva_world *w = trunk();
   w->species[0].def.tau = 20;
-  w->light[3] = 0.1, w->light[2] = 5, w->light[1] = 5;
-  w->q[3] = 0.1, w->q[2] = 5.1, w->q[1] = 10.1, w->q[0] = 100;
+  set_flows(w, (const double[]){5, 5, 0.1}, (const double[]){100, 10.1, 5.1, 0.1});
   CHECK_INT(sylva__allocate(w, 12), 0);
   double apex_r = 0;
   for (size_t i = 0; i < w->sprouts.len; i++)
@@ -204,16 +229,18 @@ static void test_allocation_hand_worked(void) {
   double hi = rb_a > rb_b ? rb_a : rb_b, lo = rb_a > rb_b ? rb_b : rb_a;
   double sum = 0.1 * 1.0 + hi * 1.0 + lo * 0.5;
   CHECK_NEAR(apex_r, 100.0 * 0.1 / sum, 1e-12);
-  /* The apex's share of the main flow (docs/model.md, "Allocation"), lambda 0.6, no
-   * apical control: L = 1, 2, 4, Q = 7, 6, 4. RBH a = 7*.4*1/(3.6+.4) = 0.7,
-   * b = 6*.4*2/(2.4+.8) = 1.5, apex own 4; the rest 7 - 0.7 - 1.5 - 4 = 0.8.
+  sylva_world_destroy(w);
+}
+
+/* The apex's share of the main flow (docs/model.md, "Allocation"): apical_flow 0.5. */
+static void test_allocation_apical_flow(void) {
+  /* lambda 0.6, no apical control: L = 1, 2, 4, Q = 7, 6, 4. RBH a = 7*.4*1/(3.6+.4)
+   * = 0.7, b = 6*.4*2/(2.4+.8) = 1.5, apex own 4; the rest 7 - 0.7 - 1.5 - 4 = 0.8.
    * apical_flow 0.5: RBH apex 4.4; ranks apex, b, a with w 1, 1, 0.5: weighted
    * 4.4, 1.5, 0.35 (sum 6.25), R_trunk 10 -> apex 7.04 (7 internodes), b 2.4 (2). */
-  w->species[0].def.tau = 0;
+  sylva_world *w = trunk();
   w->species[0].def.lambda = 0.6;
   w->species[0].def.apical_flow = 0.5;
-  w->light[3] = 4, w->light[2] = 2, w->light[1] = 1;
-  w->q[3] = 4, w->q[2] = 6, w->q[1] = 7, w->q[0] = 10;
   CHECK_INT(sylva__allocate(w, 12), 0);
   CHECK_INT(w->sprouts.len, 2);
   if (w->sprouts.len == 2) {
@@ -223,23 +250,35 @@ static void test_allocation_hand_worked(void) {
     CHECK_NEAR(w->sprouts.data[1].r, 10.0 * 1.5 / 6.25, 1e-12);
     CHECK_INT(w->sprouts.data[1].n, 2);
   }
-  /* apical_flow 0: the apex has its own light only (4 of 5.85) */
+  sylva_world_destroy(w);
+}
+
+/* apical_flow 0: the apex has its own light only (4 of 5.85). */
+static void test_allocation_no_apical_flow(void) {
+  sylva_world *w = trunk();
+  w->species[0].def.lambda = 0.6;
   w->species[0].def.apical_flow = 0.0;
   CHECK_INT(sylva__allocate(w, 12), 0);
   if (w->sprouts.len) CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 5.85, 1e-12);
-  /* lambda 0.5 leaves no rest: apical_flow changes nothing */
-  w->species[0].def.lambda = 0.5;
+  sylva_world_destroy(w);
+}
+
+/* lambda 0.5 leaves no rest: apical_flow changes nothing. */
+static void test_allocation_no_rest(void) {
+  sylva_world *w = trunk();
   w->species[0].def.apical_flow = 1.0;
   CHECK_INT(sylva__allocate(w, 12), 0);
   if (w->sprouts.len) CHECK_NEAR(w->sprouts.data[0].r, 10.0 * 4.0 / 6.5, 1e-12);
-  /* Apical zone (docs/model.md, "Allocation"), the first case again (lambda 0.5,
-   * RBH a 1, b 2, apex 4). Zone 1: b is 1 internode below the apex and a 2, both
-   * may sprout: as before. Zone 2: b's bud is dormant (RBH 0); ranks apex, a, b with
-   * w 1, 1, 0.5: weighted 4, 1, 0 (sum 5) -> apex 8 (cap 8), a 2 (2 internodes).
-   * Zone 3: a too; the apex takes all 10 and grows its cap of 8. */
-  w->species[0].def.apical_flow = 0.0;
-  w->light[3] = 4, w->light[2] = 2, w->light[1] = 1;
-  w->q[3] = 4, w->q[2] = 6, w->q[1] = 7, w->q[0] = 10;
+  sylva_world_destroy(w);
+}
+
+/* The apical zone (docs/model.md, "Allocation"): lateral buds within it stay dormant. */
+static void test_allocation_apical_zone(void) {
+  /* The first case again (lambda 0.5, RBH a 1, b 2, apex 4). Zone 1: b is 1 internode
+   * below the apex and a 2, both may sprout: as before. Zone 2: b's bud is dormant
+   * (RBH 0); ranks apex, a, b with w 1, 1, 0.5: weighted 4, 1, 0 (sum 5) -> apex 8
+   * (cap 8), a 2 (2 internodes). Zone 3: a too; the apex takes all 10 and grows its
+   * cap of 8. */
   /* zone; then the expected sprouts in order: slot, R, internodes */
   const struct {
     int zone;
@@ -252,15 +291,14 @@ static void test_allocation_hand_worked(void) {
       {2, 2, {3, 1}, {8.0, 2.0}, {8, 2}},
       {3, 1, {3, -1}, {10.0, 0.0}, {8, 0}},
   };
+  sylva_world *w = trunk();
+  w->species[0].def.apical_flow = 0.0;
   for (size_t z = 0; z < sizeof zones / sizeof zones[0]; z++) {
     w->species[0].def.apical_zone = zones[z].zone;
     CHECK_INT(sylva__allocate(w, 12), 0);
     CHECK_INT(w->sprouts.len, zones[z].len);
-    for (size_t i = 0; i < zones[z].len && i < w->sprouts.len; i++) {
-      CHECK_INT(w->sprouts.data[i].slot, zones[z].slot[i]);
-      CHECK_NEAR(w->sprouts.data[i].r, zones[z].r[i], 1e-12);
-      CHECK_INT(w->sprouts.data[i].n, zones[z].n[i]);
-    }
+    for (size_t i = 0; i < zones[z].len; i++)
+      check_sprout(w, i, zones[z].slot[i], zones[z].r[i], zones[z].n[i]);
   }
   sylva_world_destroy(w);
 }
@@ -299,14 +337,14 @@ static void test_shade_base(void) {
   sylva_world_destroy(w);
 }
 
-int main(void) {
-  test_derivatives();
-  test_cap_and_stop();
-  test_bh_and_priority();
-  test_light_sensitivity();
-  test_lateral_direction();
-  test_rng();
-  test_allocation_hand_worked();
-  test_shade_base();
+int main(int argc, char **argv) {
+  static const check_test tests[] = {
+      CHECK_TEST(derivatives), CHECK_TEST(cap_and_stop), CHECK_TEST(bh_and_priority),
+      CHECK_TEST(light_sensitivity), CHECK_TEST(lateral_direction), CHECK_TEST(rng),
+      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap),
+      CHECK_TEST(allocation_apical_control), CHECK_TEST(allocation_apical_flow),
+      CHECK_TEST(allocation_no_apical_flow), CHECK_TEST(allocation_no_rest),
+      CHECK_TEST(allocation_apical_zone), CHECK_TEST(shade_base)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("formulas");
 }

@@ -229,13 +229,11 @@ static void test_wide_pyramid(void) {
   sylva__grid_free(&g);
 }
 
-int main(void) {
-  test_wide_pyramid();
-  test_pyramid_and_column();
-  test_against_definition();
-  test_exact_removal();
-  test_occupancy();
-  test_obstacles();
-  test_sparse_site();
+int main(int argc, char **argv) {
+  static const check_test tests[] = {
+      CHECK_TEST(wide_pyramid), CHECK_TEST(pyramid_and_column), CHECK_TEST(against_definition),
+      CHECK_TEST(exact_removal), CHECK_TEST(occupancy), CHECK_TEST(obstacles),
+      CHECK_TEST(sparse_site)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("grid");
 }

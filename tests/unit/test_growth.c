@@ -256,12 +256,10 @@ static void test_leaves(void) {
   sylva_world_destroy(w);
 }
 
-int main(void) {
-  test_leaves();
-  test_radii();
-  test_shedding();
-  test_snapshot_lockstep();
-  test_snapshot_bad_images();
-  test_add_plant_errors();
+int main(int argc, char **argv) {
+  static const check_test tests[] = {
+      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
+      CHECK_TEST(snapshot_bad_images), CHECK_TEST(add_plant_errors)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("growth");
 }
