@@ -10,8 +10,9 @@
 #include "options.h"
 
 enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_TOKEN_FILE,
-       OPT_PUBLIC_READ, OPT_HOST, OPT_ORIGIN, OPT_INSECURE, OPT_MAX_MESSAGE, OPT_RATE, OPT_HELP,
-       OPT_COUNT };
+       OPT_PUBLIC_READ, OPT_HOST, OPT_ORIGIN, OPT_INSECURE, OPT_MAX_MESSAGE, OPT_RATE,
+       OPT_WORKERS, OPT_MAX_RUNS, OPT_MAX_STEMS, OPT_MAX_OBSTACLES, OPT_MAX_CLIENTS, OPT_MAX_JOBS,
+       OPT_MAX_INPUT, OPT_MEMORY, OPT_HELP, OPT_COUNT };
 
 static const cli_option serve_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
@@ -35,6 +36,19 @@ static const cli_option serve_options[OPT_COUNT] = {
     [OPT_INSECURE] = {"insecure", 0, NULL, "allow a non-loopback address without --token"},
     [OPT_MAX_MESSAGE] = {"max-message", 0, "BYTES", "largest client message (default 1 MiB)"},
     [OPT_RATE] = {"rate-limit", 0, "N", "most client messages per second (default 50)"},
+    [OPT_WORKERS] = {"workers", 0, "N", "threads that grow the runs, in turn (default 2)"},
+    [OPT_MAX_RUNS] = {"max-runs", 0, "N", "most runs held, forks included (default 64)"},
+    [OPT_MAX_STEMS] = {"max-stems", 0, "N", "most stems in one world (default 2000)"},
+    [OPT_MAX_OBSTACLES] = {"max-obstacles", 0, "N", "most obstacles in one world (default 10000)"},
+    [OPT_MAX_CLIENTS] = {"max-clients", 0, "N",
+                         "most WebSocket clients at once (default 1000, and below the limit "
+                         "of open files)"},
+    [OPT_MAX_JOBS] = {"max-jobs", 0, "N",
+                      "most exports, history snapshots and forks at once (default 2)"},
+    [OPT_MAX_INPUT] = {"max-input", 0, "BYTES",
+                       "most bytes of unfinished messages of all clients (default 64 MiB)"},
+    [OPT_MEMORY] = {"memory-budget", 0, "MIB",
+                    "memory the runs' worlds may take, by estimate (default 4096)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
 
@@ -84,9 +98,14 @@ static bool loopback(const char *host) {
 int cmd_serve(int argc, char **argv) {
   cli_parser p;
   cli_parser_init(&p, "serve", serve_options, OPT_COUNT, argc, argv);
-  server_options o = {.db = "sylva.db", .host = "127.0.0.1", .port = 8080,
-                      .max_message = DAEMON_MAX_MESSAGE, .rate_limit = DAEMON_RATE_LIMIT,
-                      .max_pending = DAEMON_MAX_PENDING, .workers = DAEMON_WORKERS};
+  server_options o = {
+      .db = "sylva.db", .host = "127.0.0.1", .port = 8080,
+      .clients = {.max_message = DAEMON_MAX_MESSAGE, .rate_limit = DAEMON_RATE_LIMIT,
+                  .max_pending = DAEMON_MAX_PENDING, .max_clients = DAEMON_MAX_CLIENTS,
+                  .max_input = DAEMON_MAX_INPUT, .message_ms = DAEMON_MESSAGE_MS},
+      .workers = DAEMON_WORKERS, .max_runs = DAEMON_MAX_RUNS, .max_stems = DAEMON_MAX_STEMS,
+      .max_obstacles = DAEMON_MAX_OBSTACLES, .max_jobs = DAEMON_MAX_JOBS,
+      .memory_budget = (size_t)DAEMON_MEMORY_BUDGET_MIB << 20};
   static char host[256], token[512];
   bool insecure = false, web_given = false, scenarios_given = false;
   const char *arg;
@@ -142,11 +161,43 @@ int cmd_serve(int argc, char **argv) {
     case OPT_INSECURE: insecure = true; break;
     case OPT_MAX_MESSAGE:
       if (cli_parse_u64("serve", "max-message", arg, 1024, 1u << 30, &v)) return CLI_EXIT_USAGE;
-      o.max_message = (size_t)v;
+      o.clients.max_message = (size_t)v;
       break;
     case OPT_RATE:
       if (cli_parse_u64("serve", "rate-limit", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
-      o.rate_limit = (int)v;
+      o.clients.rate_limit = (int)v;
+      break;
+    case OPT_WORKERS:
+      if (cli_parse_u64("serve", "workers", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
+      o.workers = (int)v;
+      break;
+    case OPT_MAX_RUNS:
+      if (cli_parse_u64("serve", "max-runs", arg, 1, 100000, &v)) return CLI_EXIT_USAGE;
+      o.max_runs = (int)v;
+      break;
+    case OPT_MAX_STEMS:
+      if (cli_parse_u64("serve", "max-stems", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
+      o.max_stems = (int)v;
+      break;
+    case OPT_MAX_OBSTACLES:
+      if (cli_parse_u64("serve", "max-obstacles", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
+      o.max_obstacles = (int)v;
+      break;
+    case OPT_MAX_CLIENTS:
+      if (cli_parse_u64("serve", "max-clients", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
+      o.clients.max_clients = (int)v;
+      break;
+    case OPT_MAX_JOBS:
+      if (cli_parse_u64("serve", "max-jobs", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
+      o.max_jobs = (int)v;
+      break;
+    case OPT_MAX_INPUT:
+      if (cli_parse_u64("serve", "max-input", arg, 1024, 1ull << 34, &v)) return CLI_EXIT_USAGE;
+      o.clients.max_input = (size_t)v;
+      break;
+    case OPT_MEMORY:
+      if (cli_parse_u64("serve", "memory-budget", arg, 16, 1u << 20, &v)) return CLI_EXIT_USAGE;
+      o.memory_budget = (size_t)v << 20;
       break;
     default:
       serve_usage(stdout);

@@ -19,19 +19,36 @@ static void on_closer(uv_timer_t *t) {
   }
 }
 
-int client_set_init(client_set *s, uv_loop_t *loop, size_t max_message, size_t max_pending,
-                    int rate_limit) {
-  *s = (client_set){.max_message = max_message, .max_pending = max_pending,
-                    .rate_limit = rate_limit};
-  s->closer.data = s;
-  return uv_timer_init(loop, &s->closer);
+/* Once a second: a client whose message has been arriving for longer than the
+ * limit is closed, so unfinished messages cannot hold memory for ever. */
+static void on_watch(uv_timer_t *t) {
+  client_set *s = t->data;
+  uint64_t now = uv_now(t->loop);
+  for (client *c = s->head; c; c = c->next)
+    if (c->rx_start && now - c->rx_start > (uint64_t)s->limits.message_ms)
+      client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "message not finished in time");
 }
+
+int client_set_init(client_set *s, uv_loop_t *loop, const client_limits *limits) {
+  *s = (client_set){.limits = *limits};
+  s->closer.data = s;
+  s->watch.data = s;
+  int rc = uv_timer_init(loop, &s->closer);
+  if (!rc) rc = uv_timer_init(loop, &s->watch);
+  if (!rc) rc = uv_timer_start(&s->watch, on_watch, 1000, 1000);
+  return rc;
+}
+
+bool client_set_has_room(const client_set *s) { return s->count < s->limits.max_clients; }
 
 void client_set_close_all(client_set *s, int code, const char *reason) {
   for (client *c = s->head; c; c = c->next) client_close(c, code, reason);
 }
 
-void client_set_close(client_set *s) { uv_close((uv_handle_t *)&s->closer, NULL); }
+void client_set_close(client_set *s) {
+  uv_close((uv_handle_t *)&s->closer, NULL);
+  uv_close((uv_handle_t *)&s->watch, NULL);
+}
 
 client *client_find(client_set *s, uint64_t serial) {
   for (client *c = s->head; c; c = c->next)
@@ -56,7 +73,20 @@ void client_open(client_set *s, client *c, struct lws *wsi, server *d, bool auth
   s->count++;
 }
 
+/* The unfinished message is done with (handled, refused or the client gone). */
+static void rx_end(client *c) {
+  c->set->input -= c->rx_len;
+  c->rx_len = 0;
+  c->rx_start = 0;
+  if (c->rx_cap > (64u << 10)) { /* a large buffer goes back at once */
+    free(c->rx);
+    c->rx = NULL;
+    c->rx_cap = 0;
+  }
+}
+
 static void release(client *c) {
+  rx_end(c);
   for (size_t i = 0; i < c->qlen; i++) msgbuf_unref(c->queue[(c->qhead + i) % c->qcap]);
   free(c->queue);
   free(c->rx);
@@ -83,7 +113,8 @@ void client_closed(client *c) {
 
 static void rx_append(client *c, const char *in, size_t len) {
   if (c->rx_too_large) return;
-  if (c->rx_len + len > c->set->max_message) {
+  if (c->rx_len + len > c->set->limits.max_message ||
+      c->set->input + len > c->set->limits.max_input) {
     c->rx_too_large = true;
     return;
   }
@@ -100,37 +131,46 @@ static void rx_append(client *c, const char *in, size_t len) {
   }
   memcpy(c->rx + c->rx_len, in, len);
   c->rx_len += len;
+  c->set->input += len;
 }
 
 bool client_receive(client *c, const void *in, size_t len) {
   client_set *s = c->set;
+  uint64_t now = uv_now(s->closer.loop);
   if (lws_is_first_fragment(c->wsi)) {
-    c->rx_len = 0;
+    rx_end(c);
     c->rx_too_large = false;
     c->rx_binary = lws_frame_is_binary(c->wsi);
+    c->rx_start = now ? now : 1;
   }
   rx_append(c, in, len);
-  if (!lws_is_final_fragment(c->wsi) || lws_remaining_packet_payload(c->wsi)) return false;
+  if (!lws_is_final_fragment(c->wsi) || lws_remaining_packet_payload(c->wsi)) {
+    if (c->rx_too_large) {
+      rx_end(c);
+      client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+    }
+    return false;
+  }
+  c->rx_start = 0;
   s->messages_received++;
-  uint64_t now = uv_now(s->closer.loop);
   if (now - c->window_start >= 1000) {
     c->window_start = now;
     c->window_count = 0;
   }
-  if (++c->window_count > s->rate_limit) {
+  bool ok = false;
+  if (++c->window_count > s->limits.rate_limit)
     client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "rate limit exceeded");
-    return false;
-  }
-  if (c->rx_too_large) {
+  else if (c->rx_too_large)
     client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
-    return false;
-  }
-  if (c->rx_binary) {
+  else if (c->rx_binary)
     client_send_text(c, sylva_msg_error("bad_request", "binary frames are not accepted", NULL));
-    return false;
-  }
-  return true;
+  else
+    ok = true;
+  if (!ok) rx_end(c);
+  return ok;
 }
+
+void client_handled(client *c) { rx_end(c); }
 
 void client_close(client *c, int code, const char *reason) {
   if (c->close_code) return;
@@ -141,7 +181,7 @@ void client_close(client *c, int code, const char *reason) {
 
 void client_send(client *c, msgbuf *m) {
   if (c->close_code) return;
-  if (c->pending + m->len > c->set->max_pending) {
+  if (c->pending + m->len > c->set->limits.max_pending) {
     client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "client too slow: output backlog");
     return;
   }

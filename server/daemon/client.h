@@ -15,19 +15,31 @@
 typedef struct server server;
 typedef struct client client;
 
+/** The limits every client is held to. */
+typedef struct client_limits {
+  size_t max_message;   /**< bytes of one message */
+  size_t max_pending;   /**< bytes waiting to be sent to one client */
+  int rate_limit;       /**< messages per second */
+  int max_clients;      /**< WebSockets at once */
+  size_t max_input;     /**< bytes of unfinished messages of all clients together */
+  int message_ms;       /**< time a message may take to arrive, from its first frame */
+} client_limits;
+
 /** Every connected client, the limits they share and their counters. */
 typedef struct client_set {
   client *head;
   int64_t count;                  /**< clients connected now */
   int64_t bytes_sent, messages_received;
-  size_t max_message, max_pending; /**< bytes */
-  int rate_limit;                 /**< messages per second */
+  size_t input;                   /**< bytes of unfinished messages now */
+  client_limits limits;
   uv_timer_t closer; /**< applies the closes asked for, outside lws callbacks */
+  uv_timer_t watch;  /**< once a second: closes clients whose message is overdue */
 } client_set;
 
 /** Starts an empty set on the loop. */
-int client_set_init(client_set *s, uv_loop_t *loop, size_t max_message, size_t max_pending,
-                    int rate_limit);
+int client_set_init(client_set *s, uv_loop_t *loop, const client_limits *limits);
+/** Whether another client may connect. */
+bool client_set_has_room(const client_set *s);
 /** Asks every client to close (code and reason). */
 void client_set_close_all(client_set *s, int code, const char *reason);
 /** Closes the set's handle (when the loop winds down; the clients are gone). */
@@ -54,6 +66,7 @@ struct client {
   size_t sent;          /**< bytes of the message at the head already written */
   char *rx;             /**< the message being received */
   size_t rx_len, rx_cap;
+  uint64_t rx_start;    /**< when its first frame came (loop ms); 0: none unfinished */
   bool rx_binary, rx_too_large;
   int window_count;     /**< messages in the current one-second window */
   uint64_t window_start;
@@ -70,9 +83,12 @@ void client_open(client_set *s, client *c, struct lws *wsi, server *d, bool auth
 /** Unlinks a closed client and frees what it holds (not c: lws owns it). */
 void client_closed(client *c);
 /** Takes one received fragment. Returns true when it completes a text message
- *  within the limits (then c->rx holds it, c->rx_len bytes); a message too large,
+ *  within the limits (then c->rx holds it, c->rx_len bytes, until client_handled);
+ *  a message too large (for the client or for the input budget of all clients),
  *  too frequent or binary is answered here (closed, or an error) and gives false. */
 bool client_receive(client *c, const void *in, size_t len);
+/** The message in c->rx has been handled: its bytes leave the input budget. */
+void client_handled(client *c);
 
 /** Queues a shared message for the client (takes a reference). A client whose
  *  pending output passes the cap is closed (1008, too slow). */

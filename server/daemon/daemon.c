@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include "client.h"
@@ -16,16 +17,52 @@
 #include "runs.h"
 #include "sylva/protocol.h"
 
+static void log_line(const char *run_name, const char *msg) {
+  if (run_name)
+    fprintf(stderr, "sylva: [run %s] %s\n", run_name, msg);
+  else
+    fprintf(stderr, "sylva: %s\n", msg);
+}
+
 void server_log(const char *run_name, const char *fmt, ...) {
   char msg[1024];
   va_list ap;
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
-  if (run_name)
-    fprintf(stderr, "sylva: [run %s] %s\n", run_name, msg);
-  else
-    fprintf(stderr, "sylva: %s\n", msg);
+  log_line(run_name, msg);
+}
+
+/* The window of server_log_limited: the second it began and its lines. */
+static time_t limited_second;
+static int limited_lines, limited_dropped;
+
+void server_log_limited(const char *run_name, const char *fmt, ...) {
+  time_t now = time(NULL);
+  if (now != limited_second) {
+    if (limited_dropped) fprintf(stderr, "sylva: (%d lines left out)\n", limited_dropped);
+    limited_second = now;
+    limited_lines = limited_dropped = 0;
+  }
+  if (++limited_lines > 10) {
+    limited_dropped++;
+    return;
+  }
+  char msg[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  log_line(run_name, msg);
+}
+
+/* libwebsockets' own errors (an accept failing with EMFILE, say) through the
+ * same limit, so that a flood cannot fill the log. */
+static void lws_log(int level, const char *line) {
+  (void)level;
+  size_t n = strlen(line);
+  while (n && (line[n - 1] == '\n' || line[n - 1] == '\r')) n--;
+  server_log_limited(NULL, "libwebsockets: %.*s", (int)n, line);
 }
 
 sylva_auth server_auth(const server *d) {
@@ -61,9 +98,12 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
       why = "the daemon is stopping";
     else if (!access_host_ok(&d->access, wsi) || !access_origin_ok(&d->access, wsi))
       why = "the Host or the Origin is not this daemon's (see --allow-host)";
+    else if (!client_set_has_room(&d->clients))
+      why = "too many clients (--max-clients)";
     if (!why) return 0;
-    if (!d->stopping) server_log(NULL, "refused a WebSocket upgrade: %s", why);
-    lws_return_http_status(wsi, d->stopping ? HTTP_STATUS_SERVICE_UNAVAILABLE : HTTP_STATUS_FORBIDDEN,
+    if (!d->stopping) server_log_limited(NULL, "refused a WebSocket upgrade: %s", why);
+    bool unavailable = d->stopping || !client_set_has_room(&d->clients);
+    lws_return_http_status(wsi, unavailable ? HTTP_STATUS_SERVICE_UNAVAILABLE : HTTP_STATUS_FORBIDDEN,
                            why);
     return 1;
   }
@@ -76,7 +116,10 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
     break;
   case LWS_CALLBACK_RECEIVE:
     if (!c || !c->set || c->close_code) break;
-    if (client_receive(c, in, len)) handle_message(c, c->rx, c->rx_len);
+    if (client_receive(c, in, len)) {
+      handle_message(c, c->rx, c->rx_len);
+      if (c->set) client_handled(c);
+    }
     break;
   case LWS_CALLBACK_WS_PEER_INITIATED_CLOSE:
     /* RFC 6455 7.4: a close payload is empty or a valid code (and UTF-8, which lws
@@ -178,17 +221,35 @@ int server_main(const server_options *opt) {
   server *d = calloc(1, sizeof *d);
   if (!d) return 1;
   d->opt = *opt;
+  /* every client and connection takes a file descriptor: the soft limit goes up
+   * to the hard one, and the client cap stays below it, so that accepting never
+   * fails for lack of descriptors (which libwebsockets would retry at once) */
+  struct rlimit nofile;
+  if (getrlimit(RLIMIT_NOFILE, &nofile) == 0) {
+    if (nofile.rlim_cur < nofile.rlim_max) {
+      nofile.rlim_cur = nofile.rlim_max;
+      setrlimit(RLIMIT_NOFILE, &nofile);
+      getrlimit(RLIMIT_NOFILE, &nofile);
+    }
+    rlim_t room = nofile.rlim_cur > 192 ? nofile.rlim_cur - 128 : 64;
+    if ((rlim_t)d->opt.clients.max_clients > room / 2) {
+      d->opt.clients.max_clients = (int)(room / 2);
+      server_log(NULL, "at most %d clients: the limit of open files is %llu",
+                 d->opt.clients.max_clients, (unsigned long long)nofile.rlim_cur);
+    }
+  }
   if (uv_loop_init(&d->loop)) {
     free(d);
     return 1;
   }
-  if (store_open(opt->db, true, &d->st)) {
+  if (store_open(opt->db, true, &d->st) || store_open(opt->db, false, &d->reader)) {
     server_log(NULL, "%s", store_open_error());
+    store_close(d->st);
     uv_loop_close(&d->loop);
     free(d);
     return 2;
   }
-  lws_set_log_level(LLL_ERR, NULL);
+  lws_set_log_level(LLL_ERR, lws_log);
   struct lws_http_mount static_mount = {
       .mountpoint = "/", .origin = opt->web, .def = "index.html",
       .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 1, .extra_mimetypes = &mime_mjs};
@@ -237,7 +298,7 @@ int server_main(const server_options *opt) {
     d->sigint.data = d->sigterm.data = d;
     uv_signal_start(&d->sigint, on_signal, SIGINT);
     uv_signal_start(&d->sigterm, on_signal, SIGTERM);
-    client_set_init(&d->clients, &d->loop, opt->max_message, opt->max_pending, opt->rate_limit);
+    client_set_init(&d->clients, &d->loop, &d->opt.clients);
     uv_timer_init(&d->loop, &shutdown_timer);
     shutdown_timer.data = d;
     uv_timer_start(&shutdown_timer, on_shutdown_tick, 100, 100);
@@ -257,6 +318,7 @@ int server_main(const server_options *opt) {
   if (d->ctx) lws_context_destroy(d->ctx);
   uv_run(&d->loop, UV_RUN_DEFAULT);
   runs_free(d);
+  store_close(d->reader);
   store_close(d->st);
   if (uv_loop_close(&d->loop)) server_log(NULL, "the loop still had handles at exit");
   free(d);

@@ -41,6 +41,25 @@
 #define DAEMON_MAX_SLICE (16ll << 20)
 /** Threads of the run pool (default). */
 #define DAEMON_WORKERS 2
+/** Runs held, forks included (default). */
+#define DAEMON_MAX_RUNS 64
+/** Stems per world (default). */
+#define DAEMON_MAX_STEMS 2000
+/** Obstacles per world (default); an edit adds at most SYLVA_MSG_MAX_EDIT. */
+#define DAEMON_MAX_OBSTACLES 10000
+/** WebSocket clients at once (default; kept below the file-descriptor limit). */
+#define DAEMON_MAX_CLIENTS 1000
+/** Exports, history snapshots and forks at once (default). */
+#define DAEMON_MAX_JOBS 2
+/** Bytes of unfinished messages of all clients together (default). */
+#define DAEMON_MAX_INPUT (64u << 20)
+/** Milliseconds a message may take to arrive (default). */
+#define DAEMON_MESSAGE_MS 10000
+/** Memory budget of the runs' worlds, MiB (default). */
+#define DAEMON_MEMORY_BUDGET_MIB 4096
+/** Estimated memory of one full-grown stem: its shade and occupancy voxels and
+ *  its nodes (measured: a stand of five trees of Table 2 peaks at 68 MiB). */
+#define DAEMON_BYTES_PER_STEM (16u << 20)
 /** Most origins given with --allow-origin. */
 #define DAEMON_MAX_ORIGINS 16
 
@@ -60,10 +79,13 @@ typedef struct server_options {
   const char *hosts[ACCESS_MAX_HOSTS]; /**< --allow-host names */
   int host_count;
   bool public_read;      /**< with a token, reading needs none */
-  size_t max_message;
-  int rate_limit;
-  size_t max_pending;
+  client_limits clients; /**< message size and rate, backlog, clients, input */
   int workers;           /**< threads of the run pool */
+  int max_runs;          /**< runs held (forks count) */
+  int max_stems;         /**< stems per world */
+  int max_obstacles;     /**< obstacles per world */
+  int max_jobs;          /**< exports, histories and forks at once */
+  size_t memory_budget;  /**< bytes the runs' worlds may take, by estimate */
 } server_options;
 
 
@@ -82,12 +104,25 @@ struct server {
   bool stopping;
   uint64_t stop_at;
   int64_t iterations_total;
+  int jobs;              /**< exports, histories and forks running */
+  size_t memory_reserved; /**< estimated memory of the runs held and being forked */
+  int runs_pending;      /**< forks on their way */
+  store *reader;         /**< a second connection, for the regrowing of jobs (WAL lets
+                              it read while the first one writes) */
   double iteration_ms_total;
   access_rules access;   /**< Host, Origin and token checks */
 };
 
 /** What the daemon wants its token for (the welcome says it). */
 sylva_auth server_auth(const server *d);
+
+/** A log line that a flood could repeat (refused connections, accept errors): at
+ *  most 10 a second get through, and the count of the others follows. */
+void server_log_limited(const char *run_name, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
 
 /** One log line on stderr: "sylva: [run NAME] message". */
 void server_log(const char *run_name, const char *fmt, ...)

@@ -182,7 +182,7 @@ static void job_work(uv_work_t *req) {
     snprintf(j->err, sizeof j->err, "cannot create a temporary file: %s", strerror(errno));
     return;
   }
-  j->failed = export_write(j->file, j->d->st, &j->spec, log_warning, j->err,
+  j->failed = export_write(j->file, j->d->reader, &j->spec, log_warning, j->err,
                            sizeof j->err);
   if (j->failed) return;
   off_t size = ftello(j->file);
@@ -196,8 +196,9 @@ static void job_work(uv_work_t *req) {
 
 /* Loop thread: the reply, when the transaction is still there; frees the job. */
 static void job_done(uv_work_t *req, int status) {
-  (void)status;
   http_job *j = req->data;
+  j->d->jobs--;
+  if (status == UV_ECANCELED) j->failed = SERVER_OK; /* the client left before it started */
   if (j->failed) server_log(j->name, "export failed: %s", j->err);
   http_pss *pss = j->pss;
   if (!pss) {
@@ -231,6 +232,11 @@ static void start_export(server *d, struct lws *wsi, http_pss *pss, const run *r
     reply_text(pss, 503, "the daemon is stopping");
     return;
   }
+  const char *busy = runs_job_room(d);
+  if (busy) {
+    reply_text(pss, 503, "%s", busy);
+    return;
+  }
   http_job *j = calloc(1, sizeof *j);
   if (!j || !(j->name = strdup(r->name))) {
     free(j);
@@ -248,6 +254,7 @@ static void start_export(server *d, struct lws *wsi, http_pss *pss, const run *r
     reply_text(pss, 500, "cannot queue the export");
     return;
   }
+  d->jobs++;
   j->wsi = wsi;
   j->pss = pss;
   pss->job = j;
@@ -532,7 +539,9 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
   case LWS_CALLBACK_CLOSED_HTTP:
     if (!pss) break;
     if (pss->job) {
-      /* the job goes on; its result is freed when it is done */
+      /* a job not started yet is cancelled; a running one goes on and its result
+       * is freed when it is done */
+      uv_cancel((uv_req_t *)&pss->job->work);
       pss->job->pss = NULL;
       pss->job->wsi = NULL;
       pss->job = NULL;

@@ -30,6 +30,49 @@ static void run_note(run *r) {
   r->iteration = sylva_world_iteration(r->w);
   r->stems = sylva_world_stem_count(r->w);
   r->finished = sylva_world_finished(r->w);
+  r->obstacles = sylva_world_obstacle_count(r->w);
+}
+
+/* ---- limits ------------------------------------------------------------------------ */
+
+/** Bytes of one grid chunk of 16^3 voxels at most (shade, occupancy, a column). */
+#define BYTES_PER_CHUNK (80u << 10)
+
+size_t runs_estimate(const sylva_world *w, int stems) {
+  int dims[3];
+  sylva_world_dims(w, dims);
+  size_t chunks = 1;
+  for (int a = 0; a < 3; a++) chunks *= (size_t)(dims[a] + 15) / 16;
+  size_t box = chunks * BYTES_PER_CHUNK, grown = (size_t)stems * DAEMON_BYTES_PER_STEM;
+  return (grown < box ? grown : box) + (1u << 20);
+}
+
+static int runs_held(server *d) {
+  int n = d->runs_pending;
+  for (run *r = d->runs; r; r = r->next) n++;
+  return n;
+}
+
+const char *runs_room(server *d, size_t estimate, char *buf, size_t size) {
+  if (runs_held(d) >= d->opt.max_runs) {
+    snprintf(buf, size, "the daemon holds %d runs, its limit (--max-runs)", d->opt.max_runs);
+    return buf;
+  }
+  if (d->memory_reserved + estimate > d->opt.memory_budget) {
+    snprintf(buf, size,
+             "the run would need about %zu MiB; %zu of the %zu MiB budget are taken "
+             "(--memory-budget)",
+             estimate >> 20, d->memory_reserved >> 20, d->opt.memory_budget >> 20);
+    return buf;
+  }
+  return NULL;
+}
+
+const char *runs_job_room(server *d) {
+  return d->jobs < d->opt.max_jobs
+             ? NULL
+             : "the daemon is busy with other exports, histories and forks (--max-jobs); "
+               "try again soon";
 }
 
 static bool run_wants_step(const run *r) {
@@ -104,10 +147,10 @@ static void load_warning(const char *msg) { server_log(NULL, "warning: %s", msg)
 
 static void work_load(run *r) {
   server *d = r->d;
-  if (store_world_at(d->st, r->id, r->iteration, load_warning, &r->task_world) ||
-      store_command_count(d->st, r->id, &r->task_edits)) {
+  if (store_world_at(d->reader, r->id, r->iteration, load_warning, &r->task_world) ||
+      store_command_count(d->reader, r->id, &r->task_edits)) {
     r->task_status = SYLVA_EINVAL;
-    snprintf(r->task_error, sizeof r->task_error, "%s", store_error(d->st));
+    snprintf(r->task_error, sizeof r->task_error, "%s", store_error(d->reader));
   }
 }
 
@@ -292,6 +335,9 @@ static void done_edit(run *r) {
     r->w = r->task_world;
     r->task_world = NULL;
     run_note(r);
+    size_t estimate = runs_estimate(r->w, r->stems);
+    d->memory_reserved += estimate - r->estimate;
+    r->estimate = estimate;
     server_log(r->name, "edited after iteration %d (+%d plants, +%d obstacles, -%d obstacles)",
                r->iteration, m->add_plant_count, m->add_obstacle_count,
                m->remove_obstacle_count);
@@ -335,6 +381,8 @@ static void done_load(run *r) {
   r->task_world = NULL;
   r->loading = false;
   run_note(r);
+  r->estimate = runs_estimate(r->w, r->stems);
+  r->d->memory_reserved += r->estimate;
   /* one seq per delta and per edit since the run was planted, so that the numbers a
    * client holds keep their meaning across restarts of the daemon */
   r->seq = (int64_t)r->iteration + r->task_edits;
@@ -444,6 +492,8 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
   r->snapshot_every = snapshot_every;
   r->status = status;
   if (w) run_note(r);
+  r->estimate = w ? runs_estimate(w, r->stems) : 0;
+  d->memory_reserved += r->estimate;
   /* append, so that runs stay in creation order */
   run **tail = &d->runs;
   while (*tail) tail = &(*tail)->next;
@@ -452,6 +502,7 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
 }
 
 static void run_free(run *r) {
+  r->d->memory_reserved -= r->estimate;
   while (r->edits) {
     pending_edit *e = r->edits;
     r->edits = e->next;
@@ -548,11 +599,30 @@ char *runs_json(server *d, bool message, const char *ref) {
 
 run *run_create(server *d, const sylva_scenario *s, const char *name, bool start,
                 const char **code, char *err, size_t errlen) {
+  *code = "too_large";
+  if (s->stem_count > d->opt.max_stems) {
+    snprintf(err, errlen, "/scenario/plants: %d stems; at most %d in one world (--max-stems)",
+             s->stem_count, d->opt.max_stems);
+    return NULL;
+  }
+  if (s->obstacle_count > d->opt.max_obstacles) {
+    snprintf(err, errlen,
+             "/scenario/obstacles: %d obstacles; at most %d in one world (--max-obstacles)",
+             s->obstacle_count, d->opt.max_obstacles);
+    return NULL;
+  }
+  *code = "busy";
+  if (runs_room(d, 0, err, errlen)) return NULL;
   *code = "bad_request";
   sylva_world *w;
   char why[512];
   if (sylva_scenario_build(s, &w, why, sizeof why) < 0) {
     snprintf(err, errlen, "/scenario%s%s", why[0] == '/' ? "" : ": ", why);
+    return NULL;
+  }
+  if (runs_room(d, runs_estimate(w, s->stem_count), err, errlen)) {
+    *code = "busy";
+    sylva_world_destroy(w);
     return NULL;
   }
   char *json = sylva_scenario_json(s);
@@ -588,7 +658,44 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
 
 /* ---- edits, light slices, forks, history ----------------------------------------- */
 
+/* NULL when the edit keeps the world within the stem and obstacle caps and the
+ * memory budget (counted against the run as it is now, edits queued before it
+ * aside), else why not and *code. */
+static const char *edit_room(run *r, const sylva_msg *m, const char **code, char *buf,
+                             size_t size) {
+  server *d = r->d;
+  int stems = r->stems;
+  for (int i = 0; i < m->add_plant_count; i++) stems += m->add_plants[i].root_count;
+  *code = "too_large";
+  if (stems > d->opt.max_stems) {
+    snprintf(buf, size, "/add_plants: the world would have %d stems; at most %d (--max-stems)",
+             stems, d->opt.max_stems);
+    return buf;
+  }
+  int obstacles = r->obstacles + m->add_obstacle_count - m->remove_obstacle_count;
+  if (obstacles > d->opt.max_obstacles) {
+    snprintf(buf, size,
+             "/add_obstacles: the world would have %d obstacles; at most %d (--max-obstacles)",
+             obstacles, d->opt.max_obstacles);
+    return buf;
+  }
+  *code = "busy";
+  size_t more = stems > r->stems && r->w ? runs_estimate(r->w, stems) : r->estimate;
+  if (more > r->estimate && d->memory_reserved + (more - r->estimate) > d->opt.memory_budget) {
+    snprintf(buf, size, "the plants would need about %zu MiB more than the budget has free "
+             "(--memory-budget)", (more - r->estimate) >> 20);
+    return buf;
+  }
+  return NULL;
+}
+
 void run_edit(run *r, client *c, sylva_msg *m) {
+  const char *code;
+  char why[256];
+  if (edit_room(r, m, &code, why, sizeof why)) {
+    client_send_text(c, sylva_msg_error(code, why, m->ref));
+    return;
+  }
   pending_edit *e = calloc(1, sizeof *e);
   if (!e) {
     client_send_text(c, sylva_msg_error("internal", "out of memory", m->ref));
@@ -629,6 +736,7 @@ typedef struct job {
   char *name, *ref, *text;
   sylva_world *w;
   int64_t new_id;
+  size_t estimate;   /**< a fork's share of the budget, held while it is made */
   char err[512];
   const char *code;
 } job;
@@ -645,7 +753,8 @@ static void job_work(uv_work_t *req) {
   job *j = req->data;
   server *d = j->d;
   j->code = NULL;
-  int failed = store_world_at(d->st, j->run, j->iteration, NULL, &j->w);
+  int failed = store_world_at(d->reader, j->run, j->iteration, NULL, &j->w);
+  if (failed) snprintf(j->err, sizeof j->err, "%s", store_error(d->reader));
   char *scenario = NULL;
   if (!failed && j->fork) {
     failed = store_run_scenario(d->st, j->run, &scenario) ||
@@ -654,7 +763,7 @@ static void job_work(uv_work_t *req) {
     if (!failed) failed = store_set_status(d->st, j->new_id, SYLVA_RUN_PAUSED, NULL, 0);
   }
   if (failed) {
-    snprintf(j->err, sizeof j->err, "%s", store_error(d->st));
+    if (j->w) snprintf(j->err, sizeof j->err, "%s", store_error(d->st));
     j->code = strstr(j->err, "exists already") ? "bad_request" : "internal";
   }
   free(scenario);
@@ -670,6 +779,9 @@ static void job_work(uv_work_t *req) {
 static void job_done(uv_work_t *req, int status) {
   job *j = req->data;
   (void)status;
+  j->d->jobs--;
+  j->d->runs_pending -= j->fork;
+  j->d->memory_reserved -= j->estimate;
   client *c = client_find(&j->d->clients, j->client);
   if (j->code) {
     if (c) client_send_text(c, sylva_msg_error(j->code, j->err, j->ref));
@@ -705,6 +817,17 @@ static void start_job(run *r, client *c, int iteration, const char *name, const 
     job_free(j);
     return;
   }
+  const char *busy = runs_job_room(r->d);
+  char why[256];
+  if (!busy && name) {
+    j->estimate = r->estimate;
+    busy = runs_room(r->d, j->estimate, why, sizeof why);
+  }
+  if (busy) {
+    client_send_text(c, sylva_msg_error("busy", busy, ref));
+    job_free(j);
+    return;
+  }
   j->d = r->d;
   j->client = c->serial;
   j->run = r->id;
@@ -716,7 +839,11 @@ static void start_job(run *r, client *c, int iteration, const char *name, const 
   if (uv_queue_work(&r->d->loop, &j->work, job_work, job_done) != 0) {
     client_send_text(c, sylva_msg_error("internal", "cannot queue the work", ref));
     job_free(j);
+    return;
   }
+  r->d->jobs++;
+  r->d->runs_pending += j->fork;
+  r->d->memory_reserved += j->estimate;
 }
 
 void run_fork(run *r, client *c, int iteration, const char *name, const char *ref) {

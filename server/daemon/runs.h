@@ -35,9 +35,10 @@ struct run {
   int steps;        /**< iterations still wanted while paused (control step) */
   int64_t seq;      /**< sequence number of the last delta or edit */
   /* summary as of the last finished task (the world may be busy on a worker) */
-  int iteration, stems;
+  int iteration, stems, obstacles;
   int64_t nodes;
   bool finished;    /**< the growth equations ended every stem */
+  size_t estimate;  /**< its share of the memory budget (runs_estimate) */
   bool busy;        /**< a task is queued or running */
   bool stop_after;  /**< stop requested while busy */
   pool_task task;
@@ -98,6 +99,18 @@ void run_fork(run *r, client *c, int iteration, const char *name, const char *re
 void run_light(run *r, client *c, double z, const char *ref);
 /** Sends the client a snapshot of stored iteration `iteration`, off the loop. */
 void run_get(run *r, client *c, int iteration, const char *ref);
+/** The estimated memory of a world of `stems` stems once grown: a full-grown
+ *  stem's DAEMON_BYTES_PER_STEM each, at most the grid of the whole world box. */
+size_t runs_estimate(const sylva_world *w, int stems);
+
+/** NULL when the daemon may hold another run of this estimate (the run cap, the
+ *  memory budget), else why not (the protocol code is then "busy"). */
+const char *runs_room(server *d, size_t estimate, char *buf, size_t size);
+
+/** NULL when another export, history snapshot or fork may start now (--max-jobs),
+ *  else why not. */
+const char *runs_job_room(server *d);
+
 /** The JSON of every run: a `runs` message (message true, with ref) or the array
  *  of GET /api/runs; malloc'd, NULL when memory ran out. */
 char *runs_json(server *d, bool message, const char *ref);
