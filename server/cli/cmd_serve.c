@@ -1,5 +1,7 @@
 /* `sylva serve`: the daemon. */
 #include <arpa/inet.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -51,6 +53,24 @@ static const cli_option serve_options[OPT_COUNT] = {
                     "memory the runs' worlds may take, by estimate (default 4096)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
+
+/* The integer limits OPT_WORKERS to OPT_MAX_JOBS: the highest value and where it
+ * goes in server_options (the lowest is 1). */
+typedef struct cli_int_option {
+  uint64_t hi;
+  size_t offset;
+} cli_int_option;
+
+static const cli_int_option int_options[] = {
+    {64, offsetof(server_options, workers)},
+    {100000, offsetof(server_options, max_runs)},
+    {1000000, offsetof(server_options, max_stems)},
+    {1000000, offsetof(server_options, max_obstacles)},
+    {1000000, offsetof(server_options, clients.max_clients)},
+    {64, offsetof(server_options, max_jobs)},
+};
+_Static_assert(sizeof int_options / sizeof int_options[0] == OPT_MAX_JOBS - OPT_WORKERS + 1,
+               "one entry per integer limit");
 
 static void serve_usage(FILE *f) {
   fputs("Usage: sylva serve [OPTIONS]\n"
@@ -167,30 +187,14 @@ int cmd_serve(int argc, char **argv) {
       if (cli_parse_u64("serve", "rate-limit", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
       o.clients.rate_limit = (int)v;
       break;
-    case OPT_WORKERS:
-      if (cli_parse_u64("serve", "workers", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
-      o.workers = (int)v;
+    case OPT_WORKERS: case OPT_MAX_RUNS: case OPT_MAX_STEMS: case OPT_MAX_OBSTACLES:
+    case OPT_MAX_CLIENTS: case OPT_MAX_JOBS: {
+      const cli_int_option *n = &int_options[opt - OPT_WORKERS];
+      if (cli_parse_u64("serve", serve_options[opt].name, arg, 1, n->hi, &v))
+        return CLI_EXIT_USAGE;
+      *(int *)((char *)&o + n->offset) = (int)v;
       break;
-    case OPT_MAX_RUNS:
-      if (cli_parse_u64("serve", "max-runs", arg, 1, 100000, &v)) return CLI_EXIT_USAGE;
-      o.max_runs = (int)v;
-      break;
-    case OPT_MAX_STEMS:
-      if (cli_parse_u64("serve", "max-stems", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
-      o.max_stems = (int)v;
-      break;
-    case OPT_MAX_OBSTACLES:
-      if (cli_parse_u64("serve", "max-obstacles", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
-      o.max_obstacles = (int)v;
-      break;
-    case OPT_MAX_CLIENTS:
-      if (cli_parse_u64("serve", "max-clients", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
-      o.clients.max_clients = (int)v;
-      break;
-    case OPT_MAX_JOBS:
-      if (cli_parse_u64("serve", "max-jobs", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
-      o.max_jobs = (int)v;
-      break;
+    }
     case OPT_MAX_INPUT:
       if (cli_parse_u64("serve", "max-input", arg, 1024, 1ull << 34, &v)) return CLI_EXIT_USAGE;
       o.clients.max_input = (size_t)v;

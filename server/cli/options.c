@@ -11,7 +11,11 @@ void cli_parser_init(cli_parser *p, const char *command, const cli_option *optio
   memset(p, 0, sizeof *p);
   p->command = command;
   p->options = options;
-  p->count = count < CLI_MAX_OPTIONS ? count : CLI_MAX_OPTIONS;
+  if (count > CLI_MAX_OPTIONS) { /* a programming error: raise CLI_MAX_OPTIONS */
+    fprintf(stderr, "sylva %s: %d options, more than CLI_MAX_OPTIONS\n", command, count);
+    abort();
+  }
+  p->count = count;
   p->argc = argc;
   p->argv = argv;
   /* A leading ':' makes getopt report a missing argument as ':' and stay silent. */

@@ -15,7 +15,7 @@ enum { CLI_EXIT_OK = 0, CLI_EXIT_FAILURE = 1, CLI_EXIT_USAGE = 2 };
 enum { CLI_PARSED = -1 };
 
 /** Most options one subcommand may declare. */
-#define CLI_MAX_OPTIONS 16
+#define CLI_MAX_OPTIONS 32
 
 /** One option of a subcommand. */
 typedef struct cli_option {

@@ -24,13 +24,17 @@ static void log_line(const char *run_name, const char *msg) {
     fprintf(stderr, "sylva: %s\n", msg);
 }
 
-void server_log(const char *run_name, const char *fmt, ...) {
+static void vlog(const char *run_name, const char *fmt, va_list ap) {
   char msg[1024];
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  log_line(run_name, msg);
+}
+
+void server_log(const char *run_name, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
+  vlog(run_name, fmt, ap);
   va_end(ap);
-  log_line(run_name, msg);
 }
 
 /* The window of server_log_limited: the second it began and its lines. */
@@ -48,12 +52,10 @@ void server_log_limited(const char *run_name, const char *fmt, ...) {
     limited_dropped++;
     return;
   }
-  char msg[1024];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
+  vlog(run_name, fmt, ap);
   va_end(ap);
-  log_line(run_name, msg);
 }
 
 /* libwebsockets' own errors (an accept failing with EMFILE, say) through the
