@@ -636,7 +636,7 @@ int sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
 double sylva_world_light_at(const sylva_world *w, const double p[3]) {
   int v[3];
   if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) return 0.0;
-  if (sylva__grid_blocked(&w->grid, v)) return 0.0;
+  /* 0 inside an obstacle too: a voxel inside one is below its top */
   return sylva__grid_light(&w->grid, v);
 }
 
