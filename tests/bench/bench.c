@@ -9,7 +9,8 @@
  *
  * "obstacles" reads the light at every cell of one horizontal slice of a
  * 4000 x 4000-voxel site holding 1,000 boxes (what a light_slice message asks), and
- * adds, finds by label and removes by id --edits N obstacles (100,000 by default).
+ * adds, finds by label, copies (a snapshot saved and loaded, as the daemon's edits
+ * do) and removes by id --edits N obstacles (100,000 by default).
  *
  *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles] [--scenarios DIR]
  *         [--edits N] */
@@ -225,8 +226,8 @@ static void random_box(sylva__rng *r, double side, double thick, double mn[3], d
 }
 
 /* The light of every cell of the layer at 0.52 m (as sylva_msg_light_slice reads
- * it) with 1,000 boxes; then `edits` obstacles added, found by label and removed by
- * id in the order they were added (the oldest first). */
+ * it) with 1,000 boxes; then `edits` obstacles added, found by label, copied through
+ * a snapshot and removed by id in the order they were added (the oldest first). */
 static void obstacles(int edits) {
   printf("\n== obstacles\n");
   sylva_world *w = obstacle_site();
@@ -278,13 +279,23 @@ static void obstacles(int edits) {
   double t2 = now(NULL);
   sylva_memory m;
   sylva_world_memory(w, &m);
+  /* an edit of the daemon works on a copy: the world saved and loaded */
+  double t3 = now(NULL);
+  uint8_t *image;
+  size_t size;
+  sylva_world *copy;
+  if (sylva_snapshot_save(w, &image, &size) || sylva_snapshot_load(image, size, &copy)) exit(1);
+  sylva_free(image);
+  sylva_world_destroy(copy);
+  double t4 = now(NULL);
   int removed = 0;
   for (int i = 0; i < edits; i++) removed += sylva_world_remove_obstacle(w, ids[i]) == SYLVA_OK;
-  double t3 = now(NULL);
-  printf("   %d obstacles: added in %.3f s, found by label in %.3f s (%d found), removed by id "
-         "in %.3f s (%d removed, %d left); voxel memory with them %.1f MB\n",
-         edits, t1 - t0, t2 - t1, found, t3 - t2, removed, sylva_world_obstacle_count(w),
-         (double)m.voxels / 1048576.0);
+  double t5 = now(NULL);
+  printf("   %d obstacles: added in %.3f s, found by label in %.3f s (%d found), saved and "
+         "loaded in %.3f s, removed by id in %.3f s (%d removed, %d left); voxel memory with "
+         "them %.1f MB\n",
+         edits, t1 - t0, t2 - t1, found, t4 - t3, t5 - t4, removed,
+         sylva_world_obstacle_count(w), (double)m.voxels / 1048576.0);
   free(ids);
   sylva_world_destroy(w);
 }
