@@ -408,15 +408,23 @@ static int slot_of(const sylva__grid *g, int id) {
 }
 
 /* Drops the dead slots, keeping the order; the labels and ranks follow. Allocates
- * nothing. */
+ * nothing, and costs the slots, not the label table. */
 static void compact_obstacles(sylva__grid *g) {
   int n = 0;
-  for (int s = 0; s < g->obstacle_slots; s++)
-    if (g->obstacles[s].live) g->obstacles[n++] = g->obstacles[s];
+  size_t mask = (size_t)g->label_cap - 1;
+  for (int s = 0; s < g->obstacle_slots; s++) {
+    if (!g->obstacles[s].live) continue;
+    if (n != s) {
+      /* its entry is the one holding s: those done hold less than n, the rest more */
+      size_t e = label_home(g, g->obstacles[s].label);
+      while (g->label_slot[e] != s) e = (e + 1) & mask;
+      g->label_slot[e] = n;
+      g->obstacles[n] = g->obstacles[s];
+    }
+    n++;
+  }
   g->obstacle_slots = n;
   for (int i = 1; i <= n; i++) g->obstacle_rank[i] = i & -i; /* every slot live */
-  for (int i = 0; i < g->label_cap; i++) g->label_slot[i] = -1;
-  label_fill(g);
 }
 
 int sylva__grid_find_obstacle(const sylva__grid *g, const char *label) {

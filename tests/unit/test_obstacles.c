@@ -1,9 +1,10 @@
 /* The obstacle index: the per-column lists answer blocked, under an obstacle and
  * light exactly as a scan of every obstacle does, on thousands of random boxes and
- * after removals; labels and ids are found without a scan (100,000 obstacles), in
- * the order they were added; duplicate labels are refused; an addition that runs
- * out of memory at any of its allocations leaves the grid as it was; a snapshot of
- * a world with removed obstacles loads into the same world, whose index answers too. */
+ * after removals; labels and ids are found without a scan (100,000 obstacles, then
+ * a few churning), in the order they were added; duplicate labels are refused; an
+ * addition that runs out of memory at any of its allocations leaves the grid as it
+ * was; a snapshot of a world with removed obstacles loads into the same world,
+ * whose index answers too. */
 #include <stdint.h>
 #include <string.h>
 
@@ -161,6 +162,9 @@ static void test_random_boxes(void) {
     if (live[i]) order += k >= g.obstacle_count || sylva__grid_obstacle_at(&g, k++)->id != ids[i];
     labels += sylva__grid_find_obstacle(&g, label) != (live[i] ? ids[i] : SYLVA_ENOTFOUND);
     if (!live[i]) labels += sylva__grid_remove_obstacle(&g, ids[i]) != SYLVA_ENOTFOUND;
+    double bmn[3] = {1, 1, 1}, bmx[3] = {2, 2, 2};
+    if (live[i] && i % 7 == 0) /* still in use */
+      labels += sylva__grid_add_obstacle(&g, label, bmn, bmx) != SYLVA_EINVAL;
   }
   CHECK_INT(order, 0);
   CHECK_INT(labels, 0);
@@ -179,7 +183,8 @@ static void test_random_boxes(void) {
   CHECK_INT(index_errors(&g), 0);
   CHECK_INT(disagreements(&r, &g, 20000), 0);
   /* all gone: no list left, light as without obstacles */
-  while (g.obstacle_count) CHECK_INT(sylva__grid_remove_obstacle(&g, sylva__grid_obstacle_at(&g, 0)->id), 0);
+  while (g.obstacle_count)
+    CHECK_INT(sylva__grid_remove_obstacle(&g, sylva__grid_obstacle_at(&g, 0)->id), 0);
   CHECK_INT(g.obstacle_list_bytes, 0);
   CHECK_INT(index_errors(&g), 0);
   CHECK_INT(disagreements(&r, &g, 20000), 0);
@@ -227,7 +232,8 @@ static void test_many(void) {
     bad += sylva__grid_remove_obstacle(&g, ids[i]) != SYLVA_OK;
     if (i % 9973 == 0 && g.obstacle_count) {
       bad += sylva__grid_obstacle_at(&g, 0)->id != ids[i + 1];
-      bad += sylva__grid_obstacle_at(&g, g.obstacle_count / 2)->id != ids[i + 1 + g.obstacle_count / 2];
+      int half = g.obstacle_count / 2;
+      bad += sylva__grid_obstacle_at(&g, half)->id != ids[i + 1 + half];
       bad += sylva__grid_obstacle_at(&g, g.obstacle_count - 1)->id != ids[N - 1];
       bad += sylva__grid_find_obstacle(&g, "o0") != SYLVA_ENOTFOUND;
     }
@@ -236,6 +242,23 @@ static void test_many(void) {
   CHECK_INT(g.obstacle_count, 0);
   CHECK_INT(sylva__grid_remove_obstacle(&g, ids[N / 2]), SYLVA_ENOTFOUND);
   CHECK_INT(g.obstacle_list_bytes, 0);
+  /* a few obstacles churning in the large table: each removal may compact */
+  bad = 0;
+  for (int i = 0; i < 20000; i++) {
+    char label[16];
+    snprintf(label, sizeof label, "c%d", i);
+    ids[i] = sylva__grid_add_obstacle(&g, label, bmn, bmx);
+    if (i >= 3) bad += sylva__grid_remove_obstacle(&g, ids[i - 3]) != SYLVA_OK;
+  }
+  CHECK_INT(bad, 0);
+  CHECK_INT(g.obstacle_count, 3);
+  for (int k = 0; k < 3; k++) {
+    char label[16];
+    snprintf(label, sizeof label, "c%d", 19997 + k);
+    CHECK_INT(sylva__grid_obstacle_at(&g, k)->id, ids[19997 + k]);
+    CHECK_INT(sylva__grid_find_obstacle(&g, label), ids[19997 + k]);
+  }
+  CHECK_INT(sylva__grid_find_obstacle(&g, "c19996"), SYLVA_ENOTFOUND);
   sylva__grid_free(&g);
 }
 
