@@ -1,5 +1,6 @@
 #include "grid.h"
 
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -46,9 +47,16 @@ void sylva__grid_free(sylva__grid *g) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
     for (size_t i = 0; i < ncols; i++) sylva__free(g->colsum[i]);
   }
+  if (g->obstacle_cols) {
+    size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
+    for (size_t i = 0; i < ncols; i++) sylva__free(g->obstacle_cols[i]);
+  }
   sylva__free(g->chunks);
   sylva__free(g->colsum);
   sylva__free(g->obstacles);
+  sylva__free(g->obstacle_rank);
+  sylva__free(g->label_slot);
+  sylva__free(g->obstacle_cols);
   memset(g, 0, sizeof *g);
 }
 
@@ -58,7 +66,9 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
   return nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
          g->column_count * SYLVA__CHUNK_VOXELS * sizeof(int64_t) +
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
-         (size_t)g->obstacle_cap * sizeof(sylva__obstacle);
+         (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
+         (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
+         (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes;
 }
 
 bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v[3]) {
@@ -104,9 +114,17 @@ static int64_t *colsum_get(sylva__grid *g, int cx, int cy) {
   return *slot;
 }
 
+/* The obstacles over voxel v's chunk column, or NULL. */
+static inline const sylva__obstacle_list *obstacles_over(const sylva__grid *g, const int v[3]) {
+  if (!g->obstacle_cols) return NULL;
+  return g->obstacle_cols[(size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4)];
+}
+
 bool sylva__grid_blocked(const sylva__grid *g, const int v[3]) {
-  for (int i = 0; i < g->obstacle_count; i++) {
-    const sylva__obstacle *o = &g->obstacles[i];
+  const sylva__obstacle_list *l = obstacles_over(g, v);
+  if (!l) return false;
+  for (int32_t i = 0; i < l->count; i++) {
+    const sylva__obstacle_box *o = &l->box[i];
     if (v[0] >= o->lo[0] && v[0] < o->hi[0] && v[1] >= o->lo[1] && v[1] < o->hi[1] &&
         v[2] >= o->lo[2] && v[2] < o->hi[2])
       return true;
@@ -115,8 +133,10 @@ bool sylva__grid_blocked(const sylva__grid *g, const int v[3]) {
 }
 
 bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]) {
-  for (int i = 0; i < g->obstacle_count; i++) {
-    const sylva__obstacle *o = &g->obstacles[i];
+  const sylva__obstacle_list *l = obstacles_over(g, v);
+  if (!l) return false;
+  for (int32_t i = 0; i < l->count; i++) {
+    const sylva__obstacle_box *o = &l->box[i];
     if (v[0] >= o->lo[0] && v[0] < o->hi[0] && v[1] >= o->lo[1] && v[1] < o->hi[1] &&
         v[2] < o->hi[2])
       return true;
@@ -283,6 +303,8 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, i
   return rc ? rc : stamp(g, v, p, sign);
 }
 
+/* ---- obstacles ------------------------------------------------------------------ */
+
 static void obstacle_voxels(const sylva__grid *g, sylva__obstacle *o) {
   for (int a = 0; a < 3; a++) {
     double lo = floor((o->min[a] - g->min[a]) / g->voxel);
@@ -297,44 +319,245 @@ static void obstacle_voxels(const sylva__grid *g, sylva__obstacle *o) {
   }
 }
 
+/* The chunk columns an obstacle is listed under: [c0[a], c1[a]) per horizontal axis;
+ * false when its box misses the grid horizontally (it is listed nowhere). An
+ * obstacle above the grid's top, clipped to an empty z range, still darkens its
+ * columns and is listed. */
+static bool obstacle_columns(const sylva__obstacle *o, int c0[2], int c1[2]) {
+  for (int a = 0; a < 2; a++) {
+    if (o->hi[a] <= o->lo[a]) return false;
+    c0[a] = o->lo[a] >> 4;
+    c1[a] = ((o->hi[a] - 1) >> 4) + 1;
+  }
+  return true;
+}
+
+/* Labels: FNV-1a, folded so the high bits reach the table index. */
+static size_t label_home(const sylva__grid *g, const char *label) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (const unsigned char *p = (const unsigned char *)label; *p; p++)
+    h = (h ^ *p) * 0x100000001b3ULL;
+  return (size_t)(h ^ (h >> 32)) & (size_t)(g->label_cap - 1);
+}
+
+/* The table entry holding label's slot, or the empty entry where it would go; -1
+ * without a table. */
+static ptrdiff_t label_entry(const sylva__grid *g, const char *label) {
+  if (!g->label_cap) return -1;
+  size_t mask = (size_t)g->label_cap - 1, i = label_home(g, label);
+  while (g->label_slot[i] >= 0 && strcmp(g->obstacles[g->label_slot[i]].label, label) != 0)
+    i = (i + 1) & mask;
+  return (ptrdiff_t)i;
+}
+
+/* Files every live slot in the table (all entries -1 before). */
+static void label_fill(sylva__grid *g) {
+  for (int s = 0; s < g->obstacle_slots; s++)
+    if (g->obstacles[s].live) g->label_slot[label_entry(g, g->obstacles[s].label)] = s;
+}
+
+/* Takes the entry at i out of the table, moving later entries of its probe run back
+ * into the gap (no tombstones). */
+static void label_erase(sylva__grid *g, size_t i) {
+  size_t mask = (size_t)g->label_cap - 1;
+  for (size_t j = (i + 1) & mask; g->label_slot[j] >= 0; j = (j + 1) & mask) {
+    size_t home = label_home(g, g->obstacles[g->label_slot[j]].label);
+    /* the entry at j may fill the gap at i unless its home lies in (i, j] */
+    bool stays = i <= j ? (home > i && home <= j) : (home > i || home <= j);
+    if (stays) continue;
+    g->label_slot[i] = g->label_slot[j];
+    i = j;
+  }
+  g->label_slot[i] = -1;
+}
+
+/* Fenwick tree over the slots: live counts. */
+static int rank_before(const sylva__grid *g, int k) { /* live slots among the first k */
+  int32_t n = 0;
+  for (int i = k; i > 0; i -= i & -i) n += g->obstacle_rank[i];
+  return n;
+}
+
+static int rank_select(const sylva__grid *g, int k) { /* slot of the k-th live one */
+  int pos = 0, step = 1;
+  while (step * 2 <= g->obstacle_slots) step *= 2;
+  for (; step; step /= 2)
+    if (pos + step <= g->obstacle_slots && g->obstacle_rank[pos + step] <= k) {
+      pos += step;
+      k -= g->obstacle_rank[pos];
+    }
+  return pos;
+}
+
+const sylva__obstacle *sylva__grid_obstacle_at(const sylva__grid *g, int i) {
+  if (g->obstacle_slots == g->obstacle_count) return &g->obstacles[i];
+  return &g->obstacles[rank_select(g, i)];
+}
+
+/* Slot of the live obstacle with this id, or -1. */
+static int slot_of(const sylva__grid *g, int id) {
+  int lo = 0, hi = g->obstacle_slots;
+  while (lo < hi) {
+    int mid = lo + (hi - lo) / 2;
+    if (g->obstacles[mid].id < id)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < g->obstacle_slots && g->obstacles[lo].id == id && g->obstacles[lo].live ? lo : -1;
+}
+
+/* Drops the dead slots, keeping the order; the labels and ranks follow. Allocates
+ * nothing, and costs the slots, not the label table. */
+static void compact_obstacles(sylva__grid *g) {
+  int n = 0;
+  size_t mask = (size_t)g->label_cap - 1;
+  for (int s = 0; s < g->obstacle_slots; s++) {
+    if (!g->obstacles[s].live) continue;
+    if (n != s) {
+      /* its entry is the one holding s: those done hold less than n, the rest more */
+      size_t e = label_home(g, g->obstacles[s].label);
+      while (g->label_slot[e] != s) e = (e + 1) & mask;
+      g->label_slot[e] = n;
+      g->obstacles[n] = g->obstacles[s];
+    }
+    n++;
+  }
+  g->obstacle_slots = n;
+  for (int i = 1; i <= n; i++) g->obstacle_rank[i] = i & -i; /* every slot live */
+}
+
 int sylva__grid_find_obstacle(const sylva__grid *g, const char *label) {
-  for (int i = 0; i < g->obstacle_count; i++)
-    if (strcmp(g->obstacles[i].label, label) == 0)
-      return g->obstacles[i].id;
-  return SYLVA_ENOTFOUND;
+  ptrdiff_t e = label ? label_entry(g, label) : -1;
+  if (e < 0 || g->label_slot[e] < 0) return SYLVA_ENOTFOUND;
+  return g->obstacles[g->label_slot[e]].id;
+}
+
+/* Frees the empty lists of columns [c0, c1): a column without obstacles has none. */
+static void drop_empty_lists(sylva__grid *g, const int c0[2], const int c1[2]) {
+  for (int cy = c0[1]; cy < c1[1]; cy++)
+    for (int cx = c0[0]; cx < c1[0]; cx++) {
+      sylva__obstacle_list **l = &g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+      if (!*l || (*l)->count) continue;
+      g->obstacle_list_bytes -= sizeof **l + (size_t)(*l)->cap * sizeof(sylva__obstacle_box);
+      sylva__free(*l);
+      *l = NULL;
+    }
+}
+
+/* Makes room for one more slot, label and entry in every column of o; the grid
+ * holds the same obstacles whether it succeeds or not. */
+static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o) {
+  if (g->obstacle_slots == g->obstacle_cap) {
+    if (g->obstacle_cap > INT32_MAX / 4) return SYLVA_ENOMEM;
+    int cap = g->obstacle_cap ? g->obstacle_cap * 2 : 8;
+    sylva__obstacle *slots = sylva__realloc(g->obstacles, (size_t)cap * sizeof *slots);
+    if (!slots) return SYLVA_ENOMEM;
+    g->obstacles = slots;
+    int32_t *rank = sylva__realloc(g->obstacle_rank, ((size_t)cap + 1) * sizeof *rank);
+    if (!rank) return SYLVA_ENOMEM;
+    g->obstacle_rank = rank;
+    g->obstacle_cap = cap;
+  }
+  if (2 * (g->obstacle_count + 1) > g->label_cap) {
+    int cap = g->label_cap ? g->label_cap * 2 : 16;
+    int32_t *table = sylva__malloc((size_t)cap * sizeof *table);
+    if (!table) return SYLVA_ENOMEM;
+    sylva__free(g->label_slot);
+    g->label_slot = table;
+    g->label_cap = cap;
+    for (int i = 0; i < cap; i++) table[i] = -1;
+    label_fill(g);
+  }
+  int c0[2], c1[2];
+  if (!obstacle_columns(o, c0, c1)) return SYLVA_OK;
+  size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
+  if (!g->obstacle_cols) {
+    g->obstacle_cols = sylva__calloc(ncols, sizeof *g->obstacle_cols);
+    if (!g->obstacle_cols) return SYLVA_ENOMEM;
+  }
+  for (int cy = c0[1]; cy < c1[1]; cy++)
+    for (int cx = c0[0]; cx < c1[0]; cx++) {
+      sylva__obstacle_list **l = &g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+      int32_t count = *l ? (*l)->count : 0, cap = *l ? (*l)->cap : 0;
+      if (count < cap) continue;
+      int32_t grown = cap ? cap * 2 : 4;
+      sylva__obstacle_list *m = cap > INT32_MAX / 4 ? NULL :
+          sylva__realloc(*l, sizeof **l + (size_t)grown * sizeof(sylva__obstacle_box));
+      if (!m) {
+        drop_empty_lists(g, c0, c1); /* the lists made for o, so that empty means absent */
+        return SYLVA_ENOMEM;
+      }
+      m->count = count;
+      m->cap = grown;
+      *l = m;
+      g->obstacle_list_bytes += (size_t)(grown - cap) * sizeof(sylva__obstacle_box) +
+                                (cap ? 0 : sizeof **l);
+    }
+  return SYLVA_OK;
+}
+
+int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
+                                const double max[3]) {
+  if (!label || !label[0] || strlen(label) >= SYLVA_LABEL_MAX) return SYLVA_EINVAL;
+  for (int a = 0; a < 3; a++)
+    if (!isfinite(min[a]) || !isfinite(max[a]) || !(max[a] > min[a])) return SYLVA_EINVAL;
+  if (id < g->next_obstacle_id || id == INT_MAX) return SYLVA_EINVAL;
+  if (sylva__grid_find_obstacle(g, label) >= 0) return SYLVA_EINVAL;
+  sylva__obstacle ob;
+  memset(&ob, 0, sizeof ob);
+  ob.id = id;
+  ob.live = true;
+  strcpy(ob.label, label);
+  memcpy(ob.min, min, sizeof ob.min);
+  memcpy(ob.max, max, sizeof ob.max);
+  obstacle_voxels(g, &ob);
+  int rc = obstacle_reserve(g, &ob);
+  if (rc) return rc;
+  /* nothing fails from here on */
+  int s = g->obstacle_slots++;
+  g->obstacles[s] = ob;
+  int k = s + 1;
+  g->obstacle_rank[k] = 1 + rank_before(g, s) - rank_before(g, k - (k & -k));
+  g->label_slot[label_entry(g, label)] = s;
+  g->obstacle_count++;
+  g->next_obstacle_id = id + 1;
+  int c0[2], c1[2];
+  if (obstacle_columns(&ob, c0, c1)) {
+    sylva__obstacle_box box = {{ob.lo[0], ob.lo[1], ob.lo[2]}, {ob.hi[0], ob.hi[1], ob.hi[2]}, id};
+    for (int cy = c0[1]; cy < c1[1]; cy++)
+      for (int cx = c0[0]; cx < c1[0]; cx++) {
+        sylva__obstacle_list *l = g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+        l->box[l->count++] = box;
+      }
+  }
+  return id;
 }
 
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]) {
-  if (!label || !label[0] || strlen(label) >= SYLVA_LABEL_MAX) return SYLVA_EINVAL;
-  for (int a = 0; a < 3; a++)
-    if (!isfinite(min[a]) || !isfinite(max[a]) || !(max[a] > min[a])) return SYLVA_EINVAL;
-  if (sylva__grid_find_obstacle(g, label) >= 0) return SYLVA_EINVAL;
-  if (g->obstacle_count == g->obstacle_cap) {
-    int cap = g->obstacle_cap ? g->obstacle_cap * 2 : 8;
-    sylva__obstacle *o = sylva__realloc(g->obstacles, (size_t)cap * sizeof *o);
-    if (!o) return SYLVA_ENOMEM;
-    g->obstacles = o;
-    g->obstacle_cap = cap;
-  }
-  sylva__obstacle *o = &g->obstacles[g->obstacle_count++];
-  memset(o, 0, sizeof *o);
-  o->id = g->next_obstacle_id++;
-  strcpy(o->label, label);
-  memcpy(o->min, min, sizeof o->min);
-  memcpy(o->max, max, sizeof o->max);
-  obstacle_voxels(g, o);
-  return o->id;
+  return sylva__grid_add_obstacle_id(g, g->next_obstacle_id, label, min, max);
 }
 
 int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
-  for (int i = 0; i < g->obstacle_count; i++) {
-    if (g->obstacles[i].id == id) {
-      memmove(&g->obstacles[i], &g->obstacles[i + 1],
-              (size_t)(g->obstacle_count - i - 1) * sizeof *g->obstacles);
-      g->obstacle_count--;
-      return SYLVA_OK;
-    }
+  int s = slot_of(g, id);
+  if (s < 0) return SYLVA_ENOTFOUND;
+  sylva__obstacle *o = &g->obstacles[s];
+  int c0[2], c1[2];
+  if (obstacle_columns(o, c0, c1)) {
+    for (int cy = c0[1]; cy < c1[1]; cy++)
+      for (int cx = c0[0]; cx < c1[0]; cx++) {
+        sylva__obstacle_list *l = g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+        int32_t i = 0;
+        while (l->box[i].id != id) i++;
+        l->box[i] = l->box[--l->count];
+      }
+    drop_empty_lists(g, c0, c1); /* a column left without obstacles costs nothing again */
   }
-  return SYLVA_ENOTFOUND;
+  label_erase(g, (size_t)label_entry(g, o->label));
+  o->live = false;
+  for (int k = s + 1; k <= g->obstacle_slots; k += k & -k) g->obstacle_rank[k]--;
+  g->obstacle_count--;
+  if (g->obstacle_slots - g->obstacle_count > g->obstacle_count) compact_obstacles(g);
+  return SYLVA_OK;
 }

@@ -1,6 +1,7 @@
 /* The voxel environment: sparse 16^3 chunks holding fixed-point shade and stem
  * occupancy, per-column block sums for the shade columns below pyramids, and
- * obstacles as voxel boxes. Memory is spent only on chunks something touched. */
+ * obstacles as voxel boxes, listed under each chunk column they overlap and indexed
+ * by label and id. Memory is spent only on chunks and columns something touched. */
 #ifndef SYLVA_GRID_H
 #define SYLVA_GRID_H
 
@@ -33,10 +34,24 @@ typedef struct sylva__chunk {
 
 typedef struct sylva__obstacle {
   int id;
+  bool live; /* false: removed, a slot waiting for the next compaction */
   char label[SYLVA_LABEL_MAX];
   double min[3], max[3];
   int lo[3], hi[3]; /* voxel box [lo, hi), clipped to the grid */
 } sylva__obstacle;
+
+/** An obstacle's voxel box in the list of a chunk column it overlaps. */
+typedef struct sylva__obstacle_box {
+  int32_t lo[3], hi[3];
+  int32_t id;
+} sylva__obstacle_box;
+
+/** The obstacles whose voxel box overlaps one chunk column's x/y footprint, in no
+ *  particular order. */
+typedef struct sylva__obstacle_list {
+  int32_t count, cap;
+  sylva__obstacle_box box[];
+} sylva__obstacle_list;
 
 typedef struct sylva__grid {
   int n[3];            /* voxels per axis */
@@ -47,10 +62,22 @@ typedef struct sylva__grid {
    * to every voxel of blocks strictly below. */
   int64_t **colsum;
   size_t chunk_count, colsum_count, column_count;
+  /* Obstacles in the order they were added, so by increasing id (found by binary
+   * search): obstacle_slots slots, obstacle_count of them live. A removed obstacle
+   * leaves a dead slot; once the dead outnumber the live the slots are compacted. */
   sylva__obstacle *obstacles;
-  int obstacle_count, obstacle_cap, next_obstacle_id;
-  /* Per-column obstacle top: (x, y) -> highest hi[2] of live obstacles covering it,
-   * rebuilt lazily; 0 where none. Kept sparse by storing only the obstacle list. */
+  int obstacle_count, obstacle_slots, obstacle_cap, next_obstacle_id;
+  /* Fenwick tree of the live slots (1-based, obstacle_cap + 1 entries): the i-th
+   * live obstacle while dead slots exist. */
+  int32_t *obstacle_rank;
+  /* Labels: open addressing with linear probing, label_cap (a power of two, at
+   * least twice the live count) entries of a slot or -1. */
+  int32_t *label_slot;
+  int label_cap;
+  /* Per chunk column (c0*c1, allocated with the first obstacle that overlaps the
+   * grid): NULL or the boxes of the obstacles over that column. */
+  sylva__obstacle_list **obstacle_cols;
+  size_t obstacle_list_bytes; /* the lists, headers and capacity */
 } sylva__grid;
 
 int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], double voxel);
@@ -92,8 +119,18 @@ typedef struct sylva__pyramid {
  *  leaves the shade as it was. */
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
 
+/** Adds an obstacle with the next id; returns the id, SYLVA_EINVAL for a bad box or
+ *  label or a label in use, SYLVA_ENOMEM leaving the grid as it was. */
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]);
+/** The same with a given id, above every id given so far (a snapshot's obstacles);
+ *  SYLVA_EINVAL for an id at or below one. */
+int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
+                                const double max[3]);
+/** Removes the obstacle of this id (never allocates); SYLVA_ENOTFOUND if none. */
 int sylva__grid_remove_obstacle(sylva__grid *g, int id);
+/** Id of the obstacle with this label, or SYLVA_ENOTFOUND. */
 int sylva__grid_find_obstacle(const sylva__grid *g, const char *label);
+/** The i-th live obstacle in the order they were added, 0 <= i < obstacle_count. */
+const sylva__obstacle *sylva__grid_obstacle_at(const sylva__grid *g, int i);
 #endif

@@ -151,8 +151,9 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   }
   put_i32(&o, w->grid.next_obstacle_id);
   put_u32(&o, (uint32_t)w->grid.obstacle_count);
-  for (int i = 0; i < w->grid.obstacle_count; i++) {
-    const sylva__obstacle *ob = &w->grid.obstacles[i];
+  for (int s = 0; s < w->grid.obstacle_slots; s++) { /* the live ones, in order */
+    const sylva__obstacle *ob = &w->grid.obstacles[s];
+    if (!ob->live) continue;
     put_i32(&o, ob->id);
     put_str(&o, ob->label);
     for (int a = 0; a < 3; a++) put_f64(&o, ob->min[a]);
@@ -345,11 +346,10 @@ static int read_world(reader *r, sylva_world **out) {
     for (int a = 0; a < 3; a++) mn[a] = get_f64(r);
     for (int a = 0; a < 3; a++) mx[a] = get_f64(r);
     if (r->bad) break;
-    if (id < 0 || id >= next_obstacle || (i > 0 && id <= w->grid.obstacles[i - 1].id))
-      SYLVA__FAIL(SYLVA_EBADIMAGE);
-    int added = sylva__grid_add_obstacle(&w->grid, label, mn, mx);
+    if (id < 0 || id >= next_obstacle) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    /* refuses an id at or below the previous one (SYLVA_EINVAL) */
+    int added = sylva__grid_add_obstacle_id(&w->grid, id, label, mn, mx);
     if (added < 0) SYLVA__FAIL(added == SYLVA_ENOMEM ? added : SYLVA_EBADIMAGE);
-    w->grid.obstacles[i].id = id;
   }
   w->grid.next_obstacle_id = next_obstacle;
   uint32_t nplants = get_u32(r);

@@ -616,7 +616,7 @@ int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out
 int sylva_world_obstacle_count(const sylva_world *w) { return w->grid.obstacle_count; }
 int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
   if (!in_range(i, w->grid.obstacle_count)) return SYLVA_ENOTFOUND;
-  const sylva__obstacle *o = &w->grid.obstacles[i];
+  const sylva__obstacle *o = sylva__grid_obstacle_at(&w->grid, i);
   if (id) *id = o->id;
   out->label = o->label;
   memcpy(out->min, o->min, sizeof out->min);
@@ -636,7 +636,7 @@ int sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
 double sylva_world_light_at(const sylva_world *w, const double p[3]) {
   int v[3];
   if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) return 0.0;
-  if (sylva__grid_blocked(&w->grid, v)) return 0.0;
+  /* 0 inside an obstacle too: a voxel inside one is below its top */
   return sylva__grid_light(&w->grid, v);
 }
 
@@ -683,10 +683,12 @@ uint64_t sylva_world_hash(const sylva_world *w) {
     h = fnv(h, &w->stems[i].finished, sizeof(bool));
     h = fnv(h, &w->stems[i].stats.light, sizeof(double));
   }
-  for (int i = 0; i < w->grid.obstacle_count; i++) {
-    h = fnv(h, w->grid.obstacles[i].label, strlen(w->grid.obstacles[i].label));
-    h = fnv(h, w->grid.obstacles[i].min, sizeof(double) * 3);
-    h = fnv(h, w->grid.obstacles[i].max, sizeof(double) * 3);
+  for (int s = 0; s < w->grid.obstacle_slots; s++) {
+    const sylva__obstacle *o = &w->grid.obstacles[s];
+    if (!o->live) continue;
+    h = fnv(h, o->label, strlen(o->label));
+    h = fnv(h, o->min, sizeof(double) * 3);
+    h = fnv(h, o->max, sizeof(double) * 3);
   }
   return h;
 }

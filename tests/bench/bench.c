@@ -7,7 +7,13 @@
  * in an SQLite store (a temporary file) with the default snapshot interval, and
  * the time spent storing is compared with the time spent growing.
  *
- *   bench [all|fig17b|stand5|stand100|shade|store5|store100] [--scenarios DIR] */
+ * "obstacles" reads the light at every cell of one horizontal slice of a
+ * 4000 x 4000-voxel site holding 1,000 boxes (what a light_slice message asks), and
+ * adds, finds by label, copies (a snapshot saved and loaded, as the daemon's edits
+ * do) and removes by id --edits N obstacles (100,000 by default).
+ *
+ *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles] [--scenarios DIR]
+ *         [--edits N] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +25,7 @@
 
 #include "../scenario_file.h"
 #include "grid.h"
+#include "rng.h"
 #include "store.h"
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
@@ -193,6 +200,106 @@ static void shade_by_height(void) {
   sylva__grid_free(&g);
 }
 
+/* A site of 4000 x 4000 x 200 voxels: 200 m x 200 m x 10 m at 5 cm, nothing in it. */
+static sylva_world *obstacle_site(void) {
+  sylva_world_def d = sylva_default_world_def();
+  d.min[0] = d.min[1] = -100;
+  d.max[0] = d.max[1] = 100;
+  d.min[2] = 0;
+  d.max[2] = 10;
+  d.voxel = 0.05;
+  d.seed = 5;
+  sylva_world *w;
+  if (sylva_world_create(&d, &w)) exit(1);
+  return w;
+}
+
+/* A random box: a corner anywhere in the site, sides of 0.05 m up to `side` m, at
+ * most `thick` m tall, between 0.5 m and 9 m high. */
+static void random_box(sylva__rng *r, double side, double thick, double mn[3], double mx[3]) {
+  for (int a = 0; a < 2; a++) {
+    mn[a] = -100 + 200 * sylva__rng_unit(r);
+    mx[a] = mn[a] + 0.05 + (side - 0.05) * sylva__rng_unit(r);
+  }
+  mn[2] = 0.5 + 8.5 * sylva__rng_unit(r);
+  mx[2] = mn[2] + 0.05 + (thick - 0.05) * sylva__rng_unit(r);
+}
+
+/* The light of every cell of the layer at 0.52 m (as sylva_msg_light_slice reads
+ * it) with 1,000 boxes; then `edits` obstacles added, found by label, copied through
+ * a snapshot and removed by id in the order they were added (the oldest first). */
+static void obstacles(int edits) {
+  printf("\n== obstacles\n");
+  sylva_world *w = obstacle_site();
+  sylva__rng r;
+  sylva__rng_seed(&r, 99);
+  for (int i = 0; i < 1000; i++) {
+    char label[16];
+    snprintf(label, sizeof label, "box%d", i);
+    sylva_obstacle_def o = {label, {0}, {0}};
+    random_box(&r, 5.0, 2.0, o.min, o.max);
+    if (sylva_world_add_obstacle(w, &o) < 0) exit(1);
+  }
+  int dims[3];
+  sylva_world_dims(w, dims);
+  double t0 = now(NULL), sum = 0;
+  long dark = 0;
+  for (int j = 0; j < dims[1]; j++)
+    for (int i = 0; i < dims[0]; i++) {
+      double p[3] = {-100 + (i + 0.5) * 0.05, -100 + (j + 0.5) * 0.05, 0.525};
+      double l = sylva_world_light_at(w, p);
+      sum += l;
+      dark += l == 0.0;
+    }
+  double t1 = now(NULL);
+  printf("   light slice %d x %d, 1,000 boxes: %.3f s (%.1f ns per cell; %ld dark cells, "
+         "light sum %.17g)\n", dims[0], dims[1], t1 - t0,
+         (t1 - t0) * 1e9 / ((double)dims[0] * dims[1]), dark, sum);
+  sylva_world_destroy(w);
+
+  w = obstacle_site();
+  int *ids = malloc((size_t)edits * sizeof *ids);
+  if (!ids) exit(1);
+  t0 = now(NULL);
+  for (int i = 0; i < edits; i++) {
+    char label[16];
+    snprintf(label, sizeof label, "o%d", i);
+    sylva_obstacle_def o = {label, {0}, {0}};
+    random_box(&r, 1.0, 0.5, o.min, o.max);
+    ids[i] = sylva_world_add_obstacle(w, &o);
+    if (ids[i] < 0) exit(1);
+  }
+  t1 = now(NULL);
+  int found = 0;
+  for (int i = 0; i < edits; i++) {
+    char label[16];
+    snprintf(label, sizeof label, "o%d", i);
+    found += sylva_world_find_obstacle(w, label) == ids[i];
+  }
+  double t2 = now(NULL);
+  sylva_memory m;
+  sylva_world_memory(w, &m);
+  /* an edit of the daemon works on a copy: the world saved and loaded */
+  double t3 = now(NULL);
+  uint8_t *image;
+  size_t size;
+  sylva_world *copy;
+  if (sylva_snapshot_save(w, &image, &size) || sylva_snapshot_load(image, size, &copy)) exit(1);
+  sylva_free(image);
+  sylva_world_destroy(copy);
+  double t4 = now(NULL);
+  int removed = 0;
+  for (int i = 0; i < edits; i++) removed += sylva_world_remove_obstacle(w, ids[i]) == SYLVA_OK;
+  double t5 = now(NULL);
+  printf("   %d obstacles: added in %.3f s, found by label in %.3f s (%d found), saved and "
+         "loaded in %.3f s, removed by id in %.3f s (%d removed, %d left); voxel memory with "
+         "them %.1f MB\n",
+         edits, t1 - t0, t2 - t1, found, t4 - t3, t5 - t4, removed,
+         sylva_world_obstacle_count(w), (double)m.voxels / 1048576.0);
+  free(ids);
+  sylva_world_destroy(w);
+}
+
 /* Grows w, storing every iteration; reports store time against grow time. */
 static void grow_stored(const char *name, sylva_world *w, int limit, size_t target) {
   char path[] = "/tmp/sylva-bench-XXXXXX";
@@ -244,14 +351,18 @@ static void grow_stored(const char *name, sylva_world *w, int limit, size_t targ
 
 int main(int argc, char **argv) {
   const char *what = "all", *dir = SOURCE_ROOT "/scenarios";
+  int edits = 100000;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--scenarios") == 0 && i + 1 < argc)
       dir = argv[++i];
+    else if (strcmp(argv[i], "--edits") == 0 && i + 1 < argc)
+      edits = atoi(argv[++i]);
     else
       what = argv[i];
   }
   bool all = strcmp(what, "all") == 0;
   if (all || strcmp(what, "shade") == 0) shade_by_height();
+  if (all || strcmp(what, "obstacles") == 0) obstacles(edits > 0 ? edits : 1);
   if (all || strcmp(what, "fig17b") == 0) {
     sylva_world *w = single("igm-fig17b");
     summary s = grow("fig. 17b tree", w, 40, 0);
