@@ -411,10 +411,9 @@ static void test_snapshot(void) {
   sylva_world_destroy(w);
 }
 
-int main(void) {
-  test_random_boxes();
-  test_many();
-  test_out_of_memory();
-  test_snapshot();
+int main(int argc, char **argv) {
+  static const check_test tests[] = {CHECK_TEST(random_boxes), CHECK_TEST(many),
+                                     CHECK_TEST(out_of_memory), CHECK_TEST(snapshot)};
+  CHECK_RUN(argc, argv, 1, tests);
   return check_summary("obstacles");
 }
