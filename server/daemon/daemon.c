@@ -114,7 +114,9 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
     client_send_text(c, sylva_msg_welcome(SYLVA_VERSION_TEXT, server_auth(d), NULL));
     break;
   case LWS_CALLBACK_CLOSED:
-    if (c && c->set) client_closed(c);
+    if (!c || !c->set) break;
+    runs_forget_client(d, c->serial);
+    client_closed(c);
     break;
   case LWS_CALLBACK_RECEIVE:
     if (!c || !c->set || c->close_code) break;
@@ -223,6 +225,7 @@ int server_main(const server_options *opt) {
   server *d = calloc(1, sizeof *d);
   if (!d) return 1;
   d->opt = *opt;
+  d->fd_ceiling = 1L << 30;
   /* every client and connection takes a file descriptor: the soft limit goes up
    * to the hard one, and the client cap stays below it, so that accepting never
    * fails for lack of descriptors (which libwebsockets would retry at once) */
@@ -234,6 +237,7 @@ int server_main(const server_options *opt) {
       getrlimit(RLIMIT_NOFILE, &nofile);
     }
     rlim_t room = nofile.rlim_cur > 192 ? nofile.rlim_cur - 128 : 64;
+    d->fd_ceiling = (long)(nofile.rlim_cur > 96 ? nofile.rlim_cur - 64 : nofile.rlim_cur);
     if ((rlim_t)d->opt.clients.max_clients > room / 2) {
       d->opt.clients.max_clients = (int)(room / 2);
       server_log(NULL, "at most %d clients: the limit of open files is %llu",

@@ -107,6 +107,7 @@ struct server {
   int jobs;              /**< exports, histories and forks running */
   size_t memory_reserved; /**< estimated memory of the runs held and being forked */
   int runs_pending;      /**< forks on their way */
+  long fd_ceiling;       /**< connections on higher descriptors are refused */
   store *reader;         /**< a second connection, for the regrowing of jobs (WAL lets
                               it read while the first one writes) */
   double iteration_ms_total;

@@ -92,11 +92,15 @@ static const char *shown(char *buf, size_t size, const char *s) {
 /* ---- /healthz, /metrics --------------------------------------------------------- */
 
 static char *healthz_text(server *d) {
-  int64_t runs = 0;
-  for (run *r = d->runs; r; r = r->next) runs++;
-  char buf[160];
-  snprintf(buf, sizeof buf, "{\"ok\": true, \"runs\": %lld, \"clients\": %lld}\n",
-           (long long)runs, (long long)d->clients.count);
+  int64_t runs = 0, loading = 0;
+  for (run *r = d->runs; r; r = r->next) {
+    runs++;
+    loading += r->loading;
+  }
+  char buf[200];
+  snprintf(buf, sizeof buf,
+           "{\"ok\": true, \"runs\": %lld, \"loading\": %lld, \"clients\": %lld}\n",
+           (long long)runs, (long long)loading, (long long)d->clients.count);
   return strdup(buf);
 }
 
@@ -496,6 +500,14 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
   http_pss *pss = user;
   server *d = lws_context_user(lws_get_context(wsi));
   switch (reason) {
+  case LWS_CALLBACK_FILTER_NETWORK_CONNECTION:
+    /* a new connection, before anything is read: descriptors are handed out lowest
+     * first, so a high one means few are left; refusing it keeps a reserve, and
+     * accept() never fails for want of one (libwebsockets would retry at once) */
+    if ((lws_intptr_t)in < d->fd_ceiling) return 0;
+    server_log_limited(NULL, "refused a connection: %d of the open files are in use",
+                       (int)(lws_intptr_t)in);
+    return 1;
   case LWS_CALLBACK_FILTER_HTTP_CONNECTION:
     /* every request, the static files too: the Host must name this daemon */
     if (access_host_ok(&d->access, wsi)) return 0;

@@ -443,6 +443,24 @@ void run_schedule(run *r) {
   pool_submit(&r->d->pool, &r->task);
 }
 
+void runs_forget_client(server *d, uint64_t serial) {
+  for (run *r = d->runs; r; r = r->next) {
+    /* the slice in flight (the head, while a light task runs) stays for its task */
+    pending_light **p = &r->lights;
+    if (r->kind == RUN_TASK_LIGHT && *p) p = &(*p)->next;
+    while (*p) {
+      pending_light *l = *p;
+      if (l->client != serial) {
+        p = &l->next;
+        continue;
+      }
+      *p = l->next;
+      free(l->ref);
+      free(l);
+    }
+  }
+}
+
 bool runs_busy(server *d) {
   for (run *r = d->runs; r; r = r->next)
     if (r->busy) return true;

@@ -83,6 +83,9 @@ void run_set_status(run *r, sylva_run_status status);
 /** A `control` action (count: the steps of SYLVA_CONTROL_STEP); returns NULL or
  *  the message of a refusal. */
 const char *run_control(run *r, sylva_control_action action, int count);
+/** A client left: its light slices not started yet are dropped (its edits are
+ *  still made: they were asked for). */
+void runs_forget_client(server *d, uint64_t serial);
 /** Whether a task of some run is running (the daemon waits for them at stop). */
 bool runs_busy(server *d);
 /** Sends a status message to every subscriber of the run. */
