@@ -27,7 +27,8 @@ export function runSummary({ run, name = String(run), status = '', iteration = 0
 
 // The cells of a run's row in the run list.
 export function runCells(r) {
-  return [r.name, r.status, String(r.iteration), String(r.stems), r.nodes.toLocaleString('en')];
+  const status = r.loading ? `${r.status} (loading)` : r.status;
+  return [r.name, status, String(r.iteration), String(r.stems), r.nodes.toLocaleString('en')];
 }
 
 // The location hash that names a run: `#run=NAME`, NAME percent-encoded.

@@ -39,6 +39,9 @@ test('a run summary has every field, from a list entry or an id and a name', () 
 test('a run\'s row: name, status, iteration, stems, internodes with thousands separators', () => {
   assert.deepEqual(runCells({ run: 1, name: 'stand', status: 'running', iteration: 12, stems: 5, nodes: 1234567 }),
     ['stand', 'running', '12', '5', '1,234,567']);
+  // a run the daemon is still restoring at start says so
+  assert.equal(runCells({ run: 2, name: 'old', status: 'running', iteration: 40, stems: 0, nodes: 9, loading: true })[1],
+    'running (loading)');
 });
 
 test('the location hash names a run and gives it back', () => {
