@@ -292,7 +292,8 @@ int server_main(const server_options *opt) {
                opt->host, opt->port);
     rc = 1;
   }
-  if (!rc && pool_init(&d->pool, &d->loop, opt->workers)) {
+  bool pool_up = false;
+  if (!rc && !(pool_up = pool_init(&d->pool, &d->loop, opt->workers) == 0)) {
     server_log(NULL, "cannot start %d worker threads", opt->workers);
     rc = 1;
   }
@@ -313,7 +314,7 @@ int server_main(const server_options *opt) {
     if (opt->web) server_log(NULL, "viewer: http://%s:%d/", opt->host, opt->port);
     uv_run(&d->loop, UV_RUN_DEFAULT);
   } else {
-    if (d->pool.threads) {
+    if (pool_up) {
       pool_stop(&d->pool);
       pool_close(&d->pool);
     }

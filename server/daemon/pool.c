@@ -66,6 +66,10 @@ int pool_init(pool *p, uv_loop_t *loop, int count) {
     if (pthread_create(&p->threads[i], NULL, worker, p)) rc = -EAGAIN;
     else p->count++;
   }
+  if (rc) { /* the workers that started end at once; the handle closes */
+    pool_stop(p);
+    pool_close(p);
+  }
   return rc;
 }
 

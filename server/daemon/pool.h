@@ -34,7 +34,8 @@ typedef struct pool {
   uv_async_t async;              /**< wakes the loop for finished tasks */
 } pool;
 
-/** Starts count workers on the loop's side; 0 or a negative errno. */
+/** Starts count workers on the loop's side; 0 or a negative errno (then nothing is
+ *  left to stop or close). */
 int pool_init(pool *p, uv_loop_t *loop, int count);
 /** Queues a task (loop thread). */
 void pool_submit(pool *p, pool_task *t);
