@@ -3,6 +3,7 @@
 #include "daemon.h"
 
 #include <errno.h>
+#include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -226,6 +227,12 @@ int server_main(const server_options *opt) {
   if (!d) return 1;
   d->opt = *opt;
   d->fd_ceiling = 1L << 30;
+#ifdef M_MMAP_THRESHOLD
+  /* large buffers (messages being received, encoded snapshots) get pages of their
+   * own and give them back when freed, so memory falls again after a burst; glibc
+   * would otherwise raise the threshold after the first such free */
+  mallopt(M_MMAP_THRESHOLD, 256 << 10);
+#endif
   /* every client and connection takes a file descriptor: the soft limit goes up
    * to the hard one, and the client cap stays below it, so that accepting never
    * fails for lack of descriptors (which libwebsockets would retry at once) */
