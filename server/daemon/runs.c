@@ -659,12 +659,18 @@ run *run_create(server *d, const sylva_scenario *s, const char *name, bool start
 /* ---- edits, light slices, forks, history ----------------------------------------- */
 
 /* NULL when the edit keeps the world within the stem and obstacle caps and the
- * memory budget (counted against the run as it is now, edits queued before it
- * aside), else why not and *code. */
+ * memory budget, else why not and *code. The edits still waiting (or being applied)
+ * are not in the run's counts yet: their plants and obstacles count as added (their
+ * removals do not, as a waiting edit may fail), so that a burst of edits cannot pass
+ * a cap that each one alone keeps. */
 static const char *edit_room(run *r, const sylva_msg *m, const char **code, char *buf,
                              size_t size) {
   server *d = r->d;
-  int stems = r->stems;
+  int stems = r->stems, obstacles = r->obstacles;
+  for (const pending_edit *e = r->edits; e; e = e->next) {
+    for (int i = 0; i < e->msg.add_plant_count; i++) stems += e->msg.add_plants[i].root_count;
+    obstacles += e->msg.add_obstacle_count;
+  }
   for (int i = 0; i < m->add_plant_count; i++) stems += m->add_plants[i].root_count;
   *code = "too_large";
   if (stems > d->opt.max_stems) {
@@ -672,7 +678,7 @@ static const char *edit_room(run *r, const sylva_msg *m, const char **code, char
              stems, d->opt.max_stems);
     return buf;
   }
-  int obstacles = r->obstacles + m->add_obstacle_count - m->remove_obstacle_count;
+  obstacles += m->add_obstacle_count - m->remove_obstacle_count;
   if (obstacles > d->opt.max_obstacles) {
     snprintf(buf, size,
              "/add_obstacles: the world would have %d obstacles; at most %d (--max-obstacles)",
