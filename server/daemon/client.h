@@ -31,6 +31,8 @@ typedef struct client_set {
   int64_t count;                  /**< clients connected now */
   int64_t bytes_sent, messages_received;
   size_t input;                   /**< bytes of unfinished messages now */
+  bool trim;                      /**< large receive buffers were freed: give the
+                                       memory back to the system (client.c) */
   client_limits limits;
   uv_timer_t closer; /**< applies the closes asked for, outside lws callbacks */
   uv_timer_t watch;  /**< once a second: closes clients whose message is overdue */
