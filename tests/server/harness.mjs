@@ -239,6 +239,34 @@ export function rawGet(port, path) {
   });
 }
 
+// A raw WebSocket on sylva.v1: once upgraded, send(socket) writes what the test
+// wants; resolves with the code of the first close frame the daemon sends, or null
+// when the connection ends (or `ms` pass) without one.
+export function rawCloseCode(port, send, ms = 15000) {
+  return new Promise((resolve) => {
+    const s = tcpConnect(port, '127.0.0.1');
+    let buf = Buffer.alloc(0), upgraded = false;
+    const done = (code) => { s.destroy(); resolve(code); };
+    s.on('data', (b) => {
+      buf = Buffer.concat([buf, b]);
+      if (!upgraded) {
+        const end = buf.indexOf('\r\n\r\n');
+        if (end < 0) return;
+        upgraded = true;
+        buf = buf.subarray(end + 4);
+        send(s);
+      }
+      const at = buf.indexOf(0x88);
+      if (at >= 0 && buf.length >= at + 4) done(buf.readUInt16BE(at + 2));
+    });
+    s.on('close', () => done(null));
+    s.on('error', () => done(null));
+    s.setTimeout(ms, () => done(null));
+    s.write(`GET /ws HTTP/1.1\r\nHost: 127.0.0.1:${port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n` +
+      'Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: sylva.v1\r\n\r\n');
+  });
+}
+
 export function plantsJSON(skeleton) {
   return JSON.stringify(skeleton.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: s.nodes })) })));
 }

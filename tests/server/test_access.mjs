@@ -11,7 +11,7 @@ import { join } from 'node:path';
 import net from 'node:net';
 import { spawnSync } from 'node:child_process';
 import WebSocket from 'ws';
-import { SYLVA, ROOT, withDaemon, connect, Client, scenario, tempDir, cleanup } from './harness.mjs';
+import { SYLVA, ROOT, withDaemon, connect, Client, scenario, tempDir, cleanup, rawCloseCode } from './harness.mjs';
 
 const WEB = ['--web', join(ROOT, 'web')];
 
@@ -88,28 +88,11 @@ test('upgrades: only /ws with the subprotocol sylva.v1', () => withDaemon({}, as
 test('close frames: an invalid code or a one-byte payload closes with 1002', () => withDaemon({}, async (d) => {
   for (const payload of [Buffer.from([0x13, 0x88]), Buffer.from([0xff, 0xff]), Buffer.from([0x03]),
     Buffer.from([0x03, 0xec]), Buffer.from([0x07, 0xd0])]) {
-    const code = await new Promise((resolve, reject) => {
-      const s = net.connect(d.port, '127.0.0.1');
-      let buf = Buffer.alloc(0), upgraded = false;
-      s.on('data', (b) => {
-        buf = Buffer.concat([buf, b]);
-        if (!upgraded) {
-          const end = buf.indexOf('\r\n\r\n');
-          if (end < 0) return;
-          upgraded = true;
-          buf = buf.subarray(end + 4);
-          const mask = Buffer.from([1, 2, 3, 4]);
-          const body = Buffer.from(payload.map((c, i) => c ^ mask[i % 4]));
-          s.write(Buffer.concat([Buffer.from([0x88, 0x80 | payload.length]), mask, body]));
-        }
-        const at = buf.indexOf(0x88);
-        if (at >= 0 && buf.length >= at + 4) { s.destroy(); resolve(buf.readUInt16BE(at + 2)); }
-      });
-      s.on('error', reject);
-      s.setTimeout(3000, () => { s.destroy(); resolve(null); });
-      s.write(`GET /ws HTTP/1.1\r\nHost: 127.0.0.1:${d.port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n` +
-        'Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: sylva.v1\r\n\r\n');
-    });
+    const code = await rawCloseCode(d.port, (s) => {
+      const mask = Buffer.from([1, 2, 3, 4]);
+      const body = Buffer.from(payload.map((c, i) => c ^ mask[i % 4]));
+      s.write(Buffer.concat([Buffer.from([0x88, 0x80 | payload.length]), mask, body]));
+    }, 3000);
     assert.equal(code, 1002, `close payload ${payload.toString('hex')}`);
   }
   // a valid close is echoed

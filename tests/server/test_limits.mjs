@@ -5,9 +5,8 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
-import net from 'node:net';
 import { SYLVA, ROOT, withDaemon, startDaemon, stopDaemon, connect, Client, scenario, tempDir,
-  cleanup } from './harness.mjs';
+  cleanup, rawCloseCode } from './harness.mjs';
 
 async function create(c, name, sc, start = false) {
   c.send({ type: 'create', name, start, scenario: sc, id: name });
@@ -105,31 +104,14 @@ test('--max-clients: the upgrade past it gets 503; a place frees when a client l
 // A raw WebSocket that sends the first fragment of a text message of `size`
 // bytes (masked), and never its end; resolves with the close code it gets.
 function unfinished(port, size) {
-  return new Promise((resolve) => {
-    const s = net.connect(port, '127.0.0.1');
-    let buf = Buffer.alloc(0), upgraded = false;
-    s.on('data', (b) => {
-      buf = Buffer.concat([buf, b]);
-      if (!upgraded) {
-        const end = buf.indexOf('\r\n\r\n');
-        if (end < 0) return;
-        upgraded = true;
-        buf = buf.subarray(end + 4);
-        const head = Buffer.alloc(14);
-        head[0] = 0x01; // text, not final
-        head[1] = 0x80 | 127;
-        head.writeBigUInt64BE(BigInt(size), 2);
-        head.writeUInt32BE(0x01020304, 10);
-        s.write(head);
-        s.write(Buffer.alloc(size, 0x20 ^ 0x01)); // masked spaces (the mask's bytes differ; any text)
-      }
-      const at = buf.indexOf(0x88);
-      if (at >= 0 && buf.length >= at + 4) { s.destroy(); resolve(buf.readUInt16BE(at + 2)); }
-    });
-    s.on('close', () => resolve(null));
-    s.on('error', () => resolve(null));
-    s.write(`GET /ws HTTP/1.1\r\nHost: 127.0.0.1:${port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n` +
-      'Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: sylva.v1\r\n\r\n');
+  return rawCloseCode(port, (s) => {
+    const head = Buffer.alloc(14);
+    head[0] = 0x01; // text, not final
+    head[1] = 0x80 | 127;
+    head.writeBigUInt64BE(BigInt(size), 2);
+    head.writeUInt32BE(0x01020304, 10);
+    s.write(head);
+    s.write(Buffer.alloc(size, 0x21)); // any text: masked, it unmasks to other bytes
   });
 }
 
