@@ -365,6 +365,7 @@ test('2. a light slice of a 4096 x 4096 world (the slice cap) with 1,000 obstacl
     return new Promise((resolve, reject) => {
       const ws = new WebSocket(ctx.d.url, 'sylva.v1', { perMessageDeflate: false, maxPayload: 64 * MiB });
       ctx.clients.push({ ws });
+      const timer = setTimeout(() => reject(new Error('no light_slice in 300 s')), 300000 * SLOW);
       let at;
       ws.on('message', (data) => {
         const head = data.toString('latin1', 0, 200);
@@ -374,10 +375,10 @@ test('2. a light slice of a 4096 x 4096 world (the slice cap) with 1,000 obstacl
           return;
         }
         const m = /^\{"type":"light_slice".*"nx":(\d+),"ny":(\d+)/.exec(head);
+        clearTimeout(timer);
         resolve({ head: head.slice(0, 120), ms: now() - at, bytes: data.length, nx: Number(m?.[1]), ny: Number(m?.[2]) });
       });
-      ws.on('error', reject);
-      setTimeout(() => reject(new Error('no light_slice in 300 s')), 300000 * SLOW);
+      ws.on('error', (e) => { clearTimeout(timer); reject(e); });
     });
   },
   check(ctx, slice) {
