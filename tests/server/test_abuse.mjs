@@ -133,22 +133,51 @@ function othersPct(a, b) {
 //
 // The machine is shared (other sessions build and test on its two cores): when a
 // timing criterion fails while other processes took more than BUSY_PCT % of a core
-// in either window, the row is measured once more, on a new daemon, and judged by
-// that second measurement. Correctness checks are never repeated.
+// in either window, the row waits for a quieter machine (up to a minute) and is
+// measured again on a new daemon, at most three times in all. If it still fails
+// and the machine was still busy, its timing is not judged: the test is skipped
+// with its numbers, never passed. A timing failure on a quiet machine fails it.
+// Correctness checks are asserted on every attempt.
 const BUSY_PCT = 25;
 
-async function judged(t, name, once) {
-  for (let attempt = 1; ; attempt++) {
-    const rec = await once(attempt);
-    const busy = Math.max(...rec.others);
-    if (rec.timing.length && attempt === 1 && busy > BUSY_PCT) {
-      t.diagnostic(`${name}: ${rec.timing.join('; ')}, while other processes used ${fmt(busy, 0)} % of a core: measuring again`);
-      continue;
-    }
-    summary.push(rec);
-    if (rec.timing.length) assert.fail(rec.timing.join('; '));
-    return rec;
+// Waits (at most 60 s) for 2 s in which other processes take under BUSY_PCT % of
+// a core; returns what they took in the last 2 s.
+async function quiet() {
+  const end = now() + 60000;
+  for (;;) {
+    const a = { t: now(), total: cpuTicksTotal(), self: process.cpuUsage() };
+    await sleep(2000);
+    const self = process.cpuUsage(a.self);
+    const pct = ((cpuTicksTotal() - a.total) - (self.user + self.system) / 1e4) / ((now() - a.t) / 1000);
+    if (pct < BUSY_PCT || now() > end) return pct;
   }
+}
+
+async function judged(t, name, once) {
+  let rec;
+  for (let attempt = 1; attempt <= 3; attempt++) {
+    if (attempt > 1) t.diagnostic(`${name}: waited for the machine; others at ${fmt(await quiet(), 0)} % of a core, measuring again`);
+    rec = await once(attempt);
+    const busy = Math.max(...rec.others);
+    if (!rec.timing.length || !(busy > BUSY_PCT)) break;
+    t.diagnostic(`${rec.name}: ${rec.timing.join('; ')}, while other processes used ${fmt(busy, 0)} % of a core`);
+  }
+  summary.push(rec);
+  if (rec.timing.length) {
+    const busy = Math.max(...rec.others);
+    if (busy > BUSY_PCT) {
+      rec.name += ' (not judged: machine busy)';
+      t.skip(`timing not judged, other processes used ${fmt(busy, 0)} % of a core: ${rec.timing.join('; ')}`);
+      return rec;
+    }
+    assert.fail(rec.timing.join('; '));
+  }
+  return rec;
+}
+
+// A timing criterion checked by a row itself: noted, judged by judged().
+function timing(rec, ok, message) {
+  if (TIMING && !ok) rec.timing.push(message);
 }
 
 function abuseRow(t, row) { return judged(t, row.name, (attempt) => abuseOnce(t, row, attempt)); }
@@ -308,20 +337,20 @@ test('1. 200 creates of stand.json from 5 clients within a second, and one of 70
     return { replies, sendMs, big: { m, ms: now() - bigAt }, bigAt };
   },
   healthzAsserted: (ctx, detail) => [ctx.start, detail.bigAt],
-  check(ctx, { replies, sendMs, big }) {
+  check(ctx, { replies, sendMs, big }, samples, rec) {
     const created = replies.filter((m) => m.type === 'created');
     const busy = replies.filter((m) => m.type === 'error' && m.code === 'busy');
     const other = replies.filter((m) => m.type !== 'created' && !(m.type === 'error' && m.code === 'busy'));
     ctx.t.diagnostic(`1 creates: 200 sent in ${fmt(sendMs, 0)} ms: ${created.length} created, ${busy.length} busy ` +
       `("${busy[0]?.message}"); the 70,000-stem create answered ${big.m.code ?? big.m.type} in ${fmt(big.ms)} ms`);
-    assert.ok(sendMs < 1000, `the 200 creates took ${sendMs} ms to send`);
+    timing(rec, sendMs < 1000, `the 200 creates took ${fmt(sendMs, 0)} ms to send`);
     assert.deepEqual(other, [], 'every reply is created or busy');
     assert.equal(created.length, 1, 'the daemon holds the watched run and one more (--max-runs 2)');
     for (const m of busy) assert.match(m.message, /--max-runs|--memory-budget/);
     assert.equal(big.m.type, 'error');
     assert.equal(big.m.code, 'too_large');
     assert.match(big.m.message, /^\/scenario\/plants: 70000 stems/);
-    if (TIMING) assert.ok(big.ms < 1000, `the 70,000-stem create was refused after ${fmt(big.ms)} ms`);
+    timing(rec, big.ms < 1000, `the 70,000-stem create was refused after ${fmt(big.ms)} ms`);
   },
 }));
 
@@ -447,7 +476,7 @@ test('3. 24 gets of past iterations in bursts and an edit every 0.5 s', { timeou
     await editing;
     return { gets: await Promise.all(gets), edits };
   },
-  check(ctx, { gets, edits }) {
+  check(ctx, { gets, edits }, samples, rec) {
     const got = gets.filter((g) => g.m.type === 'snapshot');
     const busy = gets.filter((g) => g.m.code === 'busy');
     const ms = edits.map((x) => x.ms).sort((a, b) => a - b);
@@ -459,14 +488,16 @@ test('3. 24 gets of past iterations in bursts and an edit every 0.5 s', { timeou
     assert.ok(busy.length > 0, 'gets beyond --max-jobs were refused');
     assert.ok(edits.length >= (TIMING ? 8 : 2), `${edits.length} edits`);
     for (const x of edits) assert.equal(x.type, 'status', JSON.stringify(x));
-    if (TIMING) assert.ok(ms[ms.length - 1] < 500, `an edit took ${fmt(ms[ms.length - 1])} ms to be answered`);
+    timing(rec, ms[ms.length - 1] < 500, `an edit took ${fmt(ms[ms.length - 1])} ms to be answered`);
   },
 }));
 
 // ---- 4. exports nobody reads --------------------------------------------------------------
 
 function deletedFiles(pid) { return fdsOf(pid).filter((l) => / \(deleted\)$/.test(l)); }
-function tmpEntries() { return readdirSync(tmpdir()).filter((n) => !n.startsWith('sylva-serve-')); }
+// glibc's tmpfile() makes an unnamed file (O_TMPFILE) or, where it cannot, a
+// /tmp/tmpfXXXXXX it unlinks at once; other sessions' files in /tmp are not ours
+function tmpEntries() { return readdirSync(tmpdir()).filter((n) => n.startsWith('tmpf')); }
 
 test('4. 100 connections each ask an OBJ export and read nothing', { timeout: LIMIT }, (t) => abuseRow(t, {
   name: '4 exports',
@@ -539,7 +570,7 @@ test('5. 100 WebSockets and then a stream of upgrades against --max-clients 50',
     }));
     return { statuses, retries };
   },
-  check(ctx, { statuses, retries }, samples) {
+  check(ctx, { statuses, retries }, samples, rec) {
     const busy = samples.cpuIn(ctx.start, ctx.holdFrom);
     const hold = samples.cpuIn(ctx.holdFrom, ctx.deadline);
     const lines = logLines(ctx.log);
@@ -560,10 +591,8 @@ test('5. 100 WebSockets and then a stream of upgrades against --max-clients 50',
     // at most 10 lines a second and the count of the others
     assert.ok(lines.length <= 11 * Math.ceil(secs + 1), `${lines.length} log lines:\n${ctx.log.slice(0, 2000)}`);
     assert.match(ctx.log, /lines left out/);
-    if (TIMING) {
-      assert.ok(hold.loop < 10, `the loop thread used ${fmt(hold.loop)} % of a core with 48 idle clients held`);
-      assert.ok(busy.loop < 50, `the loop thread used ${fmt(busy.loop)} % of a core refusing ${fmt(retries.length / 3)} upgrades a second`);
-    }
+    timing(rec, hold.loop < 10, `the loop thread used ${fmt(hold.loop)} % of a core with 48 idle clients held`);
+    timing(rec, busy.loop < 50, `the loop thread used ${fmt(busy.loop)} % of a core refusing ${fmt(retries.length / 3)} upgrades a second`);
   },
 }));
 
@@ -683,7 +712,7 @@ test('8. 1,000 connections each send 1 MiB - 1 of a message that never ends', { 
     ctx.rssAfter = rssOf(ctx.d.proc.pid);
     return { socks, opened };
   },
-  check(ctx, { socks, opened }, samples) {
+  check(ctx, { socks, opened }, samples, rec) {
     const codes = {};
     for (const r of opened) {
       const c = closeCodeOf(r);
@@ -703,10 +732,10 @@ test('8. 1,000 connections each send 1 MiB - 1 of a message that never ends', { 
     assert.ok((codes[1008] || 0) <= 64, 'at most --max-input worth of unfinished messages were kept');
     assert.ok((codes[1009] || 0) >= 900, 'those beyond --max-input were closed with 1009');
     for (const x of timed) assert.equal(x.reason, 'message not finished in time');
-    if (TIMING) {
-      assert.ok(after[0] >= 10000 - 50 && after[after.length - 1] <= 11500, 'closed 10 s after the first frame (checked every second)');
-      assert.ok(ctx.rssAfter <= ctx.rssBefore + 32 * MiB, `RSS ${mib(ctx.rssAfter)} 2.5 s after, ${mib(ctx.rssBefore)} before`);
-    }
+    // the daemon looks once a second: 10 to 11 s after the first frame came
+    timing(rec, after[0] >= 10000 - 50 && after[after.length - 1] <= 11500,
+      `the 1008s came ${fmt(after[0] / 1000)} to ${fmt(after[after.length - 1] / 1000)} s after the first frame`);
+    timing(rec, ctx.rssAfter <= ctx.rssBefore + 32 * MiB, `RSS ${mib(ctx.rssAfter)} 2.5 s after the last close, ${mib(ctx.rssBefore)} before`);
   },
 }));
 
@@ -873,7 +902,7 @@ test('12. a start on a store of 40 runs: /healthz at once, runs listed as loadin
   const db = join(dir, 'runs.db');
   try {
     // 36 finished runs from the CLI (12 of them stands of 20 iterations, the
-    // longest to restore), two at a time
+    // longest to restore)
     const jobs = Array.from({ length: 36 }, (_, i) => (i % 3 === 0
       ? ['stand.json', 20] : i % 3 === 1 ? ['wall.json', 12] : ['competition.json', 16]));
     const cli = (i) => new Promise((resolve, reject) => {
@@ -887,7 +916,7 @@ test('12. a start on a store of 40 runs: /healthz at once, runs listed as loadin
     // SQLite allows one writer: the CLI runs one at a time on a shared store
     for (let i = 0; i < jobs.length; i++) await cli(i);
     // and 4 running watched runs that a daemon stopped (they go on at the next start)
-    let d = await start({ dir });
+    const d = await start({ dir });
     const c = await connect(d.url);
     for (let i = 0; i < 4; i++) {
       c.send({ type: 'create', name: `live-${i}`, start: true, scenario: watchedScenario(), id: i });
@@ -896,27 +925,40 @@ test('12. a start on a store of 40 runs: /healthz at once, runs listed as loadin
     await sleep(1000);
     assert.equal((await stopDaemon(d)).code, 0);
 
-    // the start: /healthz from the moment the process exists
-    const port = await freePort();
-    const t0 = now();
-    // the stored runs' estimates come to 1,616 MiB (12 stands of 81, 12 pairs of
-    // 33, 12 single trees of 17, 4 watched runs of 11): a budget that holds them
-    // (loading does not check the budget; create does)
-    const budget = 2048;
-    const proc = spawn(SYLVA, ['serve', '--db', db, '--listen', `127.0.0.1:${port}`, '--memory-budget', String(budget)],
-      { stdio: ['ignore', 'ignore', 'pipe'] });
-    let err = '';
-    proc.stderr.on('data', (x) => { err += x; });
-    d = { proc, port, dir, db, url: `ws://127.0.0.1:${port}/ws`, stderr: () => err };
-    daemons.add(d);
+    await judged(t, '12 big store', (attempt) => bigStoreStart(t, attempt, dir, db));
+  } finally {
+    cleanup(dir);
+  }
+});
+
+// One start of the daemon on the store of test 12; returns its record.
+async function bigStoreStart(t, attempt, dir, db) {
+  const name = attempt > 1 ? '12 big store (again)' : '12 big store';
+  // the start: /healthz from the moment the process exists
+  const port = await freePort();
+  const t0 = now();
+  // the stored runs' estimates come to 1,616 MiB (12 stands of 81, 12 pairs of
+  // 33, 12 single trees of 17, 4 watched runs of 11): a budget that holds them
+  // (loading does not check the budget; create does)
+  const budget = 2048;
+  const proc = spawn(SYLVA, ['serve', '--db', db, '--listen', `127.0.0.1:${port}`, '--memory-budget', String(budget)],
+    { stdio: ['ignore', 'ignore', 'pipe'] });
+  let err = '';
+  proc.stderr.on('data', (x) => { err += x; });
+  const d = { proc, port, dir, db, url: `ws://127.0.0.1:${port}/ws`, stderr: () => err };
+  daemons.add(d);
+  proc.on('exit', () => daemons.delete(d));
+  let probe;
+  try {
     let first = null;
-    while (first === null && now() - t0 < 10000) {
-      const r = await rawHttp(port, `GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n`, 1000);
+    while (first === null && now() - t0 < 10000 * SLOW) {
+      const r = await rawHttp(port, 'GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n', 1000);
       if (r.status === 200) first = now() - t0;
       else await sleep(10);
     }
-    const probe = new Probe(d, {});
+    probe = new Probe(d, {});
     await probe.ready;
+    const m0 = machine(d, probe);
     const lc = await connect(d.url);
     lc.send({ type: 'list', id: 'l0' });
     const listed = (await lc.next((m) => m.ref === 'l0')).runs;
@@ -930,32 +972,35 @@ test('12. a start on a store of 40 runs: /healthz at once, runs listed as loadin
     }
     // the live runs grow again: iterations queued on the pool, then SIGTERM
     await sleep(1000);
+    const m1 = machine(d, probe);
     const samples = await probe.stop();
     const hz = samples.healthzIn(0, Infinity);
+    lc.close();
     const t1 = now();
     const exit = await stopDaemon(d);
     const exitMs = now() - t1;
     const rssPeak = samples.rssPeak();
-    summary.push({ name: '12 big store', hz, ratio: NaN, rssPeak, others: [NaN, NaN] });
-    t.diagnostic(`12 big store: first /healthz 200 ${fmt(first, 0)} ms after the spawn; the first list showed ` +
+    const rec = { name, hz, ratio: NaN, rssPeak, others: [othersPct(m0, m1), NaN], timing: [] };
+    t.diagnostic(`${name}: first /healthz 200 ${fmt(first, 0)} ms after the spawn; the first list showed ` +
       `${loadingAtFirst} of ${listed.length} runs loading; all loaded ${fmt(loadedAt, 0)} ms after the spawn; ` +
       `/healthz p50 ${fmt(hz.p50)} ms, p99 ${fmt(hz.p99)} ms, max ${fmt(hz.max)} ms (${hz.n}); RSS peak ${mib(rssPeak)}; ` +
-      `SIGTERM to exit ${fmt(exitMs, 0)} ms`);
+      `SIGTERM to exit ${fmt(exitMs, 0)} ms; other processes ${fmt(rec.others[0], 0)} % of a core`);
     assert.equal(listed.length, 40, 'every stored run is listed at once');
     assert.ok(loadingAtFirst > 0, 'runs are listed as loading until they are restored');
     assert.ok(loadedAt !== null, 'every run loaded');
     assert.equal(exit.code, 0, err.slice(-2000));
     assert.ok(exitMs < 5000 * SLOW, `SIGTERM took ${exitMs} ms`);
     assert.equal(integrityCheck(db), 'ok');
-    if (TIMING) {
-      assert.ok(first < 1000, `/healthz first answered ${first} ms after the start`);
-      assert.ok(hz.p99 < HEALTHZ_P99_MS, `/healthz p99 ${fmt(hz.p99)} ms while loading`);
-      assert.ok(rssPeak <= (budget + ALLOWANCE_MIB) * MiB, `RSS peak ${mib(rssPeak)}`);
-    }
+    timing(rec, first < 1000, `/healthz first answered ${fmt(first, 0)} ms after the start`);
+    timing(rec, hz.p99 < HEALTHZ_P99_MS, `/healthz p99 ${fmt(hz.p99)} ms while loading`);
+    timing(rec, hz.failed.length === 0, `/healthz failed: ${hz.failed.join(', ')}`);
+    timing(rec, rssPeak <= (budget + ALLOWANCE_MIB) * MiB, `RSS peak ${mib(rssPeak)}`);
+    return rec;
   } finally {
-    cleanup(dir);
+    probe?.kill();
+    await stopDaemon(d);
   }
-});
+}
 
 // ---- 1,000 viewers, 10 stalled ------------------------------------------------------------------
 
