@@ -135,6 +135,24 @@ export function fdsOf(pid) {
   });
 }
 
+// Bytes the kernel holds between a server on port `server` and the clients on
+// these local ports (IPv4, /proc/net/tcp): the client side's receive queue plus
+// the server side's send queue, for each client port. What a client that stopped
+// reading has not taken.
+export function unreadBytes(server, ports) {
+  const want = new Set(ports);
+  const out = new Map(ports.map((p) => [p, 0]));
+  for (const line of readFileSync('/proc/net/tcp', 'utf8').split('\n').slice(1)) {
+    const f = line.trim().split(/\s+/);
+    if (f.length < 5) continue;
+    const local = parseInt(f[1].split(':')[1], 16), remote = parseInt(f[2].split(':')[1], 16);
+    const [tx, rx] = f[4].split(':').map((x) => parseInt(x, 16));
+    if (want.has(local) && remote === server) out.set(local, out.get(local) + rx);
+    if (local === server && want.has(remote)) out.set(remote, out.get(remote) + tx);
+  }
+  return out;
+}
+
 // CPU time used by every process on the machine but these, in ticks (for telling
 // whether other work on the machine changed between two windows).
 export function cpuTicksTotal() {

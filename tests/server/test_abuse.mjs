@@ -31,7 +31,7 @@ import { startDaemon, stopDaemon, connect, scenario, tempDir, cleanup, freePort,
   SLOW } from './harness.mjs';
 import { watchedScenario, Probe, now, sleep, MiB, rssOf, fdsOf, cpuTicksTotal, integrityCheck,
   sqlite, rawHttp, upgradeText, frame, rawSocket, waitFor, closeCodeOf, inBatches,
-  percentile } from './abuse_lib.mjs';
+  percentile, unreadBytes } from './abuse_lib.mjs';
 
 // Timing, rate, CPU and memory criteria hold in the release build only.
 const TIMING = SLOW === 1;
@@ -1054,9 +1054,16 @@ function leanViewer(port, run, id, arrivals) {
 }
 
 // Delta arrival spread: for every seq, each reader's arrival less the first
-// reader's. The 1,000 viewers read, then 10 of them stop reading (their sockets
-// paused: the kernel's buffers fill, then the daemon's queue for them grows): the
-// readers' p99 spread must stay within 1.2 times what it was.
+// reader's. The 1,000 viewers read, then 10 of them stop reading: their sockets are
+// paused and they ask for twenty snapshots of a bulky run (1.2 MB each), so that
+// the kernel's buffers are full and the daemon holds a queue for each of them when
+// the deltas come. The readers' spread must stay within 1.2 times what it was.
+//
+// Which p99: for each seq, the p99 of the readers' spread, and the median of that
+// over the seqs. The p99 of all the spreads together is reported too, but not
+// asserted: it is decided by the few deltas that met a pause of this process
+// (which reads all 1,000 sockets), and between two identical phases without any
+// stalled viewer it came out anywhere from 0.7 to 1.7 times the other.
 test('1,000 viewers of a growing run, then 10 of them stalled: the readers\' spread holds', { timeout: LIMIT },
   (t) => judged(t, 'viewers', (attempt) => viewersOnce(t, attempt)));
 
@@ -1065,11 +1072,21 @@ async function viewersOnce(t, attempt) {
   const d = await start({ args: ['--max-clients', '1100', '--memory-budget', String(BUDGET_MIB)] });
   const viewers = [];
   try {
-    const STEPS = 60;
+    const STEPS = 100;
     const ctl = await connect(d.url);
     // 20 seedlings: deltas of ~3 KB, one step every 100 ms
     ctl.send({ type: 'create', name: 'crowd', start: false, scenario: watchedScenario({ name: 'crowd', cols: 5, rows: 4 }), id: 'c' });
     const run = (await ctl.next((m) => m.ref === 'c')).run;
+    // the bulky run: the watched world grown to 20 (25k nodes), for the stalled
+    // viewers' snapshots
+    ctl.send({ type: 'create', name: 'bulky', start: true, scenario: watchedScenario({ name: 'bulky', iterations: 20 }), id: 'b' });
+    const bulky = (await ctl.next((m) => m.ref === 'b')).run;
+    for (;;) {
+      ctl.send({ type: 'list', id: 'l' });
+      const r = (await ctl.next((m) => m.ref === 'l')).runs.find((x) => x.run === bulky);
+      if (r.status === 'finished') break;
+      await sleep(100);
+    }
     const arrivals = new Map(); // seq -> Float64Array of 1,000 arrival times
     let stalled = new Set();
     for (let i = 0; i < 1000; i += 50) {
@@ -1122,7 +1139,13 @@ async function viewersOnce(t, attempt) {
     const a = spread(seqsA);
     const m1 = machine(d, probe);
     stalled = new Set(Array.from({ length: 10 }, (_, i) => i * 97));
-    for (const id of stalled) viewers[id].pause();
+    const subscribe = frame(1, Buffer.from(JSON.stringify({ type: 'subscribe', run: bulky })));
+    for (const id of stalled) {
+      viewers[id].pause();
+      for (let k = 0; k < 20; k++) viewers[id].write(subscribe);
+    }
+    await sleep(2000);
+    const unread = [...unreadBytes(d.port, [...stalled].map((id) => viewers[id].localPort)).values()];
     const seqsB = await phase(STEPS);
     const b = spread(seqsB);
     const m2 = machine(d, probe);
@@ -1138,14 +1161,15 @@ async function viewersOnce(t, attempt) {
     t.diagnostic(`${name}: arrival spread with all reading: p50 ${fmt(percentile(a, 50))} ms, p99 ${fmt(percentile(a, 99))} ms, ` +
       `max ${fmt(a[a.length - 1])} ms (a seq's own p99: ${fmt(a.seqP99)} ms at the median); 10 stalled: p50 ` +
       `${fmt(percentile(b, 50))} ms, p99 ${fmt(percentile(b, 99))} ms, max ${fmt(b[b.length - 1])} ms ` +
-      `(${fmt(b.seqP99)} ms); ratio of the p99s ${fmt(percentile(b, 99) / percentile(a, 99), 2)}; ` +
+      `(${fmt(b.seqP99)} ms); ratios ${fmt(b.seqP99 / a.seqP99, 2)} (asserted), ${fmt(percentile(b, 99) / percentile(a, 99), 2)} ` +
+      `(all together); the stalled sockets had ${unread.map((x) => `${(x / MiB).toFixed(1)}`).join(', ')} MiB unread in the kernel; ` +
       `/healthz p50 ${fmt(hz.p50)} ms, p99 ${fmt(hz.p99)} ms, max ${fmt(hz.max)} ms; RSS peak ${mib(samples.rssPeak())}; ` +
       `other processes ${fmt(rec.others[0], 0)} % of a core in the first phase, ${fmt(rec.others[1], 0)} % in the second`);
     assert.ok(got(seqsA, new Set()).every((n) => n === 1000), 'every viewer got every delta');
     assert.ok(got(seqsB, stalled).every((n) => n === 990), 'every reader got every delta');
     if (TIMING) {
-      if (!(percentile(b, 99) <= 1.2 * percentile(a, 99))) {
-        rec.timing.push(`readers' p99 spread ${fmt(percentile(b, 99))} ms with 10 stalled, ${fmt(percentile(a, 99))} ms without`);
+      if (!(b.seqP99 <= 1.2 * a.seqP99)) {
+        rec.timing.push(`readers' p99 spread (a seq's, at the median) ${fmt(b.seqP99)} ms with 10 stalled, ${fmt(a.seqP99)} ms without`);
       }
       if (!(hz.p99 < HEALTHZ_P99_MS)) rec.timing.push(`/healthz p99 ${fmt(hz.p99)} ms`);
       if (!(rec.rssPeak <= RSS_LIMIT)) rec.timing.push(`daemon RSS peak ${mib(rec.rssPeak)}`);
