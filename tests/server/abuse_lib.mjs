@@ -15,17 +15,18 @@ export const MiB = 2 ** 20;
 // ---- the watched run ------------------------------------------------------------
 
 // Every ready scenario ends by its growth equations by iteration 23, in well under a
-// second, so none can be watched through an abuse. This one grows for ever at a
-// steady cost: 600 seedlings of a Weibull growth whose rate stays near 3 internodes
-// an iteration for 10^5 iterations (so no stem ever finishes), in a world 4 m high.
+// second, so none can be watched through an abuse. This one grows as long as asked,
+// at a steady cost: 600 seedlings of a Weibull growth whose rate stays near 3
+// internodes an iteration for 10^5 iterations (so no stem ever finishes), in a
+// world 4 m high.
 // The leaders reach the top by iteration ~15 and stop lengthening; from then on each
-// iteration costs the same (the light, the store's transaction, a delta of 600
-// stems' stats, and every 5th iteration a snapshot of ~25k nodes): about 20 ms on
-// one core, some 40 deltas a second, so that a lost share of a core shows in the
-// rate and a few milliseconds of loop latency per iteration do not dominate it. Its
-// world's estimate is small (the grid of a 12 x 8 x 4 m box in 0.1 m voxels, 11 MiB).
-// `iterations` bounds it (each iteration stores ~270 KB: a test that hangs must not
-// fill the disk).
+// iteration costs the same (the light, the delta of 600 stems' stats, the store's
+// transaction with a snapshot of ~25k nodes): about 12 ms, 80 to 90 deltas a
+// second on one core, steady to within a few % from one 5 s window to the next
+// (a branching tree's cost drifts by tens of %). Each iteration stores ~270 KB.
+// Its world's estimate is small (the grid of a 12 x 8 x 4 m box in 0.1 m voxels,
+// 11 MiB).
+// `iterations` bounds it (a test that hangs must not fill the disk).
 export function watchedScenario({ name = 'watched', cols = 30, rows = 20, height = 4, iterations = 6000 } = {}) {
   const plants = [];
   for (let i = 0; i < cols; i++) {
@@ -132,6 +133,24 @@ export function fdsOf(pid) {
   return readdirSync(`/proc/${pid}/fd`).map((fd) => {
     try { return readlinkSync(`/proc/${pid}/fd/${fd}`); } catch { return ''; }
   });
+}
+
+// Bytes the kernel holds between a server on port `server` and the clients on
+// these local ports (IPv4, /proc/net/tcp): the client side's receive queue plus
+// the server side's send queue, for each client port. What a client that stopped
+// reading has not taken.
+export function unreadBytes(server, ports) {
+  const want = new Set(ports);
+  const out = new Map(ports.map((p) => [p, 0]));
+  for (const line of readFileSync('/proc/net/tcp', 'utf8').split('\n').slice(1)) {
+    const f = line.trim().split(/\s+/);
+    if (f.length < 5) continue;
+    const local = parseInt(f[1].split(':')[1], 16), remote = parseInt(f[2].split(':')[1], 16);
+    const [tx, rx] = f[4].split(':').map((x) => parseInt(x, 16));
+    if (want.has(local) && remote === server) out.set(local, out.get(local) + rx);
+    if (local === server && want.has(remote)) out.set(remote, out.get(remote) + tx);
+  }
+  return out;
 }
 
 // CPU time used by every process on the machine but these, in ticks (for telling
