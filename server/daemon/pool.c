@@ -83,14 +83,6 @@ void pool_submit(pool *p, pool_task *t) {
   pthread_mutex_unlock(&p->lock);
 }
 
-int pool_waiting(pool *p) {
-  pthread_mutex_lock(&p->lock);
-  int n = 0;
-  for (pool_task *t = p->queue; t; t = t->next) n++;
-  pthread_mutex_unlock(&p->lock);
-  return n;
-}
-
 void pool_stop(pool *p) {
   pthread_mutex_lock(&p->lock);
   pool_task *dropped = p->queue;

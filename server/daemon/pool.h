@@ -39,8 +39,6 @@ typedef struct pool {
 int pool_init(pool *p, uv_loop_t *loop, int count);
 /** Queues a task (loop thread). */
 void pool_submit(pool *p, pool_task *t);
-/** Tasks queued and not started. */
-int pool_waiting(pool *p);
 /** Drops the queued tasks (their done gets cancelled = true, on the loop) and
  *  lets the running ones finish; the workers then exit. */
 void pool_stop(pool *p);
