@@ -86,12 +86,16 @@ void handle_message(client *c, const char *text, size_t len) {
     break;
   }
   case SYLVA_MSG_SUBSCRIBE: run_subscribe(r, c, m.has_since, m.since, m.ref); break;
-  case SYLVA_MSG_UNSUBSCRIBE: client_unsubscribe(c, r->id); break;
+  case SYLVA_MSG_UNSUBSCRIBE:
+    client_unsubscribe(c, r->id);
+    runs_wake(d);
+    break;
   case SYLVA_MSG_CONTROL: handle_control(c, r, &m); break;
   case SYLVA_MSG_LIGHT: {
     int dims[3];
-    if (r->loading) {
-      reply_error(c, "busy", "/run: the run is still loading; ask again in a moment", m.ref);
+    const char *waiting = run_ready(r, err, sizeof err);
+    if (waiting) {
+      reply_error(c, "busy", waiting, m.ref);
       break;
     }
     sylva_world_dims(r->w, dims); /* fixed for the world's life; safe while busy */
@@ -104,12 +108,16 @@ void handle_message(client *c, const char *text, size_t len) {
     }
     break;
   }
-  case SYLVA_MSG_EDIT:
+  case SYLVA_MSG_EDIT: {
+    const char *waiting;
     if (r->status == SYLVA_RUN_FAILED)
       reply_error(c, "bad_request", "/run: the run has failed", m.ref);
+    else if ((waiting = run_ready(r, err, sizeof err)))
+      reply_error(c, "busy", waiting, m.ref);
     else
       run_edit(r, c, &m);
     break;
+  }
   case SYLVA_MSG_FORK: run_fork(r, c, m.iteration, m.name, m.ref); break;
   case SYLVA_MSG_GET: run_get(r, c, m.iteration, m.ref); break;
   }

@@ -47,6 +47,57 @@ size_t runs_estimate(const sylva_world *w, int stems) {
   return (grown < box ? grown : box) + (1u << 20);
 }
 
+/* What a run not in memory will take once loaded: its stored stems' share, as
+ * runs_estimate without the box's bound (the box is not known before loading). */
+static size_t estimate_unloaded(const run *r) {
+  return (size_t)r->stems * DAEMON_BYTES_PER_STEM + (1u << 20);
+}
+
+static bool run_loaded(const run *r) { return r->w != NULL; }
+
+static bool run_watched(const run *r) {
+  for (client *c = r->d->clients.head; c; c = c->next)
+    if (client_subscription(c, r->id)) return true;
+  return false;
+}
+
+/* A run in memory that nothing needs there: no task, no waiting work, not growing,
+ * nobody subscribed. Its world may go back to the store. */
+static bool run_idle(const run *r) {
+  return run_loaded(r) && !r->busy && !r->edits && !r->lights && r->steps == 0 &&
+         r->status != SYLVA_RUN_RUNNING && !run_watched(r);
+}
+
+/* Frees an idle run's world (and what was encoded from it); it stays listed and
+ * loads again when a client needs it. */
+static void run_unload(run *r) {
+  server *d = r->d;
+  d->memory_reserved -= r->estimate;
+  r->estimate = 0;
+  sylva_world_destroy(r->w);
+  r->w = NULL;
+  for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) {
+    msgbuf_unref(r->history[i]);
+    r->history[i] = NULL;
+  }
+  msgbuf_unref(r->snapshot);
+  r->snapshot = NULL;
+  server_log(r->name, "unloaded (memory budget)");
+}
+
+/* Unloads idle runs, the least recently used first, until `bytes` more fit in the
+ * memory budget; whether they do. */
+static bool runs_free_memory(server *d, size_t bytes, const run *keep) {
+  while (d->memory_reserved + bytes > d->opt.memory_budget) {
+    run *oldest = NULL;
+    for (run *r = d->runs; r; r = r->next)
+      if (r != keep && run_idle(r) && (!oldest || r->used < oldest->used)) oldest = r;
+    if (!oldest) return false;
+    run_unload(oldest);
+  }
+  return true;
+}
+
 static int runs_held(server *d) {
   int n = d->runs_pending;
   for (run *r = d->runs; r; r = r->next) n++;
@@ -58,7 +109,7 @@ const char *runs_room(server *d, size_t estimate, char *buf, size_t size) {
     snprintf(buf, size, "the daemon holds %d runs, its limit (--max-runs)", d->opt.max_runs);
     return buf;
   }
-  if (d->memory_reserved + estimate > d->opt.memory_budget) {
+  if (!runs_free_memory(d, estimate, NULL)) {
     snprintf(buf, size,
              "the run would need about %zu MiB; %zu of the %zu MiB budget are taken "
              "(--memory-budget)",
@@ -381,8 +432,9 @@ static void done_load(run *r) {
   r->task_world = NULL;
   r->loading = false;
   run_note(r);
-  r->estimate = runs_estimate(r->w, r->stems);
-  r->d->memory_reserved += r->estimate;
+  size_t estimate = runs_estimate(r->w, r->stems);
+  r->d->memory_reserved += estimate - r->estimate;
+  r->estimate = estimate;
   /* one seq per delta and per edit since the run was planted, so that the numbers a
    * client holds keep their meaning across restarts of the daemon */
   r->seq = (int64_t)r->iteration + r->task_edits;
@@ -393,6 +445,7 @@ static void done_load(run *r) {
 static void task_done(pool_task *t, bool cancelled) {
   run *r = (run *)((char *)t - offsetof(run, task));
   run_task kind = r->kind;
+  r->used = uv_now(&r->d->loop);
   r->busy = false;
   r->kind = RUN_TASK_NONE;
   if (!cancelled) {
@@ -404,7 +457,10 @@ static void task_done(pool_task *t, bool cancelled) {
     case RUN_TASK_SNAPSHOT: done_snapshot(r); break;
     case RUN_TASK_NONE: break;
     }
-    if (kind == RUN_TASK_LOAD && r->task_status != SYLVA_OK) return; /* removed */
+    if (kind == RUN_TASK_LOAD && r->task_status != SYLVA_OK) {
+      runs_wake(r->d); /* removed: its reservation is free */
+      return;
+    }
   }
   free(r->task_text);
   r->task_text = NULL;
@@ -416,12 +472,21 @@ static void task_done(pool_task *t, bool cancelled) {
     run_set_status(r, SYLVA_RUN_FINISHED);
   }
   run_schedule(r);
+  if (!r->busy) runs_wake(r->d); /* the run may have stopped needing its memory */
 }
 
 /* Starts the run's next task: pending edits first, then light slices, then a
  * snapshot for subscribers waiting for one, then an iteration. */
 void run_schedule(run *r) {
   if (r->busy || r->d->stopping || r->loading) return;
+  if (!run_loaded(r)) {
+    /* loads when something needs the world; a run that cannot have the memory yet
+     * waits (runs_wake tries again when memory is freed) */
+    char why[256];
+    if (run_wants_step(r) || snapshot_wanted(r) || r->edits || r->lights)
+      run_load(r, why, sizeof why);
+    return;
+  }
   run_task kind = RUN_TASK_NONE;
   if (r->edits)
     kind = RUN_TASK_EDIT;
@@ -443,6 +508,43 @@ void run_schedule(run *r) {
   pool_submit(&r->d->pool, &r->task);
 }
 
+const char *run_load(run *r, char *buf, size_t size) {
+  server *d = r->d;
+  if (run_loaded(r) || r->loading) return NULL;
+  size_t estimate = estimate_unloaded(r);
+  if (!runs_free_memory(d, estimate, NULL)) {
+    snprintf(buf, size,
+             "/run: loading the run would need about %zu MiB; %zu of the %zu MiB budget are "
+             "taken by runs in use (--memory-budget)",
+             estimate >> 20, d->memory_reserved >> 20, d->opt.memory_budget >> 20);
+    return buf;
+  }
+  r->estimate = estimate;
+  d->memory_reserved += estimate;
+  r->loading = true;
+  r->busy = true;
+  r->kind = RUN_TASK_LOAD;
+  r->task = (pool_task){.work = task_work, .done = task_done};
+  pool_submit(&d->pool, &r->task);
+  return NULL;
+}
+
+const char *run_ready(run *r, char *buf, size_t size) {
+  r->used = uv_now(&r->d->loop);
+  if (run_loaded(r) && !r->loading) return NULL;
+  const char *why = run_load(r, buf, size);
+  return why ? why : "/run: the run is loading; ask again in a moment";
+}
+
+void runs_wake(server *d) {
+  if (d->stopping) return;
+  for (run *r = d->runs; r; r = r->next)
+    if (!run_loaded(r) && !r->loading && run_wants_step(r)) {
+      char why[256];
+      if (run_load(r, why, sizeof why)) return; /* the first in line waits */
+    }
+}
+
 void runs_forget_client(server *d, uint64_t serial) {
   for (run *r = d->runs; r; r = r->next) {
     /* the slice in flight (the head, while a light task runs) stays for its task */
@@ -459,6 +561,7 @@ void runs_forget_client(server *d, uint64_t serial) {
       free(l);
     }
   }
+  runs_wake(d);
 }
 
 bool runs_busy(server *d) {
@@ -468,6 +571,12 @@ bool runs_busy(server *d) {
 }
 
 void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref) {
+  char why[256];
+  r->used = uv_now(&r->d->loop);
+  if (!run_loaded(r) && run_load(r, why, sizeof why)) {
+    client_send_text(c, sylva_msg_error("busy", why, ref));
+    return;
+  }
   subscription *s = client_subscribe(c, r->id);
   if (!s) {
     client_send_text(c, sylva_msg_error("internal", "out of memory", ref));
@@ -566,15 +675,17 @@ int runs_load(server *d) {
       store_runs_free(stored, n);
       return SERVER_ENOMEM;
     }
-    r->loading = true;
     r->iteration = sr->last_iteration;
     r->nodes = sr->nodes;
-    r->busy = true;
-    r->kind = RUN_TASK_LOAD;
-    r->task = (pool_task){.work = task_work, .done = task_done};
-    pool_submit(&d->pool, &r->task);
+    r->stems = sr->stems;
   }
   store_runs_free(stored, n);
+  /* the growing runs load now, as many as the budget holds; the others when a client
+   * needs them */
+  char why[256];
+  for (run *r = d->runs; r; r = r->next)
+    if (run_wants_step(r) && run_load(r, why, sizeof why))
+      server_log(r->name, "waits for memory to grow: %s", why + strlen("/run: "));
   return SERVER_OK;
 }
 
@@ -705,7 +816,7 @@ static const char *edit_room(run *r, const sylva_msg *m, const char **code, char
   }
   *code = "busy";
   size_t more = stems > r->stems && r->w ? runs_estimate(r->w, stems) : r->estimate;
-  if (more > r->estimate && d->memory_reserved + (more - r->estimate) > d->opt.memory_budget) {
+  if (more > r->estimate && !runs_free_memory(d, more - r->estimate, r)) {
     snprintf(buf, size, "the plants would need about %zu MiB more than the budget has free "
              "(--memory-budget)", (more - r->estimate) >> 20);
     return buf;
@@ -802,6 +913,7 @@ static void job_work(uv_work_t *req) {
 
 static void job_done(uv_work_t *req, int status) {
   job *j = req->data;
+  server *d = j->d;
   (void)status;
   j->d->jobs--;
   j->d->runs_pending -= j->fork;
@@ -824,6 +936,7 @@ static void job_done(uv_work_t *req, int status) {
     j->text = NULL;
   }
   job_free(j);
+  runs_wake(d);
 }
 
 static void start_job(run *r, client *c, int iteration, const char *name, const char *ref) {
@@ -844,7 +957,7 @@ static void start_job(run *r, client *c, int iteration, const char *name, const 
   const char *busy = runs_job_room(r->d);
   char why[256];
   if (!busy && name) {
-    j->estimate = r->estimate;
+    j->estimate = run_loaded(r) ? r->estimate : estimate_unloaded(r);
     busy = runs_room(r->d, j->estimate, why, sizeof why);
   }
   if (busy) {

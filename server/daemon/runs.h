@@ -27,9 +27,12 @@ struct run {
   server *d;
   int64_t id;       /**< the store's run id, also the protocol's "run" */
   char *name;
-  sylva_world *w;   /**< owned; NULL while loading; the worker's while busy */
+  sylva_world *w;   /**< owned; NULL while not in memory (or loading); the worker's
+                         while busy */
   sylva_run_status status;
   bool loading;     /**< being restored from the store */
+  uint64_t used;    /**< loop time (ms) a client or a task last needed it: the least
+                         recently used idle run is unloaded first */
   int limit;        /**< iteration limit */
   int snapshot_every;
   int steps;        /**< iterations still wanted while paused (control step) */
@@ -59,10 +62,24 @@ struct run {
   run *next;
 };
 
-/** Lists every stored run and restores their worlds on the pool (they are listed
- *  as loading meanwhile); runs that were running continue once loaded. SERVER_OK,
- *  or a server_error (logged) when the store cannot list them. */
+/** Lists every stored run and restores the worlds of those that were running on
+ *  the pool, as many as the memory budget holds (they are listed as loading
+ *  meanwhile, and continue once loaded). The other runs stay in the store until a
+ *  client needs their world. SERVER_OK, or a server_error (logged) when the store
+ *  cannot list them.
+ *
+ *  A run's world is in memory while it grows, has subscribers or work waiting;
+ *  when the budget is needed for another, the least recently used run that needs
+ *  none of this goes back to the store (unloaded) and loads again on demand. */
 int runs_load(server *d);
+/** Queues the loading of a run not in memory, when the budget has room for it
+ *  (after unloading idle runs); NULL, or why not (buf). */
+const char *run_load(run *r, char *buf, size_t size);
+/** NULL when the run's world is in memory and loaded; else starts loading it and
+ *  returns what to tell the client (busy: loading, or the budget is full). */
+const char *run_ready(run *r, char *buf, size_t size);
+/** Loads the runs that wait for memory to grow, as far as the budget now allows. */
+void runs_wake(server *d);
 /** Frees every run (the loop must have no work in flight). */
 void runs_free(server *d);
 /** The run with this id, or NULL. */
@@ -84,7 +101,7 @@ void run_set_status(run *r, sylva_run_status status);
  *  the message of a refusal. */
 const char *run_control(run *r, sylva_control_action action, int count);
 /** A client left: its light slices not started yet are dropped (its edits are
- *  still made: they were asked for). */
+ *  still made: they were asked for), and runs waiting for memory may load. */
 void runs_forget_client(server *d, uint64_t serial);
 /** Whether a task of some run is running (the daemon waits for them at stop). */
 bool runs_busy(server *d);

@@ -320,7 +320,9 @@ static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
   "SELECT r.id, r.name, r.scenario, r.seed, r.iterations, r.snapshot_every, r.status,"      \
   " r.reason, r.created, r.updated,"                                                        \
   " (SELECT max(iteration) FROM iterations i WHERE i.run = r.id),"                          \
-  " (SELECT nodes FROM iterations i WHERE i.run = r.id ORDER BY iteration DESC LIMIT 1)"    \
+  " (SELECT nodes FROM iterations i WHERE i.run = r.id ORDER BY iteration DESC LIMIT 1),"   \
+  " (SELECT count(*) FROM stats s WHERE s.run = r.id AND s.iteration ="                     \
+  "   (SELECT max(iteration) FROM stats t WHERE t.run = r.id))"                             \
   " FROM runs r"
 
 static int read_run(sqlite3_stmt *q, store_run *r) {
@@ -340,6 +342,7 @@ static int read_run(sqlite3_stmt *q, store_run *r) {
   copy_column(q, 9, r->updated, sizeof r->updated);
   r->last_iteration = sqlite3_column_int(q, 10);
   r->nodes = sqlite3_column_int64(q, 11);
+  r->stems = sqlite3_column_int(q, 12);
   return r->name && r->scenario ? 0 : SERVER_EFAIL;
 }
 

@@ -48,6 +48,8 @@ typedef struct store_run {
   char created[32], updated[32]; /**< UTC, ISO 8601 */
   int last_iteration; /**< the last stored iteration (0: only the planted world) */
   int64_t nodes;      /**< live nodes after it */
+  int stems;          /**< stems at the last iteration with stats (plants an edit
+                           added since are not counted until the next iteration) */
 } store_run;
 
 /** Opens (create: also creates) a store file and brings its schema up to date

@@ -901,7 +901,7 @@ test('11. 980 wrong hello tokens from 245 sockets in a burst (--token-file)', { 
 
 // ---- 12. a start on a large store ------------------------------------------------------------------
 
-test('12. a start on a store of 40 runs: /healthz at once, runs listed as loading, SIGTERM within 5 s', { timeout: LIMIT }, async (t) => {
+test('12. a start on a store of 40 runs: /healthz at once, runs listed as loading, each viewed in turn within the memory budget, SIGTERM within 5 s', { timeout: LIMIT }, async (t) => {
   const dir = tempDir();
   const db = join(dir, 'runs.db');
   try {
@@ -942,9 +942,10 @@ async function bigStoreStart(t, attempt, dir, db) {
   const port = await freePort();
   const t0 = now();
   // the stored runs' estimates come to 1,616 MiB (12 stands of 81, 12 pairs of
-  // 33, 12 single trees of 17, 4 watched runs of 11): a budget that holds them
-  // (loading does not check the budget; create does)
-  const budget = 2048;
+  // 33, 12 single trees of 17, 4 watched runs of 11), far more than the budget:
+  // the 4 growing runs load at the start, the others when a viewer asks for them,
+  // the least recently used idle one going back to the store to make room
+  const budget = BUDGET_MIB;
   const proc = spawn(SYLVA, ['serve', '--db', db, '--listen', `127.0.0.1:${port}`, '--memory-budget', String(budget)],
     { stdio: ['ignore', 'ignore', 'pipe'] });
   let err = '';
@@ -955,10 +956,13 @@ async function bigStoreStart(t, attempt, dir, db) {
   let probe;
   try {
     let first = null;
+    let firstHealth = null;
     while (first === null && now() - t0 < 10000 * SLOW) {
       const r = await rawHttp(port, 'GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n', 1000);
-      if (r.status === 200) first = now() - t0;
-      else await sleep(10);
+      if (r.status === 200) {
+        first = now() - t0;
+        firstHealth = JSON.parse(r.text.slice(r.text.indexOf('\r\n\r\n') + 4));
+      } else await sleep(10);
     }
     probe = new Probe(d, {});
     await probe.ready;
@@ -966,7 +970,7 @@ async function bigStoreStart(t, attempt, dir, db) {
     const lc = await connect(d.url);
     lc.send({ type: 'list', id: 'l0' });
     const listed = (await lc.next((m) => m.ref === 'l0')).runs;
-    const loadingAtFirst = listed.filter((r) => r.loading).length;
+    const loadingAtFirst = firstHealth.loading;
     let loadedAt = null;
     while (now() - t0 < 60000 * SLOW) {
       lc.send({ type: 'list', id: 'l' });
@@ -974,6 +978,20 @@ async function bigStoreStart(t, attempt, dir, db) {
       if (runs.length === 40 && runs.every((r) => !r.loading)) { loadedAt = now() - t0; break; }
       await sleep(50);
     }
+    // every stored run asked for by a viewer in turn, the previous one still
+    // subscribed: each is loaded and the least recently used idle one unloaded
+    const stored = (await (async () => { lc.send({ type: 'list', id: 'l1' }); return (await lc.next((m) => m.ref === 'l1')).runs; })())
+      .filter((r) => r.name.startsWith('cli-'));
+    let viewed = 0;
+    for (let i = 0; i < stored.length; i++) {
+      lc.send({ type: 'subscribe', run: stored[i].run, id: `v${i}` });
+      const m = await lc.next((x) => x.ref === `v${i}`, 60000 * SLOW);
+      assert.equal(m.type, 'snapshot', JSON.stringify(m).slice(0, 300));
+      assert.equal(m.iteration, stored[i].iteration);
+      viewed++;
+      if (i >= 1) lc.send({ type: 'unsubscribe', run: stored[i - 1].run });
+    }
+    const viewedAt = now() - t0;
     // the live runs grow again: iterations queued on the pool, then SIGTERM
     await sleep(1000);
     const m1 = machine(d, probe);
@@ -985,13 +1003,16 @@ async function bigStoreStart(t, attempt, dir, db) {
     const exitMs = now() - t1;
     const rssPeak = samples.rssPeak();
     const rec = { name, hz, ratio: NaN, rssPeak, others: [othersPct(m0, m1), NaN], timing: [] };
-    t.diagnostic(`${name}: first /healthz 200 ${fmt(first, 0)} ms after the spawn; the first list showed ` +
-      `${loadingAtFirst} of ${listed.length} runs loading; all loaded ${fmt(loadedAt, 0)} ms after the spawn; ` +
+    t.diagnostic(`${name}: first /healthz 200 ${fmt(first, 0)} ms after the spawn, with ` +
+      `${loadingAtFirst} of ${firstHealth.runs} runs loading; the growing ones loaded ${fmt(loadedAt, 0)} ms after the spawn; ` +
+      `${viewed} stored runs loaded for a viewer in turn by ${fmt(viewedAt, 0)} ms; ` +
       `/healthz p50 ${fmt(hz.p50)} ms, p99 ${fmt(hz.p99)} ms, max ${fmt(hz.max)} ms (${hz.n}); RSS peak ${mib(rssPeak)}; ` +
       `SIGTERM to exit ${fmt(exitMs, 0)} ms; other processes ${fmt(rec.others[0], 0)} % of a core`);
     assert.equal(listed.length, 40, 'every stored run is listed at once');
-    assert.ok(loadingAtFirst > 0, 'runs are listed as loading until they are restored');
-    assert.ok(loadedAt !== null, 'every run loaded');
+    // (the four growing runs are small and may be loaded before the first answer:
+    // test_limits.mjs shows runs listed as loading)
+    assert.ok(loadedAt !== null, 'the growing runs loaded');
+    assert.equal(viewed, 36);
     assert.equal(exit.code, 0, err.slice(-2000));
     assert.ok(exitMs < 5000 * SLOW, `SIGTERM took ${exitMs} ms`);
     assert.equal(integrityCheck(db), 'ok');

@@ -56,15 +56,39 @@ test('--max-stems and --max-obstacles: a create or an edit past them is too_larg
   c.close();
 }));
 
-test('--memory-budget: a world whose estimate does not fit is refused busy', () => withDaemon({ args: ['--memory-budget', '40'] }, async (d) => {
+test('--memory-budget: a world whose estimate does not fit is refused busy; idle runs go back to the store', () => withDaemon({ args: ['--memory-budget', '40'] }, async (d) => {
   const c = await connect(d.url);
-  const one = await create(c, 'one', scenario('wall.json')); // one tree: 17 MiB by estimate
+  // one tree: 17 MiB by estimate; runs with a subscriber stay in memory
+  const one = await create(c, 'one', scenario('wall.json'));
   assert.equal(one.type, 'created');
+  c.send({ type: 'subscribe', run: one.run, id: 's1' });
+  assert.equal((await c.next((m) => m.ref === 's1')).type, 'snapshot');
   const two = await create(c, 'two', scenario('wall.json'));
   assert.equal(two.type, 'created');
+  c.send({ type: 'subscribe', run: two.run, id: 's2' });
+  const snap2 = await c.next((m) => m.ref === 's2');
   const three = await create(c, 'three', scenario('wall.json'));
   assert.equal(three.code, 'busy');
   assert.match(three.message, /the run would need about 17 MiB; 34 of the 40 MiB budget are taken \(--memory-budget\)/);
+  // without a subscriber, two is idle: the next create unloads it
+  c.send({ type: 'unsubscribe', run: two.run });
+  const again = await create(c, 'three', scenario('wall.json'));
+  assert.equal(again.type, 'created');
+  // two is still listed, and loads again for a subscriber once three is idle
+  c.send({ type: 'list', id: 'l' });
+  assert.deepEqual((await c.next((m) => m.ref === 'l')).runs.map((r) => [r.name, r.stems]),
+    [['one', 1], ['two', 1], ['three', 1]]);
+  c.send({ type: 'subscribe', run: two.run, id: 's2b' });
+  const back = await c.next((m) => m.ref === 's2b');
+  assert.equal(back.type, 'snapshot');
+  assert.deepEqual(back.nodes, snap2.nodes, 'the reloaded world is the one unloaded');
+  // with one and two held by subscribers, three cannot load
+  c.send({ type: 'subscribe', run: again.run, id: 's3' });
+  const refused = await c.next((m) => m.ref === 's3');
+  assert.equal(refused.code, 'busy');
+  assert.match(refused.message, /^\/run: loading the run would need about 17 MiB; 34 of the 40 MiB budget are taken by runs in use \(--memory-budget\)$/);
+  c.send({ type: 'light', run: again.run, z: 1, id: 'l3' });
+  assert.equal((await c.next((m) => m.ref === 'l3')).code, 'busy');
   c.close();
 }));
 
@@ -125,42 +149,105 @@ test('--max-input: unfinished messages past the budget are closed with 1009; the
   assert.equal(h.clients, 0);
 }));
 
-test('runs load after the daemon listens: /healthz and list answer at once, the runs marked loading', async () => {
+// Six stored stands (81 MiB each by estimate) against a budget of 200 MiB.
+function storedStands(db, n) {
+  for (let i = 0; i < n; i++) {
+    const r = spawnSync(SYLVA, ['run', join(ROOT, 'scenarios', 'stand.json'), '--db', db, '--name', `s${i}`,
+      '--iterations', '12', '--snapshot-every', '100', '--quiet-progress'], { encoding: 'utf8' });
+    assert.equal(r.status, 0, r.stderr);
+  }
+}
+
+function sql(db, statement) {
+  const r = spawnSync('python3', ['-c', 'import sqlite3,sys; c=sqlite3.connect(sys.argv[1]); c.execute(sys.argv[2]); c.commit()',
+    db, statement], { encoding: 'utf8' });
+  assert.equal(r.status, 0, r.stderr);
+}
+
+async function listed(c) {
+  c.send({ type: 'list', id: 'list' });
+  return (await c.next((m) => m.ref === 'list')).runs;
+}
+
+async function untilFinished(c, names) {
+  for (let w = 0; w < 1200; w++) {
+    const runs = await listed(c);
+    if (runs.filter((r) => names.includes(r.name)).every((r) => r.status === 'finished')) return runs;
+    await new Promise((r) => setTimeout(r, 100));
+  }
+  throw new Error(`${names} did not finish`);
+}
+
+test('runs load after the daemon listens, growing runs as far as the budget holds, the others on demand', async () => {
   const dir = tempDir();
   try {
     const db = join(dir, 'runs.db');
-    for (let i = 0; i < 6; i++) {
-      const r = spawnSync(SYLVA, ['run', join(ROOT, 'scenarios', 'stand.json'), '--db', db, '--name', `s${i}`,
-        '--iterations', '12', '--snapshot-every', '100', '--quiet-progress'], { encoding: 'utf8' });
-      assert.equal(r.status, 0, r.stderr);
-    }
-    const d = await startDaemon({ dir, args: ['--workers', '1'] });
+    storedStands(db, 8);
+    // as a daemon stopped mid-run leaves them: s0 to s5 were growing towards 14
+    sql(db, "UPDATE runs SET status = 'running', iterations = 14 WHERE name IN ('s0', 's1', 's2', 's3', 's4', 's5')");
+    let d = await startDaemon({ dir, args: ['--workers', '1', '--memory-budget', '500'] });
     try {
       const t0 = Date.now();
       const h = await fetch(`${d.http}/healthz`).then((r) => r.json());
       assert.ok(Date.now() - t0 < 1000);
-      assert.equal(h.runs, 6);
+      assert.equal(h.runs, 8);
       assert.ok(h.loading >= 1, `loading ${h.loading}`);
       const c = await connect(d.url);
-      c.send({ type: 'list' });
-      const first = (await c.type('runs')).runs;
+      const first = await listed(c);
+      assert.deepEqual(first.map((r) => [r.name, r.stems]), [0, 1, 2, 3, 4, 5, 6, 7].map((i) => [`s${i}`, 5]),
+        'stems from the store');
       assert.ok(first.some((r) => r.loading === true));
+      assert.ok(first.slice(6).every((r) => !r.loading), 'runs that do not grow stay in the store');
       // a subscriber of a loading run gets its snapshot once it is loaded
       c.send({ type: 'subscribe', run: first[5].run, id: 's' });
       const snap = await c.next((m) => m.type === 'snapshot', 120000);
-      assert.equal(snap.iteration, 12);
       assert.equal(snap.ref, 's');
-      for (let w = 0; w < 600; w++) {
-        const hh = await fetch(`${d.http}/healthz`).then((r) => r.json());
-        if (hh.loading === 0) break;
-        await new Promise((r) => setTimeout(r, 100));
-      }
-      c.send({ type: 'list' });
-      assert.ok((await c.type('runs')).runs.every((r) => !r.loading && r.iteration === 12));
+      const later = await untilFinished(c, ['s0', 's1', 's2', 's3', 's4', 's5']);
+      assert.deepEqual(later.map((r) => r.iteration), [14, 14, 14, 14, 14, 14, 12, 12]);
       c.close();
     } finally {
-      const exit = await stopDaemon(d);
-      assert.equal(exit.code, 0);
+      assert.equal((await stopDaemon(d)).code, 0);
+    }
+
+    // nothing grows now: nothing loads until a client needs it, within 200 MiB
+    d = await startDaemon({ dir, args: ['--memory-budget', '200'] });
+    try {
+      const h = await fetch(`${d.http}/healthz`).then((r) => r.json());
+      assert.equal(h.loading, 0);
+      const c = await connect(d.url);
+      const runs = await listed(c);
+      const ask = async (i, id) => {
+        c.send({ type: 'subscribe', run: runs[i].run, id });
+        return c.next((m) => m.ref === id, 120000);
+      };
+      const s7 = await ask(7, 'a');
+      assert.equal(s7.type, 'snapshot');
+      assert.equal(s7.iteration, 12);
+      assert.equal((await ask(6, 'b')).type, 'snapshot');
+      // s7 and s6 hold 162 of 200 MiB: s5 cannot load until one is let go
+      const no = await ask(5, 'c');
+      assert.equal(no.code, 'busy');
+      assert.match(no.message, /^\/run: loading the run would need about 81 MiB; 162 of the 200 MiB budget are taken by runs in use \(--memory-budget\)$/);
+      c.send({ type: 'unsubscribe', run: runs[7].run });
+      const s5 = await ask(5, 'd');
+      assert.equal(s5.type, 'snapshot');
+      assert.equal(s5.iteration, 14);
+      c.close();
+    } finally {
+      assert.equal((await stopDaemon(d)).code, 0);
+    }
+
+    // two growing runs and room for one: the second waits for the first to end
+    sql(db, "UPDATE runs SET status = 'running', iterations = 14 WHERE name IN ('s6', 's7')");
+    d = await startDaemon({ dir, args: ['--memory-budget', '100'] });
+    try {
+      const c = await connect(d.url);
+      const runs = await untilFinished(c, ['s6', 's7']);
+      assert.deepEqual(runs.slice(6).map((r) => r.iteration), [14, 14]);
+      assert.match(d.stderr(), /\[run s7\] waits for memory to grow: loading the run would need about 81 MiB; 81 of the 100 MiB/);
+      c.close();
+    } finally {
+      assert.equal((await stopDaemon(d)).code, 0);
     }
   } finally {
     cleanup(dir);
