@@ -192,6 +192,7 @@ static void stop(server *d) {
   server_log(NULL, "stopping: closing clients, finishing the iterations in flight");
   client_set_close_all(&d->clients, LWS_CLOSE_STATUS_GOINGAWAY, "server shutting down");
   pool_stop(&d->pool); /* iterations not started are dropped; the running ones end */
+  runs_halt(d);
   uv_signal_stop(&d->sigint);
   uv_signal_stop(&d->sigterm);
 }

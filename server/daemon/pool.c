@@ -25,9 +25,32 @@ static void *worker(void *arg) {
   return NULL;
 }
 
-/* Loop thread: reports the finished tasks, oldest first. */
+void pool_report(pool *p, pool_task *t) {
+  pthread_mutex_lock(&p->lock);
+  if (!t->reported) {
+    t->reported = true;
+    t->next_report = p->reports;
+    p->reports = t;
+  }
+  uv_async_send(&p->async);
+  pthread_mutex_unlock(&p->lock);
+}
+
+/* Loop thread: the progress of running tasks, then the finished tasks, oldest
+ * first. */
 static void on_async(uv_async_t *a) {
   pool *p = a->data;
+  for (;;) { /* one at a time: a worker may report its task again meanwhile */
+    pthread_mutex_lock(&p->lock);
+    pool_task *t = p->reports;
+    if (t) {
+      p->reports = t->next_report;
+      t->reported = false;
+    }
+    pthread_mutex_unlock(&p->lock);
+    if (!t) break;
+    t->progress(t);
+  }
   pthread_mutex_lock(&p->lock);
   pool_task *list = p->finished;
   p->finished = NULL;
@@ -99,7 +122,7 @@ void pool_stop(pool *p) {
 
 bool pool_idle(pool *p) {
   pthread_mutex_lock(&p->lock);
-  bool idle = !p->running && !p->queue && !p->finished;
+  bool idle = !p->running && !p->queue && !p->finished && !p->reports;
   pthread_mutex_unlock(&p->lock);
   return idle;
 }

@@ -15,11 +15,16 @@
 typedef struct pool_task pool_task;
 
 /** One piece of work: work runs on a worker, done on the loop (cancelled true
- *  when the pool dropped it unrun at shutdown). */
+ *  when the pool dropped it unrun at shutdown). A task that has results before it
+ *  is done reports them (pool_report): progress then runs on the loop, before
+ *  done. */
 struct pool_task {
   void (*work)(pool_task *t);
   void (*done)(pool_task *t, bool cancelled);
+  void (*progress)(pool_task *t); /**< may be NULL when the task never reports */
   pool_task *next;
+  pool_task *next_report;
+  bool reported; /**< in the pool's report list (pool lock) */
 };
 
 typedef struct pool {
@@ -29,6 +34,7 @@ typedef struct pool {
   pthread_cond_t wake;
   pool_task *queue, *queue_tail; /**< waiting, in order */
   pool_task *finished;           /**< done on a worker, waiting for the loop */
+  pool_task *reports;            /**< running tasks with progress for the loop */
   int running;                   /**< tasks on workers now */
   bool stopping;
   uv_async_t async;              /**< wakes the loop for finished tasks */
@@ -39,6 +45,9 @@ typedef struct pool {
 int pool_init(pool *p, uv_loop_t *loop, int count);
 /** Queues a task (loop thread). */
 void pool_submit(pool *p, pool_task *t);
+/** From the task's work, on its worker: has its progress callback run on the
+ *  loop soon (once for any number of reports made before it runs). */
+void pool_report(pool *p, pool_task *t);
 /** Drops the queued tasks (their done gets cancelled = true, on the loop) and
  *  lets the running ones finish; the workers then exit. */
 void pool_stop(pool *p);

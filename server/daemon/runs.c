@@ -205,23 +205,43 @@ static void work_load(run *r) {
   }
 }
 
-static void work_step(run *r) {
+/* One iteration, stored and encoded, into res; whether it went well. */
+static bool step_once(run *r, int64_t seq, step_result *res) {
   server *d = r->d;
   const sylva_journal *j;
+  *res = (step_result){.status = SYLVA_OK};
   double t0 = mono_ms();
-  r->task_status = sylva_world_step(r->w, &j);
-  r->task_ms = mono_ms() - t0;
-  if (r->task_status != SYLVA_OK) {
-    snprintf(r->task_error, sizeof r->task_error, "iteration %d: %s",
-             sylva_world_iteration(r->w) + 1, sylva_strerror(r->task_status));
-    return;
+  res->status = sylva_world_step(r->w, &j);
+  res->ms = mono_ms() - t0;
+  if (res->status != SYLVA_OK) {
+    snprintf(res->error, sizeof res->error, "iteration %d: %s", sylva_world_iteration(r->w) + 1,
+             sylva_strerror(res->status));
+    return false;
   }
   if (store_save_step(d->st, r->id, r->w, j, r->snapshot_every, r->limit)) {
-    snprintf(r->task_error, sizeof r->task_error, "%s", store_error(d->st));
-    r->task_status = SYLVA_EINVAL;
-    return;
+    snprintf(res->error, sizeof res->error, "%s", store_error(d->st));
+    res->status = SYLVA_EINVAL;
+    return false;
   }
-  r->task_text = sylva_msg_delta(r->id, r->seq + 1, r->w, j);
+  res->text = sylva_msg_delta(r->id, seq, r->w, j);
+  res->iteration = sylva_world_iteration(r->w);
+  res->stems = sylva_world_stem_count(r->w);
+  res->obstacles = sylva_world_obstacle_count(r->w);
+  res->nodes = (int64_t)sylva_world_node_count(r->w);
+  res->finished = sylva_world_finished(r->w);
+  return true;
+}
+
+/* Up to batch_max iterations, each handed to the loop when made. */
+static void work_step(run *r) {
+  for (int k = 0; k < r->batch_max; k++) {
+    bool ok = step_once(r, r->batch_seq + k + 1, &r->results[k]);
+    pthread_mutex_lock(&r->lock);
+    r->made = k + 1;
+    pthread_mutex_unlock(&r->lock);
+    pool_report(&r->d->pool, &r->task);
+    if (!ok || r->results[k].finished || atomic_load(&r->yield)) break;
+  }
 }
 
 /* The store's edit of a protocol `edit` message (copies; SYLVA_ENOMEM or 0). */
@@ -325,20 +345,24 @@ static void done_snapshot(run *r) {
   send_waiting_snapshots(r);
 }
 
-static void done_step(run *r) {
+static void done_step(run *r, const step_result *res) {
   server *d = r->d;
-  if (r->task_status != SYLVA_OK) {
-    server_log(r->name, "failed: %s", r->task_error);
+  if (res->status != SYLVA_OK) {
+    server_log(r->name, "failed: %s", res->error);
     r->status = SYLVA_RUN_FAILED;
     persist_status(r, NULL);
     run_broadcast_status(r);
     return;
   }
   d->iterations_total++;
-  d->iteration_ms_total += r->task_ms;
-  run_note(r);
+  d->iteration_ms_total += res->ms;
+  r->iteration = res->iteration;
+  r->stems = res->stems;
+  r->obstacles = res->obstacles;
+  r->nodes = res->nodes;
+  r->finished = res->finished;
   r->seq++;
-  msgbuf *m = r->task_text ? msgbuf_new(r->task_text, strlen(r->task_text)) : NULL;
+  msgbuf *m = res->text ? msgbuf_new(res->text, strlen(res->text)) : NULL;
   msgbuf **slot = &r->history[r->seq % DAEMON_DELTA_HISTORY];
   msgbuf_unref(*slot);
   *slot = m;
@@ -369,6 +393,24 @@ static void done_step(run *r) {
     return;
   }
   if (r->status == SYLVA_RUN_PAUSED && r->steps == 0) run_broadcast_status(r);
+}
+
+/* The iterations of the step task that the loop has not taken yet, in order. */
+static void take_steps(run *r) {
+  pthread_mutex_lock(&r->lock);
+  int made = r->made;
+  pthread_mutex_unlock(&r->lock);
+  for (; r->taken < made; r->taken++) {
+    step_result *res = &r->results[r->taken];
+    done_step(r, res);
+    free(res->text);
+    res->text = NULL;
+  }
+}
+
+static void task_progress(pool_task *t) {
+  run *r = (run *)((char *)t - offsetof(run, task));
+  if (r->kind == RUN_TASK_STEP) take_steps(r);
 }
 
 static void done_edit(run *r) {
@@ -451,7 +493,7 @@ static void task_done(pool_task *t, bool cancelled) {
   if (!cancelled) {
     switch (kind) {
     case RUN_TASK_LOAD: done_load(r); break;
-    case RUN_TASK_STEP: done_step(r); break;
+    case RUN_TASK_STEP: take_steps(r); break;
     case RUN_TASK_EDIT: done_edit(r); break;
     case RUN_TASK_LIGHT: done_light(r); break;
     case RUN_TASK_SNAPSHOT: done_snapshot(r); break;
@@ -478,6 +520,8 @@ static void task_done(pool_task *t, bool cancelled) {
 /* Starts the run's next task: pending edits first, then light slices, then a
  * snapshot for subscribers waiting for one, then an iteration. */
 void run_schedule(run *r) {
+  /* something new wants the run: a step task stops after its iteration in flight */
+  if (r->busy && r->kind == RUN_TASK_STEP) atomic_store(&r->yield, true);
   if (r->busy || r->d->stopping || r->loading) return;
   if (!run_loaded(r)) {
     /* loads when something needs the world; a run that cannot have the memory yet
@@ -502,9 +546,17 @@ void run_schedule(run *r) {
   } else if (run_wants_step(r))
     kind = RUN_TASK_STEP;
   if (kind == RUN_TASK_NONE) return;
+  if (kind == RUN_TASK_STEP) {
+    int n = r->limit - r->iteration;
+    if (r->status != SYLVA_RUN_RUNNING && r->steps < n) n = r->steps;
+    r->batch_max = n < RUN_AHEAD ? n : RUN_AHEAD;
+    r->batch_seq = r->seq;
+    r->made = r->taken = 0;
+    atomic_store(&r->yield, false);
+  }
   r->busy = true;
   r->kind = kind;
-  r->task = (pool_task){.work = task_work, .done = task_done};
+  r->task = (pool_task){.work = task_work, .done = task_done, .progress = task_progress};
   pool_submit(&r->d->pool, &r->task);
 }
 
@@ -524,7 +576,7 @@ const char *run_load(run *r, char *buf, size_t size) {
   r->loading = true;
   r->busy = true;
   r->kind = RUN_TASK_LOAD;
-  r->task = (pool_task){.work = task_work, .done = task_done};
+  r->task = (pool_task){.work = task_work, .done = task_done, .progress = task_progress};
   pool_submit(&d->pool, &r->task);
   return NULL;
 }
@@ -562,6 +614,10 @@ void runs_forget_client(server *d, uint64_t serial) {
     }
   }
   runs_wake(d);
+}
+
+void runs_halt(server *d) {
+  for (run *r = d->runs; r; r = r->next) atomic_store(&r->yield, true);
 }
 
 bool runs_busy(server *d) {
@@ -612,6 +668,11 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
     free(r);
     return NULL;
   }
+  if (pthread_mutex_init(&r->lock, NULL)) {
+    free(r->name);
+    free(r);
+    return NULL;
+  }
   r->d = d;
   r->id = id;
   r->w = w;
@@ -647,6 +708,7 @@ static void run_free(run *r) {
   free(r->task_text);
   sylva_world_destroy(r->task_world);
   sylva_world_destroy(r->w);
+  pthread_mutex_destroy(&r->lock);
   free(r->name);
   free(r);
 }

@@ -5,6 +5,9 @@
 #ifndef SYLVA_SERVER_RUNS_H
 #define SYLVA_SERVER_RUNS_H
 
+#include <pthread.h>
+#include <stdatomic.h>
+
 #include "client.h"
 #include "daemon.h"
 #include "pool.h"
@@ -20,6 +23,24 @@ typedef enum run_task {
   RUN_TASK_LIGHT,    /**< the oldest pending light slice, encoded */
   RUN_TASK_SNAPSHOT, /**< the snapshot of the current seq, encoded */
 } run_task;
+
+/** Iterations one step task may take in a row (RUN_TASK_STEP): each one's delta
+ *  goes to the loop as soon as it is made, and the worker goes on without waiting
+ *  for the loop, unless the loop asks it to stop (run.yield). The run then goes
+ *  back to the end of the pool's queue. */
+#define RUN_AHEAD 4
+
+/** One iteration of a step task, as the worker made it. */
+typedef struct step_result {
+  int status;        /**< SYLVA_OK or why it failed */
+  char error[256];
+  char *text;        /**< the encoded delta (malloc'd; NULL when out of memory) */
+  double ms;
+  /* the world's summary after it */
+  int iteration, stems, obstacles;
+  int64_t nodes;
+  bool finished;
+} step_result;
 
 /** A run the daemon holds. Its world is touched only by its task, one at a time
  *  on the shared pool (pool.h); the loop reads the summary fields. */
@@ -46,6 +67,14 @@ struct run {
   bool stop_after;  /**< stop requested while busy */
   pool_task task;
   run_task kind;
+  /* a step task's iterations: the worker fills results[made++] (under lock); the
+   * loop takes them in order (taken) */
+  int batch_max;        /**< iterations this task may take (set before it runs) */
+  int64_t batch_seq;    /**< seq before its first delta */
+  atomic_bool yield;    /**< the loop wants the world: stop after this iteration */
+  pthread_mutex_t lock;
+  int made, taken;
+  step_result results[RUN_AHEAD];
   /* the task's results */
   int task_status;     /**< SYLVA_OK or why it failed */
   char task_error[512];
@@ -103,6 +132,8 @@ const char *run_control(run *r, sylva_control_action action, int count);
 /** A client left: its light slices not started yet are dropped (its edits are
  *  still made: they were asked for), and runs waiting for memory may load. */
 void runs_forget_client(server *d, uint64_t serial);
+/** At stop: every step task ends after its iteration in flight. */
+void runs_halt(server *d);
 /** Whether a task of some run is running (the daemon waits for them at stop). */
 bool runs_busy(server *d);
 /** Sends a status message to every subscriber of the run. */
