@@ -185,6 +185,24 @@ bool client_receive(client *c, const void *in, size_t len) {
 
 void client_handled(client *c) { rx_end(c); }
 
+char *client_take_message(client *c, size_t *len) {
+  char *text = c->rx;
+  *len = c->rx_len;
+  text[c->rx_len] = '\0';
+  c->rx = NULL;
+  c->rx_len = c->rx_cap = 0;
+  c->rx_start = 0;
+  lws_rx_flow_control(c->wsi, 0);
+  return text;
+}
+
+void client_resume(client *c) { lws_rx_flow_control(c->wsi, 1); }
+
+void client_set_input_done(client_set *s, size_t len) {
+  s->input -= len;
+  s->trim = true;
+}
+
 void client_close(client *c, int code, const char *reason) {
   if (c->close_code) return;
   c->close_code = code;

@@ -91,6 +91,15 @@ void client_closed(client *c);
 bool client_receive(client *c, const void *in, size_t len);
 /** The message in c->rx has been handled: its bytes leave the input budget. */
 void client_handled(client *c);
+/** Takes the complete message out of the client (malloc'd, *len bytes, NUL-ended)
+ *  to be handled later, and stops reading from the client until client_resume,
+ *  so that its messages stay in order. Its bytes still count as input until
+ *  client_set_input_done. */
+char *client_take_message(client *c, size_t *len);
+/** Reads from the client again after client_take_message. */
+void client_resume(client *c);
+/** A taken message of len bytes is handled (its client may be gone). */
+void client_set_input_done(client_set *s, size_t len);
 
 /** Queues a shared message for the client (takes a reference). A client whose
  *  pending output passes the cap is closed (1008, too slow). */

@@ -122,8 +122,12 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
   case LWS_CALLBACK_RECEIVE:
     if (!c || !c->set || c->close_code) break;
     if (client_receive(c, in, len)) {
-      handle_message(c, c->rx, c->rx_len);
-      if (c->set) client_handled(c);
+      if (c->rx_len >= DAEMON_PARSE_INLINE) {
+        handle_message_later(c);
+      } else {
+        handle_message(c, c->rx, c->rx_len);
+        if (c->set) client_handled(c);
+      }
     }
     break;
   case LWS_CALLBACK_WS_PEER_INITIATED_CLOSE:

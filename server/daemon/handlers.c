@@ -26,19 +26,18 @@ static void handle_control(client *c, run *r, const sylva_msg *m) {
     client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
 }
 
-void handle_message(client *c, const char *text, size_t len) {
+/* A parsed message (rc and err: how parsing went); frees nothing. */
+static void handle_parsed(client *c, sylva_msg *mp, int rc, const char *parse_err) {
   server *d = c->d;
-  sylva_msg m;
+  sylva_msg m = *mp;
   char err[512];
-  if (sylva_msg_parse(text, len, &m, err, sizeof err) != SYLVA_OK) {
-    reply_error(c, "bad_request", err, m.ref); /* the id, when it could be read */
-    sylva_msg_free(&m);
+  if (rc != SYLVA_OK) {
+    reply_error(c, "bad_request", parse_err, m.ref); /* the id, when it could be read */
     return;
   }
   bool needs_token = m.type != SYLVA_MSG_HELLO && (changes(m.type) || !d->opt.public_read);
   if (needs_token && d->opt.token && !c->authed) {
     reply_error(c, "unauthorized", "send a hello with the token first", m.ref);
-    sylva_msg_free(&m);
     return;
   }
   run *r = NULL;
@@ -49,7 +48,6 @@ void handle_message(client *c, const char *text, size_t len) {
     if (!r) {
       snprintf(err, sizeof err, "/run: no run %lld", (long long)m.run);
       reply_error(c, "unknown_run", err, m.ref);
-      sylva_msg_free(&m);
       return;
     }
   }
@@ -121,5 +119,65 @@ void handle_message(client *c, const char *text, size_t len) {
   case SYLVA_MSG_FORK: run_fork(r, c, m.iteration, m.name, m.ref); break;
   case SYLVA_MSG_GET: run_get(r, c, m.iteration, m.ref); break;
   }
+  *mp = m; /* run_edit may have taken it (and emptied it) */
+}
+
+void handle_message(client *c, const char *text, size_t len) {
+  sylva_msg m;
+  char err[512];
+  int rc = sylva_msg_parse(text, len, &m, err, sizeof err);
+  handle_parsed(c, &m, rc, err);
   sylva_msg_free(&m);
+}
+
+/* A large message parsed off the loop. */
+typedef struct parse_job {
+  uv_work_t work;
+  server *d;
+  uint64_t client;
+  char *text;
+  size_t len;
+  sylva_msg m;
+  int rc;
+  char err[512];
+} parse_job;
+
+static void parse_work(uv_work_t *w) {
+  parse_job *j = w->data;
+  j->rc = sylva_msg_parse(j->text, j->len, &j->m, j->err, sizeof j->err);
+}
+
+static void parse_done(uv_work_t *w, int status) {
+  parse_job *j = w->data;
+  server *d = j->d;
+  client_set_input_done(&d->clients, j->len);
+  client *c = client_find(&d->clients, j->client);
+  if (c) {
+    if (status == 0 && !c->close_code) handle_parsed(c, &j->m, j->rc, j->err);
+    client_resume(c);
+  }
+  if (status == 0) sylva_msg_free(&j->m);
+  free(j->text);
+  free(j);
+}
+
+void handle_message_later(client *c) {
+  server *d = c->d;
+  parse_job *j = calloc(1, sizeof *j);
+  if (!j) {
+    handle_message(c, c->rx, c->rx_len);
+    client_handled(c);
+    return;
+  }
+  j->d = d;
+  j->client = c->serial;
+  j->work.data = j;
+  j->text = client_take_message(c, &j->len);
+  if (uv_queue_work(&d->loop, &j->work, parse_work, parse_done) != 0) {
+    handle_message(c, j->text, j->len);
+    client_set_input_done(&d->clients, j->len);
+    client_resume(c);
+    free(j->text);
+    free(j);
+  }
 }

@@ -230,10 +230,6 @@ async function abuseOnce(t, row, attempt) {
     const samples = await probe.stop();
     ctx.log = d.stderr().slice(stderrAt);
     const hz = samples.healthzIn(ctx.start, ctx.end);
-    // a row may assert /healthz over part of its abuse only (a known fault of the
-    // daemon in the rest, reported)
-    const [hzFrom, hzTo] = row.healthzAsserted ? row.healthzAsserted(ctx, detail) : [ctx.start, ctx.end];
-    const hzAsserted = samples.healthzIn(hzFrom, hzTo);
     const base = samples.rateIn(ctx.start - window, ctx.start);
     const during = samples.rateIn(ctx.start, ctx.start + window);
     const ratio = during / base;
@@ -243,10 +239,6 @@ async function abuseOnce(t, row, attempt) {
       others: [othersPct(m0, m1), othersPct(m1, m2)], timing: [] };
     t.diagnostic(`${name}: /healthz p50 ${fmt(hz.p50)} ms, p99 ${fmt(hz.p99)} ms, max ${fmt(hz.max)} ms ` +
       `(${hz.n} fresh connections, ${hz.failed.length} failed${hz.failed.length ? `: ${[...new Set(hz.failed)].join(', ')}` : ''})`);
-    if (row.healthzAsserted) {
-      t.diagnostic(`${name}: asserted over the first ${fmt((hzTo - hzFrom) / 1000)} s only: p50 ${fmt(hzAsserted.p50)} ms, ` +
-        `p99 ${fmt(hzAsserted.p99)} ms, max ${fmt(hzAsserted.max)} ms (${hzAsserted.n})`);
-    }
     if (watched) {
       const perSecond = (from) => Array.from({ length: Math.round(window / 1000) },
         (_, i) => fmt(samples.rateIn(from + 1000 * i, from + 1000 * (i + 1)), 0)).join(' ');
@@ -266,8 +258,8 @@ async function abuseOnce(t, row, attempt) {
     assert.equal(exit.code, 0, `the daemon ended with ${JSON.stringify(exit)}: ${d.stderr().slice(-3000)}`);
     assert.equal(integrityCheck(d.db), 'ok', 'PRAGMA integrity_check');
     if (TIMING) {
-      if (hzAsserted.failed.length) rec.timing.push(`/healthz failed during the abuse: ${hzAsserted.failed.join(', ')}`);
-      if (!(hzAsserted.p99 < HEALTHZ_P99_MS)) rec.timing.push(`/healthz p99 ${fmt(hzAsserted.p99)} ms`);
+      if (hz.failed.length) rec.timing.push(`/healthz failed during the abuse: ${hz.failed.join(', ')}`);
+      if (!(hz.p99 < HEALTHZ_P99_MS)) rec.timing.push(`/healthz p99 ${fmt(hz.p99)} ms`);
       if (watched && !(ratio >= MIN_RATE_RATIO)) {
         rec.timing.push(`the watched run kept ${fmt(100 * ratio, 0)} % of its rate (${fmt(base)} -> ${fmt(during)} deltas/s)`);
       }
@@ -338,9 +330,8 @@ test('1. 200 creates of stand.json from 5 clients within a second, and one of 70
     const bigAt = now();
     big.send(bigText);
     const m = await big.next((x) => x.ref === 'big');
-    return { replies, sendMs, big: { m, ms: now() - bigAt }, bigAt };
+    return { replies, sendMs, big: { m, ms: now() - bigAt } };
   },
-  healthzAsserted: (ctx, detail) => [ctx.start, detail.bigAt],
   check(ctx, { replies, sendMs, big }, samples, rec) {
     const created = replies.filter((m) => m.type === 'created');
     const busy = replies.filter((m) => m.type === 'error' && m.code === 'busy');

@@ -92,6 +92,31 @@ test('--memory-budget: a world whose estimate does not fit is refused busy; idle
   c.close();
 }));
 
+test('a large message is parsed off the loop: the client\'s next messages are answered after it, in order', () => withDaemon({}, async (d) => {
+  const c = await connect(d.url);
+  const stand = scenario('stand.json');
+  // 70 plants of 1,000 stems (755 KB): parsed on a libuv thread, refused by --max-stems
+  const plants = Array.from({ length: 70 }, (_, p) => ({ id: `b${p}`, species: 'broadleaf',
+    roots: Array.from({ length: 1000 }, (_, k) => [p, k, 0]) }));
+  const big = JSON.stringify({ type: 'create', id: 'big', name: 'big', scenario: { ...stand, plants } });
+  assert.ok(big.length > 65536);
+  const ok = JSON.stringify({ type: 'create', id: 'ok', name: 'ok', scenario: { ...stand, plants: [{ ...plants[0], roots: plants[0].roots.slice(0, 3) }] } });
+  for (let i = 0; i < 3; i++) {
+    c.send(big.replace('"id":"big"', `"id":"big${i}"`));
+    c.send({ type: 'list', id: `l${i}` });
+  }
+  c.send(ok + ' '.repeat(70000)); // large too, and valid
+  const refs = [];
+  for (let i = 0; i < 7; i++) refs.push(await c.next((m) => m.ref !== undefined));
+  assert.deepEqual(refs.map((m) => m.ref), ['big0', 'l0', 'big1', 'l1', 'big2', 'l2', 'ok']);
+  for (const m of refs.filter((x) => x.ref.startsWith('big'))) {
+    assert.equal(m.code, 'too_large');
+    assert.match(m.message, /^\/scenario\/plants: 70000 stems; at most 2000 in one world \(--max-stems\)$/);
+  }
+  assert.equal(refs[6].type, 'created');
+  c.close();
+}));
+
 test('--max-jobs: a get past it is busy, an export 503; the one running is answered', () => withDaemon({ args: ['--max-jobs', '1'] }, async (d) => {
   const c = await connect(d.url);
   const r = await create(c, 'stand', scenario('stand.json', { iterations: 12 }), true);
