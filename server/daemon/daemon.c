@@ -179,10 +179,10 @@ static int start_scenario(server *d, const char *path) {
     sylva_scenario_free(s);
     return SERVER_OK;
   }
-  const char *code;
-  r = run_create(d, s, s->name, true, &code, err, sizeof err);
+  /* built and stored off the loop; a failure then is logged */
+  const char *refused = run_create(d, NULL, &s, s->name, true, NULL, err, sizeof err);
   sylva_scenario_free(s);
-  if (!r) {
+  if (refused) {
     server_log(NULL, "%s: %s", path, err);
     return SERVER_EINPUT;
   }

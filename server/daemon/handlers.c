@@ -74,13 +74,9 @@ static void handle_parsed(client *c, sylva_msg *mp, int rc, const char *parse_er
     scenarios_list(&d->loop, &d->clients, c, d->opt.scenarios, m.ref);
     break;
   case SYLVA_MSG_CREATE: {
-    const char *code;
     const char *name = m.name ? m.name : m.scenario->name;
-    run *nr = run_create(d, m.scenario, name, m.start, &code, err, sizeof err);
-    if (!nr)
-      reply_error(c, code, err, m.ref);
-    else
-      client_send_text(c, sylva_msg_created(nr->id, nr->name, m.ref));
+    const char *code = run_create(d, c, &m.scenario, name, m.start, m.ref, err, sizeof err);
+    if (code) reply_error(c, code, err, m.ref);
     break;
   }
   case SYLVA_MSG_SUBSCRIBE: run_subscribe(r, c, m.has_since, m.since, m.ref); break;

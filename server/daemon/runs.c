@@ -1,5 +1,6 @@
 #include "runs.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -38,13 +39,27 @@ static void run_note(run *r) {
 /** Bytes of one grid chunk of 16^3 voxels at most (shade, occupancy, a column). */
 #define BYTES_PER_CHUNK (80u << 10)
 
-size_t runs_estimate(const sylva_world *w, int stems) {
-  int dims[3];
-  sylva_world_dims(w, dims);
+/* The estimate of a world of dims voxels (see runs_estimate). */
+static size_t estimate_dims(const int dims[3], int stems) {
   size_t chunks = 1;
   for (int a = 0; a < 3; a++) chunks *= (size_t)(dims[a] + 15) / 16;
   size_t box = chunks * BYTES_PER_CHUNK, grown = (size_t)stems * DAEMON_BYTES_PER_STEM;
   return (grown < box ? grown : box) + (1u << 20);
+}
+
+size_t runs_estimate(const sylva_world *w, int stems) {
+  int dims[3];
+  sylva_world_dims(w, dims);
+  return estimate_dims(dims, stems);
+}
+
+size_t runs_estimate_scenario(const sylva_scenario *s) {
+  int dims[3];
+  for (int a = 0; a < 3; a++) { /* as the grid counts its cells (core/src/grid.c) */
+    double cells = ceil((s->world_max[a] - s->world_min[a]) / s->voxel - 1e-9);
+    dims[a] = cells >= 1.0 && cells < (double)(1 << 24) ? (int)cells : 1 << 24;
+  }
+  return estimate_dims(dims, s->stem_count);
 }
 
 /* What a run not in memory will take once loaded: its stored stems' share, as
@@ -788,63 +803,32 @@ char *runs_json(server *d, bool message, const char *ref) {
   return text;
 }
 
-run *run_create(server *d, const sylva_scenario *s, const char *name, bool start,
-                const char **code, char *err, size_t errlen) {
-  *code = "too_large";
+static void start_create(server *d, client *c, sylva_scenario *s, const char *name, bool start,
+                         const char *ref, size_t estimate);
+
+const char *run_create(server *d, client *c, sylva_scenario **sp, const char *name, bool start,
+                       const char *ref, char *err, size_t errlen) {
+  const sylva_scenario *s = *sp;
   if (s->stem_count > d->opt.max_stems) {
     snprintf(err, errlen, "/scenario/plants: %d stems; at most %d in one world (--max-stems)",
              s->stem_count, d->opt.max_stems);
-    return NULL;
+    return "too_large";
   }
   if (s->obstacle_count > d->opt.max_obstacles) {
     snprintf(err, errlen,
              "/scenario/obstacles: %d obstacles; at most %d in one world (--max-obstacles)",
              s->obstacle_count, d->opt.max_obstacles);
-    return NULL;
+    return "too_large";
   }
-  *code = "busy";
-  if (runs_room(d, 0, err, errlen)) return NULL;
-  *code = "bad_request";
-  sylva_world *w;
-  char why[512];
-  if (sylva_scenario_build(s, &w, why, sizeof why) < 0) {
-    snprintf(err, errlen, "/scenario%s%s", why[0] == '/' ? "" : ": ", why);
-    return NULL;
+  if (run_find_name(d, name, strlen(name))) {
+    snprintf(err, errlen, "/name: a run named \"%.64s\" exists already", name);
+    return "bad_request";
   }
-  if (runs_room(d, runs_estimate(w, s->stem_count), err, errlen)) {
-    *code = "busy";
-    sylva_world_destroy(w);
-    return NULL;
-  }
-  char *json = sylva_scenario_json(s);
-  if (!json) {
-    sylva_world_destroy(w);
-    *code = "internal";
-    snprintf(err, errlen, "out of memory");
-    return NULL;
-  }
-  int64_t id;
-  int failed = store_create_run(d->st, name, json, s->seed, s->iterations, STORE_SNAPSHOT_EVERY,
-                                w, &id);
-  if (failed) snprintf(err, errlen, "%s", store_error(d->st));
-  free(json);
-  if (failed) {
-    sylva_world_destroy(w);
-    if (!strstr(err, "exists already")) *code = "internal";
-    return NULL;
-  }
-  run *r = run_new(d, id, name, w, start ? SYLVA_RUN_RUNNING : SYLVA_RUN_PAUSED, s->iterations,
-                   STORE_SNAPSHOT_EVERY);
-  if (!r) {
-    sylva_world_destroy(w);
-    *code = "internal";
-    snprintf(err, errlen, "out of memory");
-    return NULL;
-  }
-  store_set_status(d->st, id, r->status, NULL, 0);
-  server_log(r->name, "created (%s)", sylva_run_status_name(r->status));
-  run_schedule(r);
-  return r;
+  size_t estimate = runs_estimate_scenario(s);
+  if (runs_room(d, estimate, err, errlen)) return "busy";
+  start_create(d, c, *sp, name, start, ref, estimate);
+  *sp = NULL; /* the job owns it */
+  return NULL;
 }
 
 /* ---- edits, light slices, forks, history ----------------------------------------- */
@@ -922,23 +906,28 @@ void run_light(run *r, client *c, double z, const char *ref) {
   run_schedule(r);
 }
 
-/* A fork or a history snapshot, computed off the loop. */
+/* A create, a fork or a history snapshot, made off the loop. */
+typedef enum job_kind { JOB_GET, JOB_FORK, JOB_CREATE } job_kind;
+
 typedef struct job {
   uv_work_t work;
   server *d;
-  uint64_t client;
+  job_kind kind;
+  uint64_t client;   /**< who asked (0: the daemon itself, --run) */
   int64_t run;
   int iteration, limit, snapshot_every;
-  bool fork;
+  bool start;        /**< a create: running at once */
+  sylva_scenario *scenario; /**< a create's (owned) */
   char *name, *ref, *text;
   sylva_world *w;
   int64_t new_id;
-  size_t estimate;   /**< a fork's share of the budget, held while it is made */
+  size_t estimate;   /**< a create's or fork's share of the budget, held while it is made */
   char err[512];
   const char *code;
 } job;
 
 static void job_free(job *j) {
+  sylva_scenario_free(j->scenario);
   free(j->name);
   free(j->ref);
   free(j->text);
@@ -946,14 +935,46 @@ static void job_free(job *j) {
   free(j);
 }
 
+/* A create: the world built and stored, paused or running. */
+static void create_work(job *j) {
+  server *d = j->d;
+  const sylva_scenario *s = j->scenario;
+  char why[400];
+  if (sylva_scenario_build(s, &j->w, why, sizeof why) < 0) {
+    j->w = NULL;
+    j->code = "bad_request";
+    snprintf(j->err, sizeof j->err, "/scenario%s%s", why[0] == '/' ? "" : ": ", why);
+    return;
+  }
+  char *json = sylva_scenario_json(s);
+  if (!json) {
+    j->code = "internal";
+    snprintf(j->err, sizeof j->err, "out of memory");
+    return;
+  }
+  sylva_run_status status = j->start ? SYLVA_RUN_RUNNING : SYLVA_RUN_PAUSED;
+  if (store_create_run(d->st, j->name, json, s->seed, s->iterations, STORE_SNAPSHOT_EVERY, j->w,
+                       &j->new_id) ||
+      store_set_status(d->st, j->new_id, status, NULL, 0)) {
+    snprintf(j->err, sizeof j->err, "%s", store_error(d->st));
+    j->code = strstr(j->err, "exists already") ? "bad_request" : "internal";
+  }
+  free(json);
+}
+
 static void job_work(uv_work_t *req) {
   job *j = req->data;
   server *d = j->d;
   j->code = NULL;
+  if (j->kind == JOB_CREATE) {
+    create_work(j);
+    return;
+  }
+  bool fork = j->kind == JOB_FORK;
   int failed = store_world_at(d->reader, j->run, j->iteration, NULL, &j->w);
   if (failed) snprintf(j->err, sizeof j->err, "%s", store_error(d->reader));
   char *scenario = NULL;
-  if (!failed && j->fork) {
+  if (!failed && fork) {
     failed = store_run_scenario(d->st, j->run, &scenario) ||
              store_create_run(d->st, j->name, scenario, sylva_world_get_def(j->w)->seed, j->limit,
                               j->snapshot_every, j->w, &j->new_id);
@@ -964,7 +985,7 @@ static void job_work(uv_work_t *req) {
     j->code = strstr(j->err, "exists already") ? "bad_request" : "internal";
   }
   free(scenario);
-  if (!failed && !j->fork) {
+  if (!failed && !fork) {
     j->text = sylva_msg_snapshot(j->run, 0, j->w, j->ref);
     if (!j->text) {
       j->code = "internal";
@@ -977,13 +998,26 @@ static void job_done(uv_work_t *req, int status) {
   job *j = req->data;
   server *d = j->d;
   (void)status;
-  j->d->jobs--;
-  j->d->runs_pending -= j->fork;
-  j->d->memory_reserved -= j->estimate;
-  client *c = client_find(&j->d->clients, j->client);
+  d->jobs -= j->kind != JOB_CREATE;
+  d->runs_pending -= j->kind != JOB_GET;
+  d->memory_reserved -= j->estimate;
+  client *c = j->client ? client_find(&d->clients, j->client) : NULL;
   if (j->code) {
     if (c) client_send_text(c, sylva_msg_error(j->code, j->err, j->ref));
-  } else if (j->fork) {
+    if (!j->client) server_log(NULL, "%s: %s", j->name, j->err);
+  } else if (j->kind == JOB_CREATE) {
+    sylva_run_status status = j->start ? SYLVA_RUN_RUNNING : SYLVA_RUN_PAUSED;
+    run *nr = run_new(d, j->new_id, j->name, j->w, status, j->scenario->iterations,
+                      STORE_SNAPSHOT_EVERY);
+    if (nr) {
+      j->w = NULL; /* the run owns it */
+      server_log(nr->name, "created (%s)", sylva_run_status_name(nr->status));
+      if (c) client_send_text(c, sylva_msg_created(nr->id, nr->name, j->ref));
+      run_schedule(nr);
+    } else if (c) {
+      client_send_text(c, sylva_msg_error("internal", "out of memory", j->ref));
+    }
+  } else if (j->kind == JOB_FORK) {
     run *nr = run_new(j->d, j->new_id, j->name, j->w, SYLVA_RUN_PAUSED, j->limit, j->snapshot_every);
     if (nr) {
       nr->seq = j->iteration; /* a fork starts with no edits of its own */
@@ -1031,7 +1065,7 @@ static void start_job(run *r, client *c, int iteration, const char *name, const 
   j->client = c->serial;
   j->run = r->id;
   j->iteration = iteration;
-  j->fork = name != NULL;
+  j->kind = name ? JOB_FORK : JOB_GET;
   j->limit = r->limit;
   j->snapshot_every = r->snapshot_every;
   j->work.data = j;
@@ -1041,8 +1075,33 @@ static void start_job(run *r, client *c, int iteration, const char *name, const 
     return;
   }
   r->d->jobs++;
-  r->d->runs_pending += j->fork;
+  r->d->runs_pending += j->kind == JOB_FORK;
   r->d->memory_reserved += j->estimate;
+}
+
+static void start_create(server *d, client *c, sylva_scenario *s, const char *name, bool start,
+                         const char *ref, size_t estimate) {
+  job *j = calloc(1, sizeof *j);
+  if (!j || !(j->name = strdup(name)) || (ref && !(j->ref = strdup(ref)))) {
+    if (j) job_free(j);
+    sylva_scenario_free(s);
+    if (c) client_send_text(c, sylva_msg_error("internal", "out of memory", ref));
+    return;
+  }
+  j->d = d;
+  j->kind = JOB_CREATE;
+  j->client = c ? c->serial : 0;
+  j->scenario = s;
+  j->start = start;
+  j->estimate = estimate;
+  j->work.data = j;
+  if (uv_queue_work(&d->loop, &j->work, job_work, job_done) != 0) {
+    if (c) client_send_text(c, sylva_msg_error("internal", "cannot queue the work", ref));
+    job_free(j);
+    return;
+  }
+  d->runs_pending++;
+  d->memory_reserved += estimate;
 }
 
 void run_fork(run *r, client *c, int iteration, const char *name, const char *ref) {

@@ -115,10 +115,14 @@ void runs_free(server *d);
 run *run_find(server *d, int64_t id);
 /** The run named by the len bytes at name, or NULL. */
 run *run_find_name(server *d, const char *name, size_t len);
-/** Creates a run from a parsed scenario; on failure err says why (and *code is a
- *  protocol error code). */
-run *run_create(server *d, const sylva_scenario *s, const char *name, bool start,
-                const char **code, char *err, size_t errlen);
+/** Creates a run from a parsed scenario, off the loop: checks the caps and the
+ *  budget now, and when they allow it takes the scenario (*s becomes NULL) and
+ *  returns NULL; the world is built and stored on a libuv thread, and the client
+ *  (NULL: the daemon's own --run, logged) gets `created` or an error then (the
+ *  run counts against --max-runs and the budget meanwhile). Otherwise returns
+ *  the protocol error code, and err says why. */
+const char *run_create(server *d, client *c, sylva_scenario **s, const char *name, bool start,
+                       const char *ref, char *err, size_t errlen);
 /** Starts the next iteration if the run wants one and none is in flight. */
 void run_schedule(run *r);
 /** Sends the client what a new subscription needs: a snapshot, or the deltas after
@@ -153,6 +157,8 @@ void run_get(run *r, client *c, int iteration, const char *ref);
 /** The estimated memory of a world of `stems` stems once grown: a full-grown
  *  stem's DAEMON_BYTES_PER_STEM each, at most the grid of the whole world box. */
 size_t runs_estimate(const sylva_world *w, int stems);
+/** The same estimate for the world a scenario would build. */
+size_t runs_estimate_scenario(const sylva_scenario *s);
 
 /** NULL when the daemon may hold another run of this estimate (the run cap, the
  *  memory budget), else why not (the protocol code is then "busy"). */
