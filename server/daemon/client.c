@@ -15,6 +15,10 @@ static void on_closer(uv_timer_t *t) {
   client_set *s = t->data;
   for (client *c = s->head; c; c = c->next) {
     if (c->close_code <= 0) continue;
+    if (c->close_after) { /* its messages leave first (client_writable, on_watch) */
+      lws_callback_on_writable(c->wsi);
+      continue;
+    }
     lws_close_reason(c->wsi, (enum lws_close_status)c->close_code,
                      (unsigned char *)c->close_reason, strlen(c->close_reason));
     lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_SYNC);
@@ -22,14 +26,23 @@ static void on_closer(uv_timer_t *t) {
   }
 }
 
+static void closer_soon(client_set *s) {
+  if (!uv_is_closing((uv_handle_t *)&s->closer)) uv_timer_start(&s->closer, on_closer, 0, 0);
+}
+
 /* Once a second: a client whose message has been arriving for longer than the
  * limit is closed, so unfinished messages cannot hold memory for ever. */
 static void on_watch(uv_timer_t *t) {
   client_set *s = t->data;
   uint64_t now = uv_now(t->loop);
-  for (client *c = s->head; c; c = c->next)
+  for (client *c = s->head; c; c = c->next) {
     if (c->rx_start && now - c->rx_start > (uint64_t)s->limits.message_ms)
       client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "message not finished in time");
+    if (c->close_after && now >= c->close_after) { /* its messages did not leave in time */
+      c->close_after = 0;
+      closer_soon(s);
+    }
+  }
 #ifdef __GLIBC__
   /* glibc keeps freed memory that lies among the loop's other allocations: the
    * large buffers of 1,000 clients' unfinished messages left 100 MiB of RSS behind
@@ -207,7 +220,13 @@ void client_close(client *c, int code, const char *reason) {
   if (c->close_code) return;
   c->close_code = code;
   snprintf(c->close_reason, sizeof c->close_reason, "%s", reason);
-  if (!uv_is_closing((uv_handle_t *)&c->set->closer)) uv_timer_start(&c->set->closer, on_closer, 0, 0);
+  closer_soon(c->set);
+}
+
+void client_close_after_sending(client *c, int code, const char *reason) {
+  if (c->close_code) return;
+  c->close_after = uv_now(c->set->closer.loop) + CLIENT_FLUSH_MS;
+  client_close(c, code, reason);
 }
 
 void client_send(client *c, msgbuf *m) {
@@ -254,8 +273,18 @@ void client_send_text(client *c, char *text) {
  * whole messages of megabytes would sit in its buffers outside the client's cap. */
 #define CLIENT_FRAGMENT (128u << 10)
 
+/* A close that waited for the queue: the queue is empty, so now. */
+static void close_if_sent(client *c) {
+  if (!c->close_after) return;
+  c->close_after = 0;
+  closer_soon(c->set);
+}
+
 int client_writable(client *c) {
-  if (!c->qlen) return 0;
+  if (!c->qlen) {
+    close_if_sent(c);
+    return 0;
+  }
   msgbuf *m = c->queue[c->qhead];
   size_t n = m->len - c->sent;
   if (n > CLIENT_FRAGMENT) n = CLIENT_FRAGMENT;
@@ -278,7 +307,10 @@ int client_writable(client *c) {
     c->pending -= m->len;
     msgbuf_unref(m);
   }
-  if (c->qlen) lws_callback_on_writable(c->wsi);
+  if (c->qlen)
+    lws_callback_on_writable(c->wsi);
+  else
+    close_if_sent(c);
   return 0;
 }
 

@@ -15,6 +15,9 @@
 typedef struct server server;
 typedef struct client client;
 
+/** How long a close may wait for the client's queued messages to leave, ms. */
+#define CLIENT_FLUSH_MS 1000
+
 /** The limits every client is held to. */
 typedef struct client_limits {
   size_t max_message;   /**< bytes of one message */
@@ -75,6 +78,8 @@ struct client {
   subscription *subs;
   size_t nsubs, subs_cap;
   int close_code;       /**< non-zero: close with this code from the loop */
+  uint64_t close_after; /**< non-zero: the close waits for the queue to empty, at
+                             most until this loop time (ms) */
   char close_reason[96];
   client *next, *prev;
 };
@@ -109,6 +114,9 @@ void client_send_text(client *c, char *text);
 /** Asks for the client to be closed with a code and reason, from the loop (lws
  *  ignores closes asked from inside some of its callbacks). */
 void client_close(client *c, int code, const char *reason);
+/** The same once the messages queued for the client have been sent (at most
+ *  CLIENT_FLUSH_MS later): a refusal's earlier answers are not lost. */
+void client_close_after_sending(client *c, int code, const char *reason);
 /** Writes one queued message; called on LWS_CALLBACK_SERVER_WRITEABLE. */
 int client_writable(client *c);
 /** The subscription of c to run, or NULL. */

@@ -31,6 +31,8 @@
 #define DAEMON_MAX_MESSAGE (1u << 20)
 /** Most messages a client may send per second (default). */
 #define DAEMON_RATE_LIMIT 50
+/** Light slices that may wait for one run's world; more are refused busy. */
+#define DAEMON_MAX_LIGHTS 16
 /** Messages of this many bytes or more are parsed on a libuv thread, not the loop
  *  (a create of 70,000 stems, 755 KB, took the loop 70 ms to parse). */
 #define DAEMON_PARSE_INLINE (64u << 10)

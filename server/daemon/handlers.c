@@ -57,7 +57,7 @@ static void handle_parsed(client *c, sylva_msg *mp, int rc, const char *parse_er
     if (v != ACCESS_OK) {
       /* the last failure a socket may have closes it instead of answering */
       if (++c->token_failures >= ACCESS_FAILURES_PER_CLIENT)
-        client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "too many wrong tokens");
+        client_close_after_sending(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "too many wrong tokens");
       else
         reply_error(c, "unauthorized",
                     v == ACCESS_WRONG ? "/token: wrong token"

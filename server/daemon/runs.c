@@ -249,13 +249,16 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
 
 /* Up to batch_max iterations, each handed to the loop when made. */
 static void work_step(run *r) {
+  double t0 = mono_ms();
   for (int k = 0; k < r->batch_max; k++) {
     bool ok = step_once(r, r->batch_seq + k + 1, &r->results[k]);
     pthread_mutex_lock(&r->lock);
     r->made = k + 1;
     pthread_mutex_unlock(&r->lock);
     pool_report(&r->d->pool, &r->task);
-    if (!ok || r->results[k].finished || atomic_load(&r->yield)) break;
+    if (!ok || r->results[k].finished || atomic_load(&r->yield) ||
+        mono_ms() - t0 >= RUN_SLICE_MS)
+      break;
   }
 }
 
@@ -892,6 +895,15 @@ void run_edit(run *r, client *c, sylva_msg *m) {
 }
 
 void run_light(run *r, client *c, double z, const char *ref) {
+  int waiting = 0;
+  for (const pending_light *o = r->lights; o; o = o->next) waiting++;
+  if (waiting >= DAEMON_MAX_LIGHTS) {
+    char why[128];
+    snprintf(why, sizeof why, "/run: %d light slices of this run are waiting; ask again later",
+             waiting);
+    client_send_text(c, sylva_msg_error("busy", why, ref));
+    return;
+  }
   pending_light *l = calloc(1, sizeof *l);
   if (!l || (ref && !(l->ref = strdup(ref)))) {
     free(l);

@@ -24,11 +24,13 @@ typedef enum run_task {
   RUN_TASK_SNAPSHOT, /**< the snapshot of the current seq, encoded */
 } run_task;
 
-/** Iterations one step task may take in a row (RUN_TASK_STEP): each one's delta
- *  goes to the loop as soon as it is made, and the worker goes on without waiting
- *  for the loop, unless the loop asks it to stop (run.yield). The run then goes
- *  back to the end of the pool's queue. */
-#define RUN_AHEAD 4
+/** Iterations one step task may take in a row (RUN_TASK_STEP), and how long it
+ *  may go on taking more (ms): each one's delta goes to the loop as soon as it is
+ *  made, and the worker goes on without waiting for the loop, unless the loop
+ *  asks it to stop (run.yield). The run then goes back to the end of the pool's
+ *  queue, behind the other runs' tasks. */
+#define RUN_AHEAD 16
+#define RUN_SLICE_MS 100.0
 
 /** One iteration of a step task, as the worker made it. */
 typedef struct step_result {
