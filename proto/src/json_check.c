@@ -287,6 +287,20 @@ int sylva_json_check_ex(const char *text, size_t len, int max_depth, unsigned fl
   }
 }
 
+int sylva_utf8_check(const char *text, size_t len, char *err, size_t errlen) {
+  checker c = {(const unsigned char *)text, len, 0, 0, err, errlen};
+  if (err && errlen) err[0] = '\0';
+  while (c.pos < len) {
+    if (c.s[c.pos] < 0x80) {
+      c.pos++;
+    } else {
+      int rc = check_utf8(&c);
+      if (rc) return rc;
+    }
+  }
+  return 0;
+}
+
 int sylva_json_check(const char *text, size_t len, int max_depth, char *err, size_t errlen) {
   return sylva_json_check_ex(text, len, max_depth, 0, err, errlen);
 }

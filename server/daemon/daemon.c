@@ -16,6 +16,7 @@
 #include "http.h"
 #include "files.h"
 #include "runs.h"
+#include "sylva/json_check.h"
 #include "sylva/protocol.h"
 
 static void log_line(const char *run_name, const char *msg) {
@@ -82,8 +83,9 @@ static bool close_payload_ok(const void *in, size_t len) {
   if (len == 1) return false;
   const unsigned char *p = in;
   unsigned code = (unsigned)p[0] << 8 | p[1];
-  return (code >= 1000 && code <= 1003) || (code >= 1007 && code <= 1014) ||
-         (code >= 3000 && code <= 4999);
+  bool known = (code >= 1000 && code <= 1003) || (code >= 1007 && code <= 1014) ||
+               (code >= 3000 && code <= 4999);
+  return known && sylva_utf8_check((const char *)p + 2, len - 2, NULL, 0) == 0;
 }
 
 static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
@@ -131,8 +133,8 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
     }
     break;
   case LWS_CALLBACK_WS_PEER_INITIATED_CLOSE:
-    /* RFC 6455 7.4: a close payload is empty or a valid code (and UTF-8, which lws
-     * checks); anything else is a protocol error */
+    /* RFC 6455 7.4: a close payload is empty or a valid code and a UTF-8 reason;
+     * anything else is a protocol error */
     if (!close_payload_ok(in, len)) {
       lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"invalid close frame",
                        19);
@@ -287,8 +289,10 @@ int server_main(const server_options *opt) {
   info.iface = opt->host;
   info.protocols = protocols;
   info.mounts = &healthz;
-  info.options = LWS_SERVER_OPTION_LIBUV | LWS_SERVER_OPTION_VALIDATE_UTF8 |
-                 LWS_SERVER_OPTION_DISABLE_IPV6;
+  /* no LWS_SERVER_OPTION_VALIDATE_UTF8: lws would check every byte of every
+   * fragment on the loop, also of messages that never end; a complete text
+   * message is checked instead (handlers.c), off the loop when it is large */
+  info.options = LWS_SERVER_OPTION_LIBUV | LWS_SERVER_OPTION_DISABLE_IPV6;
   info.foreign_loops = foreign;
   info.pcontext = &d->ctx;
   info.user = d;

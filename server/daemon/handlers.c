@@ -5,6 +5,7 @@
 
 #include "runs.h"
 #include "scenarios.h"
+#include "sylva/json_check.h"
 #include "sylva/protocol.h"
 #include "sylva/status.h"
 
@@ -118,7 +119,16 @@ static void handle_parsed(client *c, sylva_msg *mp, int rc, const char *parse_er
   *mp = m; /* run_edit may have taken it (and emptied it) */
 }
 
+/* RFC 6455 8.1: a text message that is not UTF-8 fails the connection. */
+static void refuse_utf8(client *c) {
+  client_close(c, LWS_CLOSE_STATUS_INVALID_PAYLOAD, "invalid UTF-8");
+}
+
 void handle_message(client *c, const char *text, size_t len) {
+  if (sylva_utf8_check(text, len, NULL, 0)) {
+    refuse_utf8(c);
+    return;
+  }
   sylva_msg m;
   char err[512];
   int rc = sylva_msg_parse(text, len, &m, err, sizeof err);
@@ -133,6 +143,7 @@ typedef struct parse_job {
   uint64_t client;
   char *text;
   size_t len;
+  bool utf8_ok;
   sylva_msg m;
   int rc;
   char err[512];
@@ -140,7 +151,8 @@ typedef struct parse_job {
 
 static void parse_work(uv_work_t *w) {
   parse_job *j = w->data;
-  j->rc = sylva_msg_parse(j->text, j->len, &j->m, j->err, sizeof j->err);
+  j->utf8_ok = sylva_utf8_check(j->text, j->len, NULL, 0) == 0;
+  if (j->utf8_ok) j->rc = sylva_msg_parse(j->text, j->len, &j->m, j->err, sizeof j->err);
 }
 
 static void parse_done(uv_work_t *w, int status) {
@@ -149,10 +161,13 @@ static void parse_done(uv_work_t *w, int status) {
   client_set_input_done(&d->clients, j->len);
   client *c = client_find(&d->clients, j->client);
   if (c) {
-    if (status == 0 && !c->close_code) handle_parsed(c, &j->m, j->rc, j->err);
+    if (status == 0 && !j->utf8_ok)
+      refuse_utf8(c);
+    else if (status == 0 && !c->close_code)
+      handle_parsed(c, &j->m, j->rc, j->err);
     client_resume(c);
   }
-  if (status == 0) sylva_msg_free(&j->m);
+  if (status == 0 && j->utf8_ok) sylva_msg_free(&j->m);
   free(j->text);
   free(j);
 }

@@ -201,6 +201,36 @@ static void test_deep_nesting(void) {
   }
 }
 
+/* sylva_utf8_check on bare text (the daemon's check of a WebSocket text message). */
+static void test_utf8_text(void) {
+  static const struct {
+    const char *text;
+    size_t len;
+    bool ok;
+  } cases[] = {
+      {"", 0, true},
+      {"plain ascii", 11, true},
+      {"\xc3\xa9t\xc3\xa9", 6, true},            /* two-byte */
+      {"\xe2\x82\xac", 3, true},                   /* three-byte */
+      {"\xf0\x9f\x8c\xb3", 4, true},               /* four-byte */
+      {"a\0b", 3, true},                              /* NUL is a character */
+      {"\xc0\xaf", 2, false},                        /* overlong */
+      {"\xed\xa0\x80", 3, false},                   /* surrogate */
+      {"\xf4\x90\x80\x80", 4, false},               /* above U+10FFFF */
+      {"\xe2\x82", 2, false},                        /* truncated at the end */
+      {"\x80", 1, false},                             /* lone continuation */
+      {"\xff", 1, false},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char err[128];
+    int rc = sylva_utf8_check(cases[i].text, cases[i].len, err, sizeof err);
+    char what[32];
+    snprintf(what, sizeof what, "utf8 case %zu", i);
+    record((rc == 0) == cases[i].ok, what, cases[i].ok ? err : "accepted");
+    if (!cases[i].ok) record(strstr(err, "invalid UTF-8") != NULL, what, err);
+  }
+}
+
 /* ---- JSONTestSuite ---- */
 
 static const char *suite_dir;
@@ -284,7 +314,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(numbers), CHECK_TEST(strings), CHECK_TEST(nul_escape), CHECK_TEST(stray_bytes),
       CHECK_TEST(utf8), CHECK_TEST(surrogates), CHECK_TEST(documents), CHECK_TEST(structure),
       CHECK_TEST(positions), CHECK_TEST(depths), CHECK_TEST(error_buffer),
-      CHECK_TEST(deep_nesting)};
+      CHECK_TEST(deep_nesting), CHECK_TEST(utf8_text)};
   static const check_test suite[] = {CHECK_TEST(suite_y), CHECK_TEST(suite_n), CHECK_TEST(suite_i)};
   CHECK_RUN(argc, argv, 2, fixed);
   DIR *d = opendir(argv[1]);

@@ -86,8 +86,9 @@ test('upgrades: only /ws with the subprotocol sylva.v1', () => withDaemon({}, as
 }));
 
 test('close frames: an invalid code or a one-byte payload closes with 1002', () => withDaemon({}, async (d) => {
+  // codes 5000, 65535, 1004, 2000; one byte; a reason that is not UTF-8
   for (const payload of [Buffer.from([0x13, 0x88]), Buffer.from([0xff, 0xff]), Buffer.from([0x03]),
-    Buffer.from([0x03, 0xec]), Buffer.from([0x07, 0xd0])]) {
+    Buffer.from([0x03, 0xec]), Buffer.from([0x07, 0xd0]), Buffer.from([0x03, 0xe8, 0x61, 0xc0, 0xaf])]) {
     const code = await rawCloseCode(d.port, (s) => {
       const mask = Buffer.from([1, 2, 3, 4]);
       const body = Buffer.from(payload.map((c, i) => c ^ mask[i % 4]));
@@ -100,6 +101,26 @@ test('close frames: an invalid code or a one-byte payload closes with 1002', () 
   const closed = new Promise((resolve) => c.ws.on('close', (code) => resolve(code)));
   c.ws.close(4000, 'bye');
   assert.equal(await closed, 4000);
+}));
+
+test('text messages must be UTF-8: otherwise 1007, small or large; a character split across fragments is fine', () => withDaemon({}, async (d) => {
+  // a list whose id holds a character split between two fragments
+  const c = await connect(d.url);
+  const text = Buffer.from('{"type":"list","id":"été"}');
+  const cut = text.indexOf(0xc3) + 1;
+  c.ws.send(text.subarray(0, cut), { binary: false, fin: false });
+  c.ws.send(text.subarray(cut), { binary: false, fin: true });
+  assert.equal((await c.next((m) => m.type === 'runs')).ref, 'été');
+  c.close();
+  for (const size of [100, 100000]) { // checked on the loop, and on a thread with the parse
+    const bad = await connect(d.url);
+    const closed = bad.whenClosed();
+    const body = Buffer.from(`{"type":"list","id":"${'a'.repeat(size)}\u0000"}`);
+    body[body.length - 3] = 0xff; // a byte of the escape becomes 0xFF: not UTF-8
+    bad.ws.send(body, { binary: false });
+    const { code } = await closed;
+    assert.equal(code, 1007, `a message of ${size} bytes`);
+  }
 }));
 
 test('a token: every route and message but /healthz, the viewer\'s files and hello needs it', () => withDaemon({ args: [...WEB, '--token', 's3cret'] }, async (d) => {

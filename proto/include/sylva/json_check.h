@@ -26,6 +26,11 @@ enum {
 /** Longest number text cJSON 1.7.15 can read (its buffer of 64 bytes with the NUL). */
 #define SYLVA_JSON_CJSON_NUMBER_MAX 63
 
+/** Checks that text[0..len) is valid UTF-8 (RFC 3629: no overlong forms,
+ *  surrogates or code points above U+10FFFF). 0, or SYLVA_EINVAL with err saying
+ *  where (err may be NULL). */
+int sylva_utf8_check(const char *text, size_t len, char *err, size_t errlen);
+
 /** Checks that text[0..len) is exactly one RFC 8259 JSON value surrounded by
  *  optional whitespace (space, tab, LF, CR), in valid UTF-8, with arrays and
  *  objects nested at most max_depth deep (the outermost container is depth 1).
