@@ -66,9 +66,18 @@ export class Probe {
     });
   }
 
+  // The samples; fails when the probe is gone or does not answer in 20 s.
   stop() {
-    return new Promise((resolve) => {
-      this.onSamples = (m) => resolve(new Samples(m));
+    return new Promise((resolve, reject) => {
+      const fail = (why) => reject(new Error(`the probe ${why}; its errors: ${this.errors.join(' | ')}`));
+      if (this.child.exitCode !== null || this.child.signalCode !== null) {
+        fail(`had exited (${this.child.exitCode ?? this.child.signalCode})`);
+        return;
+      }
+      const timer = setTimeout(() => fail('sent no samples within 20 s'), 20000);
+      // 'close', not 'exit': a message may still be read from the channel after 'exit'
+      this.child.once('close', (code, signal) => { clearTimeout(timer); fail(`exited (${code ?? signal}) before its samples`); });
+      this.onSamples = (m) => { clearTimeout(timer); resolve(new Samples(m)); };
       this.child.send({ cmd: 'stop' });
     });
   }

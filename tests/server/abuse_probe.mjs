@@ -11,6 +11,15 @@ import { readFileSync } from 'node:fs';
 import WebSocket from 'ws';
 
 const cfg = JSON.parse(process.argv[2]);
+// To the test process, while it listens (it may be gone at the end).
+function send(m) {
+  try {
+    if (process.connected) process.send(m);
+  } catch { /* the channel closed */ }
+}
+// Whatever goes wrong here is told and measuring goes on: the test must get its
+// samples (Probe.stop) rather than wait for a probe that died.
+process.on('uncaughtException', (e) => send({ type: 'error', message: `probe: ${e.stack || e}` }));
 const now = () => performance.timeOrigin + performance.now();
 const PERIOD = 50;
 const TIMEOUT = 5000;
@@ -74,18 +83,22 @@ ws.on('message', (data) => {
   }
   if (type === 'delta' || type === 'snapshot') {
     const m = /"seq":(\d+),"iteration":(\d+)/.exec(head);
+    if (!m) {
+      send({ type: 'error', message: `watcher: a ${type} without seq and iteration: ${head}` });
+      return;
+    }
     deltas.push({ t, type, seq: Number(m[1]), iteration: Number(m[2]) });
     if (!ready && Number(m[2]) >= (cfg.warm || 0)) {
       ready = true;
       process.send({ type: 'ready' });
     }
   } else if (type === 'error') {
-    process.send({ type: 'error', message: data.toString() });
+    send({ type: 'error', message: data.toString() });
   }
 });
 let wsClosed = null;
 ws.on('close', (code) => { wsClosed = { t: now(), code }; });
-ws.on('error', (e) => process.send({ type: 'error', message: `watcher: ${e.message}` }));
+ws.on('error', (e) => send({ type: 'error', message: `watcher: ${e.message}` }));
 
 const timer = setInterval(() => { healthzOnce(); memOnce(); }, PERIOD);
 
@@ -94,9 +107,12 @@ process.on('message', async (m) => {
   clearInterval(timer);
   const end = now() + TIMEOUT + 500;
   while (inFlight > 0 && now() < end) await new Promise((r) => setTimeout(r, 20));
-  process.send({ type: 'samples', healthz, mem, deltas, wsClosed });
   ws.terminate();
-  process.disconnect();
-  setTimeout(() => process.exit(0), 50);
+  // a large message is still being written when send returns: going before it is
+  // written lost it now and then, and the test waited for it in vain
+  process.send({ type: 'samples', healthz, mem, deltas, wsClosed }, () => {
+    process.disconnect();
+    setTimeout(() => process.exit(0), 50);
+  });
 });
 process.on('disconnect', () => process.exit(0));

@@ -228,6 +228,7 @@ async function abuseOnce(t, row, attempt) {
     const cpu1 = process.cpuUsage(cpu0);
     ctx.end = now();
     const samples = await probe.stop();
+    if (probe.errors.length) t.diagnostic(`${name}: the probe saw: ${probe.errors.slice(0, 5).join(' | ').slice(0, 2000)}`);
     ctx.log = d.stderr().slice(stderrAt);
     const hz = samples.healthzIn(ctx.start, ctx.end);
     const base = samples.rateIn(ctx.start - window, ctx.start);
