@@ -25,8 +25,9 @@ export function freePort() {
   });
 }
 
+// A fresh directory for a store, under SYLVA_TEST_TMPDIR when it is set.
 export function tempDir() {
-  return mkdtempSync(join(tmpdir(), 'sylva-serve-'));
+  return mkdtempSync(join(process.env.SYLVA_TEST_TMPDIR || tmpdir(), 'sylva-serve-'));
 }
 
 // Starts `sylva serve`; resolves when it listens. Returns {proc, port, url, stderr()}.

@@ -22,7 +22,7 @@
 import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
-import { readFileSync, readdirSync, writeFileSync } from 'node:fs';
+import { existsSync, readFileSync, readdirSync, writeFileSync } from 'node:fs';
 import net from 'node:net';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -65,6 +65,13 @@ const BUDGET_MIB = 256;
 // 64 + 69 + 64 + 32 + 27 = 256 MiB.
 const ALLOWANCE_MIB = 256;
 const RSS_LIMIT = (BUDGET_MIB + ALLOWANCE_MIB) * MiB;
+
+// The stores live in memory (/dev/shm) where there is one: the watched run writes
+// ~270 KB an iteration with an fsync per commit, and the disk's own latency (which
+// the abuse does not cause) moved its rate by a quarter from one window to the
+// next on the VM's shared disk. What is measured is what the abuse does to the
+// daemon's threads.
+if (!process.env.SYLVA_TEST_TMPDIR && existsSync('/dev/shm')) process.env.SYLVA_TEST_TMPDIR = '/dev/shm';
 
 const summary = [];
 
