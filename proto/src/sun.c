@@ -1,0 +1,34 @@
+#include "sylva/sun.h"
+
+#include <libnova/julian_day.h>
+#include <libnova/sidereal_time.h>
+#include <libnova/solar.h>
+#include <libnova/transform.h>
+#include <math.h>
+
+/* The sun's hour angle at JD seen from longitude 0, degrees in (-180, 180]. */
+static double hour_angle(double jd, const struct ln_equ_posn *sun) {
+  double h = fmod(ln_get_apparent_sidereal_time(jd) * 15.0 - sun->ra, 360.0);
+  if (h > 180.0) h -= 360.0;
+  if (h <= -180.0) h += 360.0;
+  return h;
+}
+
+sylva_sun sylva_sun_at(double latitude, int day, double hours) {
+  struct ln_date date = {.years = 2025, .months = 1, .days = 1, .hours = 12};
+  double jd = ln_get_julian_day(&date) + (double)(day - 1);
+  /* the transit: where the hour angle is 0 (the sun moves about 360 degrees of
+   * hour angle a day; three steps bring it within a fraction of a second) */
+  struct ln_equ_posn sun;
+  for (int k = 0; k < 3; k++) {
+    ln_get_solar_equ_coords(jd, &sun);
+    jd -= hour_angle(jd, &sun) / 360.0;
+  }
+  jd += hours / 24.0;
+  ln_get_solar_equ_coords(jd, &sun);
+  struct ln_lnlat_posn site = {.lng = 0.0, .lat = latitude};
+  struct ln_hrz_posn at;
+  ln_get_hrz_from_equ(&sun, &site, jd, &at);
+  /* libnova counts azimuth from the south, westwards */
+  return (sylva_sun){.elevation = at.alt, .azimuth = fmod(at.az + 180.0, 360.0)};
+}
