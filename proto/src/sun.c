@@ -14,21 +14,35 @@ static double hour_angle(double jd, const struct ln_equ_posn *sun) {
   return h;
 }
 
-sylva_sun sylva_sun_at(double latitude, int day, double hours) {
+/* The Julian day of the sun's transit (at longitude 0) on day `day` of 2025: where
+ * its hour angle is 0. It moves about 360 degrees of hour angle a day; three
+ * steps bring it within a fraction of a second. */
+static double transit(int day) {
   struct ln_date date = {.years = 2025, .months = 1, .days = 1, .hours = 12};
   double jd = ln_get_julian_day(&date) + (double)(day - 1);
-  /* the transit: where the hour angle is 0 (the sun moves about 360 degrees of
-   * hour angle a day; three steps bring it within a fraction of a second) */
   struct ln_equ_posn sun;
   for (int k = 0; k < 3; k++) {
     ln_get_solar_equ_coords(jd, &sun);
     jd -= hour_angle(jd, &sun) / 360.0;
   }
-  jd += hours / 24.0;
+  return jd;
+}
+
+static sylva_sun sun_at_jd(double latitude, double jd) {
+  struct ln_equ_posn sun;
   ln_get_solar_equ_coords(jd, &sun);
   struct ln_lnlat_posn site = {.lng = 0.0, .lat = latitude};
   struct ln_hrz_posn at;
   ln_get_hrz_from_equ(&sun, &site, jd, &at);
   /* libnova counts azimuth from the south, westwards */
   return (sylva_sun){.elevation = at.alt, .azimuth = fmod(at.az + 180.0, 360.0)};
+}
+
+sylva_sun sylva_sun_at(double latitude, int day, double hours) {
+  return sun_at_jd(latitude, transit(day) + hours / 24.0);
+}
+
+void sylva_sun_day(double latitude, int day, const double *hours, int count, sylva_sun *out) {
+  double noon = transit(day);
+  for (int i = 0; i < count; i++) out[i] = sun_at_jd(latitude, noon + hours[i] / 24.0);
 }

@@ -1,8 +1,12 @@
-/* The sun's positions from libnova (proto/src/sun.c) against published values:
+/* The sun's positions from libnova (proto/src/sun.c) against published values,
+ * and the site sky built on them (proto/src/sky.c).
+ *
+ * The sun:
  * solar noon elevation is 90 - |latitude - declination|, with the declination
  * +23.44 degrees at the June solstice, -23.44 at the December one and about 0 at
  * the equinoxes (NOAA's solar calculator gives the same to 0.01 degree). */
 #include "../check.h"
+#include "sylva/sky.h"
 #include "sylva/sun.h"
 
 enum { MARCH_20 = 79, JUNE_21 = 172, DECEMBER_21 = 355 };
@@ -66,10 +70,136 @@ static void test_polar(void) {
   CHECK(sylva_sun_at(80.0, DECEMBER_21, 0.0).elevation < 0.0);
 }
 
+/* ---- the sky (sky.c) ---- */
+
+/* The weights' sum, the sun's part (the first samples / 2) and the weighted mean
+ * direction of the sun's part. */
+typedef struct sky_sums {
+  double total, sun, mean[3];
+} sky_sums;
+
+static sky_sums sums(const sylva_sky_def *def, const sylva_sky_dir *dirs) {
+  sky_sums s = {0};
+  int suns = def->diffuse >= 1.0 ? 0 : def->samples / 2;
+  for (int i = 0; i < def->samples; i++) {
+    s.total += dirs[i].weight;
+    if (i < suns) {
+      s.sun += dirs[i].weight;
+      for (int a = 0; a < 3; a++) s.mean[a] += dirs[i].weight * dirs[i].d[a];
+    }
+  }
+  return s;
+}
+
+static const sylva_sky_def munich = {.latitude = 48.1, .north = {0, 1}, .first_day = 91,
+                                     .last_day = 273, .diffuse = 0.4, .samples = 64};
+
+/* The sums of munich's sky moved to another latitude and season. */
+static sky_sums sums_at(double latitude, int first_day, int last_day) {
+  sylva_sky_def def = munich;
+  def.latitude = latitude;
+  def.first_day = first_day;
+  def.last_day = last_day;
+  sylva_sky_dir dirs[64];
+  sylva_sky_build(&def, dirs);
+  return sums(&def, dirs);
+}
+
+/* The weights add up to 1, the sky's to `diffuse`; every direction is a unit
+ * vector above the horizon. */
+static void test_sky_weights(void) {
+  sylva_sky_dir dirs[64];
+  sylva_sky_build(&munich, dirs);
+  sky_sums s = sums(&munich, dirs);
+  CHECK_NEAR(s.total, 1.0, 1e-12);
+  CHECK_NEAR(s.sun, 0.6, 1e-12);
+  for (int i = 0; i < 64; i++) {
+    double len = sqrt(dirs[i].d[0] * dirs[i].d[0] + dirs[i].d[1] * dirs[i].d[1] + dirs[i].d[2] * dirs[i].d[2]);
+    CHECK_NEAR(len, 1.0, 1e-12);
+    CHECK(dirs[i].d[2] >= 0.0);
+    CHECK(dirs[i].weight >= 0.0);
+  }
+  /* every sun slot is used at this latitude in summer */
+  for (int i = 0; i < 32; i++) CHECK(dirs[i].weight > 0.0);
+}
+
+/* In the northern hemisphere the sun stands in the south: with north along +y its
+ * light comes from -y, balanced east and west; north along +x turns it to -x. */
+static void test_sky_north(void) {
+  sylva_sky_dir dirs[64];
+  sylva_sky_build(&munich, dirs);
+  sky_sums s = sums(&munich, dirs);
+  CHECK(s.mean[1] < -0.2 * s.sun);
+  CHECK_NEAR(s.mean[0], 0.0, 0.01 * s.sun);
+  sylva_sky_def turned = munich;
+  turned.north[0] = 2.0; /* not a unit vector: its direction is what counts */
+  turned.north[1] = 0.0;
+  sylva_sky_build(&turned, dirs);
+  sky_sums t = sums(&turned, dirs);
+  CHECK_NEAR(t.mean[0], s.mean[1], 1e-9);
+  CHECK_NEAR(t.mean[1], -s.mean[0], 1e-9);
+  CHECK_NEAR(t.mean[2], s.mean[2], 1e-9);
+  CHECK(sums_at(-48.1, 1, 90).mean[1] > 0.2 * s.sun);
+}
+
+/* At the equator over the whole year the sun is as much north as south. */
+static void test_sky_equator(void) {
+  sky_sums s = sums_at(0.0, 1, 365);
+  CHECK_NEAR(s.mean[1], 0.0, 0.03 * s.sun);
+  CHECK(s.mean[2] > 0.5 * s.sun);
+}
+
+/* The overcast sky: CIE luminance (1 + 2 sin g) / 3 times sin g on equal solid
+ * angles; all sky with diffuse 1; none of it with 0. */
+static void test_sky_overcast(void) {
+  sylva_sky_def overcast = munich;
+  overcast.diffuse = 1.0;
+  overcast.samples = 100;
+  sylva_sky_dir dirs[100];
+  sylva_sky_build(&overcast, dirs);
+  CHECK_NEAR(sums(&overcast, dirs).total, 1.0, 1e-12);
+  for (int i = 1; i < 100; i++) {
+    double zi = dirs[i].d[2], z0 = dirs[0].d[2];
+    CHECK_NEAR(dirs[i].weight / dirs[0].weight, (1 + 2 * zi) * zi / ((1 + 2 * z0) * z0), 1e-9);
+  }
+  sylva_sky_def clear = munich;
+  clear.diffuse = 0.0;
+  sylva_sky_dir more[64];
+  sylva_sky_build(&clear, more);
+  for (int i = 32; i < 64; i++) CHECK(more[i].weight == 0.0);
+  CHECK_NEAR(sums(&clear, more).sun, 1.0, 1e-12);
+}
+
+/* A polar night: the sun's directions get no weight; the light is the sky's. */
+static void test_sky_polar_night(void) {
+  sky_sums s = sums_at(80.0, 340, 365);
+  CHECK(s.sun == 0.0);
+  CHECK_NEAR(s.total, 0.4, 1e-12);
+}
+
+/* The same definition gives the same bytes; the largest count is built. */
+static void test_sky_deterministic(void) {
+  static sylva_sky_dir a[4096], b[4096];
+  sylva_sky_def big = munich;
+  big.samples = 4096;
+  sylva_sky_build(&big, a);
+  sylva_sky_build(&big, b);
+  CHECK(memcmp(a, b, sizeof a) == 0);
+  CHECK_NEAR(sums(&big, a).total, 1.0, 1e-9);
+  sylva_sky_def odd = munich;
+  odd.samples = 7; /* 3 sun directions, 4 of the sky */
+  sylva_sky_dir c[7];
+  sylva_sky_build(&odd, c);
+  CHECK_NEAR(sums(&odd, c).sun, 0.6, 1e-12);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {CHECK_TEST(noon_50n_june), CHECK_TEST(noon_50n_december),
                                      CHECK_TEST(equator_equinox), CHECK_TEST(equator_june),
-                                     CHECK_TEST(south), CHECK_TEST(symmetry), CHECK_TEST(polar)};
+                                     CHECK_TEST(south), CHECK_TEST(symmetry), CHECK_TEST(polar),
+                                     CHECK_TEST(sky_weights), CHECK_TEST(sky_north),
+                                     CHECK_TEST(sky_equator), CHECK_TEST(sky_overcast),
+                                     CHECK_TEST(sky_polar_night), CHECK_TEST(sky_deterministic)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("sun");
 }
