@@ -53,6 +53,13 @@ typedef struct sylva_plant_def {
   int root_count;
 } sylva_plant_def;
 
+/** One direction of a site's sky: d is a unit vector from the ground towards it
+ *  (z up), weight its share of the light. */
+typedef struct sylva_sky_dir {
+  double d[3];
+  double weight;
+} sylva_sky_dir;
+
 /** A solid box that shades everything below it. */
 typedef struct sylva_obstacle_def {
   const char *label;

@@ -8,12 +8,7 @@
 #ifndef SYLVA_SKY_H
 #define SYLVA_SKY_H
 
-/** One direction of the sky: d is a unit vector from the ground towards it, in the
- *  scenario's axes (z up). */
-typedef struct sylva_sky_dir {
-  double d[3];
-  double weight;
-} sylva_sky_dir;
+#include "sylva/sylva.h" /* sylva_sky_dir */
 
 /** What a site sky is made from. */
 typedef struct sylva_sky_def {
