@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "alloc.h"
+#include "site.h"
 
 int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], double voxel) {
   memset(g, 0, sizeof *g);
@@ -51,6 +52,13 @@ void sylva__grid_free(sylva__grid *g) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
     for (size_t i = 0; i < ncols; i++) sylva__free(g->obstacle_cols[i]);
   }
+  if (g->site) {
+    size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+    for (size_t i = 0; i < nchunks; i++) sylva__free(g->site->chunk[i]);
+    sylva__free(g->site->chunk);
+  }
+  sylva__free(g->site);
+  sylva__free(g->sky);
   sylva__free(g->chunks);
   sylva__free(g->colsum);
   sylva__free(g->obstacles);
@@ -68,7 +76,10 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
          (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
-         (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes;
+         (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes +
+         (size_t)g->sky_count * sizeof(sylva_sky_dir) +
+         (g->site ? nchunks * sizeof(float *) + g->site->count * SYLVA__CHUNK_VOXELS * sizeof(float)
+                  : 0);
 }
 
 bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v[3]) {
@@ -89,6 +100,64 @@ static inline int local_index(int x, int y, int z) {
   return (x & (SYLVA__CHUNK - 1)) | ((y & (SYLVA__CHUNK - 1)) << 4) |
          ((z & (SYLVA__CHUNK - 1)) << 8);
 }
+
+/* Drops the cached site factors (obstacles changed) and finds the new top. */
+static void site_forget(sylva__grid *g) {
+  if (!g->site) return;
+  size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+  for (size_t i = 0; i < nchunks && g->site->count; i++)
+    if (g->site->chunk[i]) {
+      sylva__free(g->site->chunk[i]);
+      g->site->chunk[i] = NULL;
+      g->site->count--;
+    }
+  g->sky_top = sylva__site_top(g);
+}
+
+int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count) {
+  if (count <= 0) return SYLVA_OK;
+  size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+  sylva_sky_dir *sky = sylva__calloc((size_t)count, sizeof *sky);
+  sylva__site_cache *site = sylva__calloc(1, sizeof *site);
+  float **chunk = sylva__calloc(nchunks, sizeof *chunk);
+  if (!sky || !site || !chunk) {
+    sylva__free(sky);
+    sylva__free(site);
+    sylva__free(chunk);
+    return SYLVA_ENOMEM;
+  }
+  memcpy(sky, dirs, (size_t)count * sizeof *sky);
+  site->chunk = chunk;
+  g->sky = sky;
+  g->sky_count = count;
+  g->site = site;
+  g->sky_top = sylva__site_top(g);
+  return SYLVA_OK;
+}
+
+double sylva__grid_site_factor(const sylva__grid *g, const int v[3]) {
+  if (!g->sky_count) return 1.0;
+  size_t ci = chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
+  float *f = g->site->chunk[ci];
+  if (!f) { /* the whole chunk at once: its voxels are read together */
+    f = sylva__malloc(SYLVA__CHUNK_VOXELS * sizeof *f);
+    if (!f) /* no room to keep it: this voxel alone, the same value */
+      return (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
+    int base[3] = {v[0] & ~15, v[1] & ~15, v[2] & ~15};
+    for (int z = 0; z < SYLVA__CHUNK; z++)
+      for (int y = 0; y < SYLVA__CHUNK; y++)
+        for (int x = 0; x < SYLVA__CHUNK; x++) {
+          int u[3] = {base[0] + x, base[1] + y, base[2] + z};
+          bool inside = u[0] < g->n[0] && u[1] < g->n[1] && u[2] < g->n[2];
+          f[local_index(u[0], u[1], u[2])] =
+              inside ? (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, u) : 0.0f;
+        }
+    g->site->chunk[ci] = f;
+    g->site->count++;
+  }
+  return f[local_index(v[0], v[1], v[2])];
+}
+
 
 static inline const sylva__chunk *chunk_at(const sylva__grid *g, const int v[3]) {
   return g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
@@ -169,6 +238,10 @@ int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
 }
 
 static double light_in(const sylva__grid *g, const sylva__chunk *c, const int v[3]) {
+  if (g->sky_count) { /* a site's sky: what reaches the voxel, under the plants' shade */
+    double l = 1.0 - (double)shade_in(g, c, v) / SYLVA__SHADE_ONE;
+    return l > 0.0 ? sylva__grid_site_factor(g, v) * l : 0.0;
+  }
   if (g->obstacle_count && sylva__grid_under_obstacle(g, v)) return 0.0;
   double l = 1.0 - (double)shade_in(g, c, v) / SYLVA__SHADE_ONE;
   return l > 0.0 ? l : 0.0;
@@ -531,6 +604,7 @@ int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const
         l->box[l->count++] = box;
       }
   }
+  site_forget(g);
   return id;
 }
 
@@ -559,5 +633,6 @@ int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
   for (int k = s + 1; k <= g->obstacle_slots; k += k & -k) g->obstacle_rank[k]--;
   g->obstacle_count--;
   if (g->obstacle_slots - g->obstacle_count > g->obstacle_count) compact_obstacles(g);
+  site_forget(g);
   return SYLVA_OK;
 }

@@ -78,9 +78,27 @@ typedef struct sylva__grid {
    * grid): NULL or the boxes of the obstacles over that column. */
   sylva__obstacle_list **obstacle_cols;
   size_t obstacle_list_bytes; /* the lists, headers and capacity */
+  /* A site's sky (site.h): none in the zenith model. Its factors are computed a
+   * chunk at a time when first read, and forgotten when an obstacle comes or goes. */
+  sylva_sky_dir *sky;
+  int sky_count;
+  double sky_top; /* the highest obstacle top, voxel units */
+  struct sylva__site_cache *site;
 } sylva__grid;
 
+/** The site factors of the chunks read so far: c0*c1*c2 entries, NULL or 4096
+ *  floats in the chunk's voxel order. */
+typedef struct sylva__site_cache {
+  float **chunk;
+  size_t count;
+} sylva__site_cache;
+
 int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], double voxel);
+/** Gives the grid a site's sky (copied); its light then is the site factor times
+ *  the light under the plants' shade. SYLVA_ENOMEM leaves it as it was. */
+int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count);
+/** The site factor of voxel v (1 without a sky; cached per chunk). */
+double sylva__grid_site_factor(const sylva__grid *g, const int v[3]);
 void sylva__grid_free(sylva__grid *g);
 size_t sylva__grid_bytes(const sylva__grid *g);
 

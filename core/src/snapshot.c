@@ -1,6 +1,8 @@
 /* Versioned binary image of a world. Layout: 32-byte header (magic "SYLVASNP",
- * u32 version, u32 reserved = 0, u64 payload size, u64 FNV-1a 64 of the payload),
- * then the payload, little-endian. The voxel grid is not stored: shade is an exact
+ * u32 version, u32 flags, u64 payload size, u64 FNV-1a 64 of the payload), then
+ * the payload, little-endian. Flags: 0, or SKY when the world has a site's sky
+ * (its directions follow the seed), so that a world without one has the same
+ * bytes as before skies existed. The voxel grid is not stored: shade is an exact
  * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -12,7 +14,7 @@
 #include "world_impl.h"
 
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
-enum { HEADER = 32 };
+enum { HEADER = 32, SKY = 1 };
 
 typedef struct writer {
   uint8_t *buf;
@@ -138,6 +140,13 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   for (int a = 0; a < 3; a++) put_f64(&o, w->def.max[a]);
   put_f64(&o, w->def.voxel);
   put_u64(&o, w->def.seed);
+  if (w->def.sky_count) {
+    put_u32(&o, (uint32_t)w->def.sky_count);
+    for (int i = 0; i < w->def.sky_count; i++) {
+      for (int a = 0; a < 3; a++) put_f64(&o, w->def.sky[i].d[a]);
+      put_f64(&o, w->def.sky[i].weight);
+    }
+  }
   put_i32(&o, w->iteration);
   for (int i = 0; i < 4; i++) put_u64(&o, w->rng.s[i]);
   put_i32(&o, w->nodes.next_id);
@@ -207,7 +216,8 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   uint8_t *h = o.buf + 8;
   uint32_t version = SYLVA_SNAPSHOT_VERSION;
   for (int i = 0; i < 4; i++) h[i] = (uint8_t)(version >> (8 * i));
-  for (int i = 0; i < 4; i++) h[4 + i] = 0;
+  uint32_t flags = w->def.sky_count ? SKY : 0;
+  for (int i = 0; i < 4; i++) h[4 + i] = (uint8_t)(flags >> (8 * i));
   for (int i = 0; i < 8; i++) h[8 + i] = (uint8_t)(payload >> (8 * i));
   uint64_t sum = fnv1a(o.buf + HEADER, payload);
   for (int i = 0; i < 8; i++) h[16 + i] = (uint8_t)(sum >> (8 * i));
@@ -305,7 +315,7 @@ static void get_species(reader *r, sylva_species_def *d) {
     goto fail;            \
   } while (0)
 
-static int read_world(reader *r, sylva_world **out) {
+static int read_world(reader *r, bool has_sky, sylva_world **out) {
   int rc = SYLVA_OK;
   sylva_world *w = NULL;
   sylva_world_def def = sylva_default_world_def();
@@ -313,8 +323,26 @@ static int read_world(reader *r, sylva_world **out) {
   for (int a = 0; a < 3; a++) def.max[a] = get_f64(r);
   def.voxel = get_f64(r);
   def.seed = get_u64(r);
-  if (r->bad) return SYLVA_ETRUNCATED;
+  sylva_sky_dir *sky = NULL;
+  if (has_sky) {
+    uint32_t n = get_u32(r);
+    if (r->bad) return SYLVA_ETRUNCATED;
+    if (n < 1 || n > SYLVA_MAX_SKY) return SYLVA_EBADIMAGE;
+    sky = sylva__calloc(n, sizeof *sky);
+    if (!sky) return SYLVA_ENOMEM;
+    for (uint32_t i = 0; i < n; i++) {
+      for (int a = 0; a < 3; a++) sky[i].d[a] = get_f64(r);
+      sky[i].weight = get_f64(r);
+    }
+    def.sky = sky;
+    def.sky_count = (int)n;
+  }
+  if (r->bad) {
+    sylva__free(sky);
+    return SYLVA_ETRUNCATED;
+  }
   rc = sylva_world_create(&def, &w);
+  sylva__free(sky); /* the world has its own copy */
   if (rc) return rc == SYLVA_ENOMEM ? rc : SYLVA_EBADIMAGE;
   int32_t iteration = get_i32(r);
   for (int i = 0; i < 4; i++) w->rng.s[i] = get_u64(r);
@@ -481,9 +509,9 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved != 0) return SYLVA_EBADIMAGE;
+  if (reserved & ~(uint32_t)SKY) return SYLVA_EBADIMAGE;
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};
-  return read_world(&r, out);
+  return read_world(&r, (reserved & SKY) != 0, out);
 }

@@ -30,6 +30,16 @@ int sylva_world_def_check(const sylva_world_def *def) {
       return SYLVA_EINVAL;
     total *= ceil((def->max[a] - def->min[a]) / def->voxel - 1e-9);
   }
+  /* a sky: 1 to SYLVA_MAX_SKY finite directions pointing up, of weights >= 0 */
+  if (def->sky_count < 0 || def->sky_count > SYLVA_MAX_SKY || (def->sky_count && !def->sky))
+    return SYLVA_EINVAL;
+  for (int i = 0; i < def->sky_count; i++) {
+    const sylva_sky_dir *s = &def->sky[i];
+    double len = sqrt(s->d[0] * s->d[0] + s->d[1] * s->d[1] + s->d[2] * s->d[2]);
+    if (!(fabs(len - 1.0) < 1e-6) || !(s->d[2] >= 0.0) || !(s->weight >= 0.0) ||
+        !isfinite(s->weight))
+      return SYLVA_EINVAL;
+  }
   return total > SYLVA_MAX_VOXELS ? SYLVA_ETOOBIG : SYLVA_OK;
 }
 
@@ -45,6 +55,14 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
     sylva__free(w);
     return rc;
   }
+  rc = sylva__grid_set_sky(&w->grid, def->sky, def->sky_count);
+  if (rc) {
+    sylva__grid_free(&w->grid);
+    sylva__free(w);
+    return rc;
+  }
+  w->def.sky = w->grid.sky; /* the world's own copy */
+  w->def.sky_count = w->grid.sky_count;
   sylva__rng_seed(&w->rng, def->seed);
   *out = w;
   return SYLVA_OK;

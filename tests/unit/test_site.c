@@ -5,6 +5,8 @@
  * the walk over the chunk columns finds exactly the boxes a test of every obstacle
  * finds. */
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "../check.h"
 #include "grid.h"
@@ -145,9 +147,124 @@ static void test_against_brute_force(void) {
   sylva__grid_free(&g);
 }
 
+/* ---- a world with a sky ---- */
+
+/* A world of one tree, with the given sky (NULL: zenith) and optionally a board
+ * over it at 3 m. */
+static sylva_world *tree_world(const sylva_sky_dir *sky, int sky_count, bool board) {
+  sylva_world_def wd = sylva_default_world_def();
+  wd.sky = sky;
+  wd.sky_count = sky_count;
+  sylva_world *w = NULL;
+  if (sylva_world_create(&wd, &w)) return NULL;
+  sylva_species_def sp = sylva_default_species_def();
+  int s = sylva_world_add_species(w, &sp, "oak");
+  double roots[1][3] = {{0, 0, 0}};
+  sylva_plant_def pd = {s, "tree", (const double(*)[3])roots, 1};
+  sylva_obstacle_def roof = {"board", {-1, -1, 3.0}, {1, 1, 3.2}};
+  if (s < 0 || sylva_world_add_plant(w, &pd, NULL) < 0 ||
+      (board && sylva_world_add_obstacle(w, &roof) < 0)) {
+    sylva_world_destroy(w);
+    return NULL;
+  }
+  return w;
+}
+
+/* With every direction reaching it (weights adding up to exactly 1, no obstacle)
+ * a site's tree grows as the zenith model's does, to the bit. */
+static void test_open_sky_is_zenith(void) {
+  sylva_sky_dir sky[] = {toward(90, 0, 0.5), toward(30, 200, 0.25), toward(10, 45, 0.25)};
+  sylva_world *a = tree_world(NULL, 0, false), *b = tree_world(sky, 3, false);
+  CHECK(a && b);
+  if (!a || !b) return;
+  for (int i = 0; i < 12; i++) {
+    CHECK_INT(sylva_world_step(a, NULL), 0);
+    CHECK_INT(sylva_world_step(b, NULL), 0);
+  }
+  CHECK(sylva_world_hash(a) == sylva_world_hash(b));
+  sylva_world_destroy(a);
+  sylva_world_destroy(b);
+}
+
+/* Under a board the zenith model has no light; a site's sky still sends the low
+ * directions under its edge; adding and removing obstacles updates the factors. */
+static void test_board_light(void) {
+  sylva_sky_dir sky[] = {toward(90, 0, 0.6), toward(8, 90, 0.4)};
+  sylva_world *z = tree_world(NULL, 0, true), *s = tree_world(sky, 2, true);
+  CHECK(z && s);
+  if (!z || !s) return;
+  double under[3] = {0.02, 0.02, 2.0};
+  CHECK_NEAR(sylva_world_light_at(z, under), 0.0, 0.0);
+  CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
+  /* a wall to the east takes the low direction too */
+  sylva_obstacle_def wall = {"wall", {2, -3, 0}, {2.2, 3, 4}};
+  int id = sylva_world_add_obstacle(s, &wall);
+  CHECK(id >= 0);
+  CHECK_NEAR(sylva_world_light_at(s, under), 0.0, 1e-6);
+  CHECK_INT(sylva_world_remove_obstacle(s, id), SYLVA_OK);
+  CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
+  sylva_world_destroy(z);
+  sylva_world_destroy(s);
+}
+
+/* A snapshot keeps the sky: saved, loaded and saved again, the same bytes, and the
+ * same light; a world without a sky keeps the flags word 0 (the old bytes). */
+static void test_snapshot(void) {
+  sylva_sky_dir sky[] = {toward(90, 0, 0.6), toward(8, 90, 0.4)};
+  sylva_world *s = tree_world(sky, 2, true), *z = tree_world(NULL, 0, true);
+  CHECK(s && z);
+  if (!s || !z) return;
+  CHECK_INT(sylva_world_step(s, NULL), 0);
+  uint8_t *a = NULL, *b = NULL, *c = NULL;
+  size_t na = 0, nb = 0, nc = 0;
+  CHECK_INT(sylva_snapshot_save(s, &a, &na), 0);
+  sylva_world *back = NULL;
+  CHECK_INT(sylva_snapshot_load(a, na, &back), 0);
+  if (back) {
+    CHECK_INT(sylva_snapshot_save(back, &b, &nb), 0);
+    CHECK(na == nb && memcmp(a, b, na) == 0);
+    double under[3] = {0.02, 0.02, 2.0};
+    CHECK_NEAR(sylva_world_light_at(back, under), sylva_world_light_at(s, under), 0.0);
+    CHECK_INT(sylva_world_step(back, NULL), 0);
+    CHECK_INT(sylva_world_step(s, NULL), 0);
+    CHECK(sylva_world_hash(back) == sylva_world_hash(s));
+  }
+  CHECK(a && a[12] == 1 && a[13] == 0);
+  CHECK_INT(sylva_snapshot_save(z, &c, &nc), 0);
+  CHECK(c && c[12] == 0 && c[13] == 0 && c[14] == 0 && c[15] == 0);
+  free(a);
+  free(b);
+  free(c);
+  sylva_world_destroy(back);
+  sylva_world_destroy(s);
+  sylva_world_destroy(z);
+}
+
+/* A sky must be unit vectors pointing up with weights >= 0, 1 to 4096 of them. */
+static void test_bad_sky(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w = NULL;
+  sylva_sky_dir down[] = {toward(-10, 0, 1.0)}, longer[] = {{{0, 0, 2}, 1.0}},
+                negative[] = {toward(45, 0, -0.1)};
+  const sylva_sky_dir *bad[] = {down, longer, negative};
+  for (int i = 0; i < 3; i++) {
+    wd.sky = bad[i];
+    wd.sky_count = 1;
+    CHECK_INT(sylva_world_create(&wd, &w), SYLVA_EINVAL);
+  }
+  wd.sky = NULL;
+  CHECK_INT(sylva_world_create(&wd, &w), SYLVA_EINVAL);
+  wd.sky = down;
+  wd.sky_count = SYLVA_MAX_SKY + 1;
+  CHECK_INT(sylva_world_create(&wd, &w), SYLVA_EINVAL);
+  CHECK(w == NULL);
+}
+
 int main(int argc, char **argv) {
-  static const check_test tests[] = {CHECK_TEST(open_ground), CHECK_TEST(board), CHECK_TEST(wall),
-                                     CHECK_TEST(against_brute_force)};
+  static const check_test tests[] = {
+      CHECK_TEST(open_ground),         CHECK_TEST(board),      CHECK_TEST(wall),
+      CHECK_TEST(against_brute_force), CHECK_TEST(open_sky_is_zenith), CHECK_TEST(board_light),
+      CHECK_TEST(snapshot),            CHECK_TEST(bad_sky)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("site");
 }

@@ -36,10 +36,26 @@ typedef enum sylva_phase {
 } sylva_phase;
 
 /** How to build a world. */
+/** Most directions of a site's sky. */
+#define SYLVA_MAX_SKY 4096
+
+/** One direction of a site's sky: d is a unit vector from the ground towards it
+ *  (z up), weight its share of the light. */
+typedef struct sylva_sky_dir {
+  double d[3];
+  double weight;
+} sylva_sky_dir;
+
 typedef struct sylva_world_def {
   double min[3], max[3]; /**< the box, metres; z is up, the ground is z = min[2] */
   double voxel;          /**< voxel edge, metres (> 0) */
   uint64_t seed;         /**< drives every random choice */
+  /** A site's sky (sky_count directions, copied at creation), or none (NULL, 0): the
+   *  paper's light from straight above, which obstacles block below themselves.
+   *  With a sky, a voxel's light is its site factor (the weights of the directions
+   *  that reach it past the obstacles) times 1 - S. */
+  const sylva_sky_dir *sky;
+  int sky_count;
   /** Optional clock (seconds) used only to time phases; never affects results. */
   double (*clock)(void *ctx);
   void *clock_ctx;
@@ -52,13 +68,6 @@ typedef struct sylva_plant_def {
   const double (*roots)[3]; /**< root positions, metres */
   int root_count;
 } sylva_plant_def;
-
-/** One direction of a site's sky: d is a unit vector from the ground towards it
- *  (z up), weight its share of the light. */
-typedef struct sylva_sky_dir {
-  double d[3];
-  double weight;
-} sylva_sky_dir;
 
 /** A solid box that shades everything below it. */
 typedef struct sylva_obstacle_def {
