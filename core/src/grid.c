@@ -139,23 +139,17 @@ double sylva__grid_site_factor(const sylva__grid *g, const int v[3]) {
   if (!g->sky_count) return 1.0;
   size_t ci = chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
   float *f = g->site->chunk[ci];
-  if (!f) { /* the whole chunk at once: its voxels are read together */
+  if (!f) { /* a chunk's factors, each computed when first read (-1 until then) */
     f = sylva__malloc(SYLVA__CHUNK_VOXELS * sizeof *f);
     if (!f) /* no room to keep it: this voxel alone, the same value */
       return (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
-    int base[3] = {v[0] & ~15, v[1] & ~15, v[2] & ~15};
-    for (int z = 0; z < SYLVA__CHUNK; z++)
-      for (int y = 0; y < SYLVA__CHUNK; y++)
-        for (int x = 0; x < SYLVA__CHUNK; x++) {
-          int u[3] = {base[0] + x, base[1] + y, base[2] + z};
-          bool inside = u[0] < g->n[0] && u[1] < g->n[1] && u[2] < g->n[2];
-          f[local_index(u[0], u[1], u[2])] =
-              inside ? (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, u) : 0.0f;
-        }
+    for (int i = 0; i < SYLVA__CHUNK_VOXELS; i++) f[i] = -1.0f;
     g->site->chunk[ci] = f;
     g->site->count++;
   }
-  return f[local_index(v[0], v[1], v[2])];
+  float *at = &f[local_index(v[0], v[1], v[2])];
+  if (*at < 0.0f) *at = (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
+  return *at;
 }
 
 

@@ -78,16 +78,17 @@ typedef struct sylva__grid {
    * grid): NULL or the boxes of the obstacles over that column. */
   sylva__obstacle_list **obstacle_cols;
   size_t obstacle_list_bytes; /* the lists, headers and capacity */
-  /* A site's sky (site.h): none in the zenith model. Its factors are computed a
-   * chunk at a time when first read, and forgotten when an obstacle comes or goes. */
+  /* A site's sky (site.h): none in the zenith model. A voxel's factor is computed
+   * when first read and kept (per chunk), and forgotten when an obstacle comes or
+   * goes. */
   sylva_sky_dir *sky;
   int sky_count;
   double sky_top; /* the highest obstacle top, voxel units */
   struct sylva__site_cache *site;
 } sylva__grid;
 
-/** The site factors of the chunks read so far: c0*c1*c2 entries, NULL or 4096
- *  floats in the chunk's voxel order. */
+/** The site factors read so far: c0*c1*c2 entries, NULL or 4096
+ *  floats in the chunk's voxel order, -1 where not computed yet. */
 typedef struct sylva__site_cache {
   float **chunk;
   size_t count;

@@ -740,8 +740,8 @@ static void scenario_free_parts(sylva_scenario *s) {
 
 void sylva_scenario_free(sylva_scenario *s) { scenario_free_parts(s); }
 
-static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
-                                       "world",   "species", "plants",   "obstacles"};
+static const char *const top_keys[] = {"format",  "name",    "seed",   "iterations", "world",
+                                       "species", "plants",  "obstacles", "light"};
 
 static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_scenario *s) {
   int rc = sylva__want_object(p, root);
@@ -903,6 +903,8 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
     sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
+
+  if ((item = member(root, "light")) && (rc = sylva__parse_light(p, item, &s->light))) return rc;
 
   if ((item = member(root, "obstacles"))) {
     old = sylva__ptr_push(p, "obstacles");
@@ -1089,7 +1091,12 @@ char *sylva_scenario_json(const sylva_scenario *s) {
     put_vec3(&b, o->max);
     sylva__strbuf_putc(&b, '}');
   }
-  sylva__strbuf_puts(&b, s->obstacle_count ? "\n  ]\n}\n" : "]\n}\n");
+  sylva__strbuf_puts(&b, s->obstacle_count ? "\n  ]" : "]");
+  if (s->light.site) { /* the zenith sky is the default: its scenarios stay as they were */
+    sylva__strbuf_puts(&b, ",\n  \"light\": ");
+    sylva__put_light(&b, &s->light);
+  }
+  sylva__strbuf_puts(&b, "\n}\n");
   return sylva__strbuf_finish(&b);
 }
 
@@ -1100,8 +1107,16 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
   if (err && errlen) err[0] = '\0';
   sylva__parser p = {.ptr = "", .plen = 0, .base = 0, .err = err, .errlen = errlen};
   sylva_world_def def = world_def_of(s, s->voxel);
+  sylva_sky_dir *sky = NULL;
+  if (s->light.site) { /* the site's sky, as weighted directions (sky.c) */
+    if (!(sky = malloc((size_t)s->light.sky.samples * sizeof *sky))) return sylva__fail_nomem(&p);
+    sylva_sky_build(&s->light.sky, sky);
+    def.sky = sky;
+    def.sky_count = s->light.sky.samples;
+  }
   sylva_world *w = NULL;
   int rc = sylva_world_create(&def, &w);
+  free(sky); /* the world has its own copy */
   if (rc < 0) {
     if (rc == SYLVA_ENOMEM) return sylva__fail_nomem(&p);
     size_t old = sylva__ptr_push(&p, "world");

@@ -70,6 +70,12 @@ int sylva__want_integer(sylva__parser *p, const cJSON *item, double lo, double h
 /** [x, y, z] of finite numbers. */
 int sylva__want_vec3(sylva__parser *p, const cJSON *item, double out[3]);
 
+/** The `light` member (scenario_light.c). */
+int sylva__parse_light(sylva__parser *p, const cJSON *item, sylva_scenario_light *out);
+/** Its canonical JSON, for a site's sky. */
+struct sylva__strbuf;
+void sylva__put_light(struct sylva__strbuf *b, const sylva_scenario_light *l);
+
 /** An id and its index, for duplicate detection and lookups. */
 typedef struct sylva__id_ref {
   const char *id;

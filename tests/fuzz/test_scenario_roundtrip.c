@@ -256,6 +256,38 @@ static void test_odd_label(void) {
   sylva_scenario_free(s);
 }
 
+/* The light key: a site's defaults, its canonical form parsed back to the same
+ * sky; the zenith sky written out as no key at all. */
+static void test_light(void) {
+  const char *site = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD
+                     ", \"light\": {\"sky\": \"site\", \"latitude\": -33.9}}";
+  sylva_scenario *a = parse_ok("site", site, strlen(site));
+  if (!a) return;
+  const sylva_sky_def *d = &a->light.sky;
+  EXPECT(a->light.site && d->latitude == -33.9 && d->north[0] == 0 && d->north[1] == 1 &&
+             d->first_day == 1 && d->last_day == 365 && d->diffuse == 0.5 && d->samples == 64,
+         "site defaults: %g [%g, %g] [%d, %d] %g %d", d->latitude, d->north[0], d->north[1],
+         d->first_day, d->last_day, d->diffuse, d->samples);
+  char *json = sylva_scenario_json(a);
+  EXPECT(json && strstr(json, "\"light\": {\"sky\": \"site\", \"latitude\": -33.9, \"north\": [0, 1], "
+                              "\"season\": [1, 365], \"diffuse\": 0.5, \"samples\": 64}"),
+         "canonical: %s", json ? json : "(null)");
+  sylva_scenario *b = json ? parse_ok("canonical site", json, strlen(json)) : NULL;
+  if (b) EXPECT(b->light.site && memcmp(&a->light.sky, &b->light.sky, sizeof a->light.sky) == 0,
+                "the canonical form's sky differs");
+  free(json);
+  sylva_scenario_free(a);
+  sylva_scenario_free(b);
+  const char *zenith = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD
+                       ", \"light\": {\"sky\": \"zenith\"}}";
+  sylva_scenario *z = parse_ok("zenith", zenith, strlen(zenith));
+  if (!z) return;
+  json = sylva_scenario_json(z);
+  EXPECT(!z->light.site && json && !strstr(json, "light"), "zenith: %s", json ? json : "(null)");
+  free(json);
+  sylva_scenario_free(z);
+}
+
 int main(int argc, char **argv) {
   if (argc != 2 && argc != 3) {
     fprintf(stderr, "usage: %s SCENARIO_DIR [TEST]\n", argv[0]);
@@ -265,7 +297,7 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(defaults), CHECK_TEST(species_resolution), CHECK_TEST(presets),
       CHECK_TEST(parse_errors), CHECK_TEST(no_plants), CHECK_TEST(fmt_fixed),
-      CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label),
+      CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label), CHECK_TEST(light),
       CHECK_TEST(shipped_scenarios)};
   CHECK_RUN(argc, argv, 2, tests);
   return check_summary("scenario-roundtrip");

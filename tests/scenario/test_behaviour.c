@@ -352,11 +352,73 @@ static void test_golden(void) {
   }
 }
 
+/* ---- site light (docs/model.md, "Site light") ---- */
+
+/* A tree of wall.json's species at (0, y) beside an east-west wall 6 m high along
+ * y in [-0.2, 0] (north is +y), under the zenith sky or the sky of 50 N over the
+ * summer; grown 20 iterations. */
+static sylva_world *wall_site(double y, bool site) {
+  char text[1200];
+  snprintf(text, sizeof text,
+           "{\"format\": \"sylva.scenario/1\", \"seed\": 11, \"iterations\": 20,"
+           " \"world\": {\"min\": [-6, -3, 0], \"max\": [6, 12, 10]},"
+           " \"species\": {\"broadleaf\": {\"preset\": \"igm-fig11\"}},"
+           " \"plants\": [{\"id\": \"tree\", \"species\": \"broadleaf\", \"roots\": [[0, %g, 0]]}],"
+           " \"obstacles\": [{\"id\": \"wall\", \"kind\": \"box\", \"min\": [-6, -0.2, 0], \"max\": [6, 0, 6]}]%s}",
+           y,
+           site ? ", \"light\": {\"sky\": \"site\", \"latitude\": 50, \"north\": [0, 1],"
+                  " \"season\": [91, 273], \"diffuse\": 0.4, \"samples\": 64}"
+                : "");
+  sylva_scenario *s = NULL;
+  char err[512];
+  if (sylva_scenario_parse(text, strlen(text), &s, err, sizeof err) < 0) {
+    fprintf(stderr, "wall_site: %s\n", err);
+    exit(1);
+  }
+  sylva_world *w = build(s);
+  sylva_scenario_free(s);
+  grow(w, 20);
+  return w;
+}
+
+static double mean_y(const sylva_world *w) {
+  size_t n = sylva_world_node_count(w);
+  double sy = 0;
+  for (size_t i = 0; i < n; i++) {
+    sylva_node_info ni;
+    sylva_world_node_at(w, i, &ni);
+    sy += ni.y;
+  }
+  return sy / (double)n;
+}
+
+/* At 50 N the wall takes the southern sun from a tree 1.5 m north of it: its crown
+ * leans further north than under the zenith sky, and it ends lower than the same
+ * tree 5 m further away in the open. */
+static void test_site_wall(void) {
+  sylva_world *zenith = wall_site(1.5, false), *near = wall_site(1.5, true),
+              *open = wall_site(6.5, true);
+  sylva_stem_stats zs, ns, os;
+  sylva_world_stem_stats(zenith, 0, &zs);
+  sylva_world_stem_stats(near, 0, &ns);
+  sylva_world_stem_stats(open, 0, &os);
+  double zy = mean_y(zenith) - 1.5, ny = mean_y(near) - 1.5;
+  printf("site wall: crown centroid %.3f m north of the trunk (zenith %.3f m); height %.2f m "
+         "beside the wall, %.2f m in the open (zenith %.2f m)\n",
+         ny, zy, ns.height, os.height, zs.height);
+  CHECK(ny > zy + 0.05);
+  CHECK(ns.height < os.height);
+  CHECK(nodes_placed_legally(near));
+  sylva_world_destroy(zenith);
+  sylva_world_destroy(near);
+  sylva_world_destroy(open);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(simplified), CHECK_TEST(wall), CHECK_TEST(board), CHECK_TEST(stand),
       CHECK_TEST(competition), CHECK_TEST(determinism_and_order), CHECK_TEST(snapshot_continuation),
-      CHECK_TEST(golden)};
+      CHECK_TEST(golden), CHECK_TEST(site_wall)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("behaviour");
 }

@@ -54,6 +54,7 @@ def main():
         stop_at_5(env, c, scenario, db_b, lines)
         resume_to_10(env, c, db, db_b, final, lines)
         bad_cases(env, c, scenario, db)
+        site_sky(env, c)
     finally:
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t0))
@@ -90,6 +91,23 @@ def run_with_store(env, c, scenario, db, final):
     c.check(rc == 0 and data == read_bytes(final), "export --iteration %d too" % ITERATIONS,
             "exit %s: %s" % (rc, err))
     return lines
+
+
+def site_sky(env, c):
+    """The same under a site's sky (docs/model.md, "Site light"): the snapshots keep
+    the sky, so stored, regrown and resumed iterations equal a run without a store."""
+    with open(env.scenario("wall.json")) as f:
+        doc = json.load(f)
+    doc["light"] = {"sky": "site", "latitude": 50, "north": [0, 1], "season": [91, 273],
+                    "diffuse": 0.4, "samples": 64}
+    scenario = env.path("wall-site.json")
+    with open(scenario, "w") as f:
+        json.dump(doc, f)
+    db, db_b, final = env.path("site.db"), env.path("site-b.db"), env.path("site-final.json")
+    lines = run_with_store(env, c, scenario, db, final)
+    export_iterations(env, c, scenario, db)
+    stop_at_5(env, c, scenario, db_b, lines)
+    resume_to_10(env, c, db, db_b, final, lines)
 
 
 def export_iterations(env, c, scenario, db):

@@ -15,6 +15,7 @@
 #include <stdint.h>
 
 #include "sylva/params.h"
+#include "sylva/sky.h"
 #include "sylva/world.h"
 
 /** The format string a scenario must carry. */
@@ -48,6 +49,16 @@ typedef struct sylva_scenario_plant {
   int root_count;
 } sylva_scenario_plant;
 
+/** The scenario's light (the `light` key): the paper's zenith sky, or a site's. */
+typedef struct sylva_scenario_light {
+  bool site;         /**< "sky": "site"; false: "zenith" */
+  sylva_sky_def sky; /**< when site: latitude, north, season, diffuse, samples */
+} sylva_scenario_light;
+
+/** Defaults of a site's sky. */
+#define SYLVA_SITE_DIFFUSE 0.5
+#define SYLVA_SITE_SAMPLES 64
+
 /** An obstacle (kind "box"). */
 typedef struct sylva_scenario_obstacle {
   char id[SYLVA_LABEL_MAX];
@@ -70,6 +81,7 @@ typedef struct sylva_scenario {
   int stem_count; /**< roots of all plants */
   sylva_scenario_obstacle *obstacles;
   int obstacle_count;
+  sylva_scenario_light light;
 } sylva_scenario;
 
 /** Parses and validates a scenario: the strict JSON check, then every rule of
