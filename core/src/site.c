@@ -72,7 +72,9 @@ bool sylva__site_blocked(const sylva__grid *g, const double p[3], const double d
 double sylva__site_factor(const sylva__grid *g, const sylva_sky_dir *dirs, int count, double top,
                           const int v[3]) {
   double p[3] = {v[0] + 0.5, v[1] + 0.5, v[2] + 0.5}, f = 0.0;
+  /* above every obstacle no ray is blocked: the same sum, in the same order */
+  bool open = p[2] >= top || !g->obstacle_cols;
   for (int i = 0; i < count; i++)
-    if (!sylva__site_blocked(g, p, dirs[i].d, top)) f += dirs[i].weight;
+    if (open || !sylva__site_blocked(g, p, dirs[i].d, top)) f += dirs[i].weight;
   return f;
 }
