@@ -101,7 +101,7 @@ static inline int local_index(int x, int y, int z) {
          ((z & (SYLVA__CHUNK - 1)) << 8);
 }
 
-/* Drops the cached site factors (obstacles changed) and finds the new top. */
+/* Drops the cached site factors (obstacles changed; the caller keeps sky_top). */
 static void site_forget(sylva__grid *g) {
   if (!g->site) return;
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
@@ -111,7 +111,6 @@ static void site_forget(sylva__grid *g) {
       g->site->chunk[i] = NULL;
       g->site->count--;
     }
-  g->sky_top = sylva__site_top(g);
 }
 
 int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count) {
@@ -599,6 +598,7 @@ int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const
       }
   }
   site_forget(g);
+  if (ob.hi[2] > g->sky_top) g->sky_top = ob.hi[2];
   return id;
 }
 
@@ -628,5 +628,6 @@ int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
   g->obstacle_count--;
   if (g->obstacle_slots - g->obstacle_count > g->obstacle_count) compact_obstacles(g);
   site_forget(g);
+  if (g->site) g->sky_top = sylva__site_top(g); /* a scan: removals are rare */
   return SYLVA_OK;
 }

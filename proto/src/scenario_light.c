@@ -11,7 +11,7 @@
 static const char *const light_keys[] = {"sky",    "latitude", "north",
                                          "season", "diffuse",  "samples"};
 
-/* A member that only a site sky has. */
+/* A member that only a site sky has: every key of light_keys but the first, "sky". */
 static int only_site(sylva__parser *p, const cJSON *item) {
   for (size_t k = 1; k < sizeof light_keys / sizeof light_keys[0]; k++)
     if (cJSON_GetObjectItemCaseSensitive(item, light_keys[k]))

@@ -119,19 +119,23 @@ static int runs_held(server *d) {
   return n;
 }
 
+/* Unloads idle runs until estimate more bytes fit in the budget: NULL, or why not
+ * in buf ("<what> would need about N MiB; M of the B MiB budget are taken<by> ..."). */
+static const char *budget_room(server *d, size_t estimate, const char *what, const char *by,
+                               char *buf, size_t size) {
+  if (runs_free_memory(d, estimate, NULL)) return NULL;
+  snprintf(buf, size, "%s would need about %zu MiB; %zu of the %zu MiB budget are taken%s "
+           "(--memory-budget)", what, estimate >> 20, d->memory_reserved >> 20,
+           d->opt.memory_budget >> 20, by);
+  return buf;
+}
+
 const char *runs_room(server *d, size_t estimate, char *buf, size_t size) {
   if (runs_held(d) >= d->opt.max_runs) {
     snprintf(buf, size, "the daemon holds %d runs, its limit (--max-runs)", d->opt.max_runs);
     return buf;
   }
-  if (!runs_free_memory(d, estimate, NULL)) {
-    snprintf(buf, size,
-             "the run would need about %zu MiB; %zu of the %zu MiB budget are taken "
-             "(--memory-budget)",
-             estimate >> 20, d->memory_reserved >> 20, d->opt.memory_budget >> 20);
-    return buf;
-  }
-  return NULL;
+  return budget_room(d, estimate, "the run", "", buf, size);
 }
 
 const char *runs_job_room(server *d) {
@@ -535,6 +539,14 @@ static void task_done(pool_task *t, bool cancelled) {
   if (!r->busy) runs_wake(r->d); /* the run may have stopped needing its memory */
 }
 
+/* Queues the run's task of this kind on the pool. */
+static void submit(run *r, run_task kind) {
+  r->busy = true;
+  r->kind = kind;
+  r->task = (pool_task){.work = task_work, .done = task_done, .progress = task_progress};
+  pool_submit(&r->d->pool, &r->task);
+}
+
 /* Starts the run's next task: pending edits first, then light slices, then a
  * snapshot for subscribers waiting for one, then an iteration. */
 void run_schedule(run *r) {
@@ -572,30 +584,23 @@ void run_schedule(run *r) {
     r->made = r->taken = 0;
     atomic_store(&r->yield, false);
   }
-  r->busy = true;
-  r->kind = kind;
-  r->task = (pool_task){.work = task_work, .done = task_done, .progress = task_progress};
-  pool_submit(&r->d->pool, &r->task);
+  submit(r, kind);
 }
 
 const char *run_load(run *r, char *buf, size_t size) {
   server *d = r->d;
   if (run_loaded(r) || r->loading) return NULL;
-  size_t estimate = estimate_unloaded(r);
-  if (!runs_free_memory(d, estimate, NULL)) {
-    snprintf(buf, size,
-             "/run: loading the run would need about %zu MiB; %zu of the %zu MiB budget are "
-             "taken by runs in use (--memory-budget)",
-             estimate >> 20, d->memory_reserved >> 20, d->opt.memory_budget >> 20);
+  if (d->stopping) { /* the pool takes no more work */
+    snprintf(buf, size, "/run: the daemon is stopping");
     return buf;
   }
+  size_t estimate = estimate_unloaded(r);
+  const char *full = budget_room(d, estimate, "/run: loading the run", " by runs in use", buf, size);
+  if (full) return full;
   r->estimate = estimate;
   d->memory_reserved += estimate;
   r->loading = true;
-  r->busy = true;
-  r->kind = RUN_TASK_LOAD;
-  r->task = (pool_task){.work = task_work, .done = task_done, .progress = task_progress};
-  pool_submit(&d->pool, &r->task);
+  submit(r, RUN_TASK_LOAD);
   return NULL;
 }
 

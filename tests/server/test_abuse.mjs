@@ -508,7 +508,8 @@ test('3. 24 gets of past iterations in bursts and an edit every 0.5 s', { timeou
 
 function deletedFiles(pid) { return fdsOf(pid).filter((l) => / \(deleted\)$/.test(l)); }
 // glibc's tmpfile() makes an unnamed file (O_TMPFILE) or, where it cannot, a
-// /tmp/tmpfXXXXXX it unlinks at once; other sessions' files in /tmp are not ours
+// file in /tmp named tmpf and six random characters, which it unlinks at once;
+// other sessions' files in /tmp are not ours
 function tmpEntries() { return readdirSync(tmpdir()).filter((n) => n.startsWith('tmpf')); }
 
 test('4. 100 connections each ask an OBJ export and read nothing', { timeout: LIMIT }, (t) => abuseRow(t, {
