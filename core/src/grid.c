@@ -473,6 +473,8 @@ static int slot_of(const sylva__grid *g, int id) {
   return lo < g->obstacle_slots && g->obstacles[lo].id == id && g->obstacles[lo].live ? lo : -1;
 }
 
+int sylva__grid_obstacle_slot(const sylva__grid *g, int id) { return slot_of(g, id); }
+
 /* Drops the dead slots, keeping the order; the labels and ranks follow. Allocates
  * nothing, and costs the slots, not the label table. */
 static void compact_obstacles(sylva__grid *g) {
@@ -513,7 +515,7 @@ static void drop_empty_lists(sylva__grid *g, const int c0[2], const int c1[2]) {
 
 /* Makes room for one more slot, label and entry in every column of o; the grid
  * holds the same obstacles whether it succeeds or not. */
-static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o) {
+static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o, bool zone) {
   if (g->obstacle_slots == g->obstacle_cap) {
     if (g->obstacle_cap > INT32_MAX / 4) return SYLVA_ENOMEM;
     int cap = g->obstacle_cap ? g->obstacle_cap * 2 : 8;
@@ -536,7 +538,7 @@ static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o) {
     label_fill(g);
   }
   int c0[2], c1[2];
-  if (!obstacle_columns(o, c0, c1)) return SYLVA_OK;
+  if (zone || !obstacle_columns(o, c0, c1)) return SYLVA_OK; /* a zone blocks nothing */
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
   if (!g->obstacle_cols) {
     g->obstacle_cols = sylva__calloc(ncols, sizeof *g->obstacle_cols);
@@ -563,8 +565,8 @@ static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o) {
   return SYLVA_OK;
 }
 
-int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
-                                const double max[3]) {
+int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, const double min[3],
+                                  const double max[3], bool zone) {
   if (!label || !label[0] || strlen(label) >= SYLVA_LABEL_MAX) return SYLVA_EINVAL;
   for (int a = 0; a < 3; a++)
     if (!isfinite(min[a]) || !isfinite(max[a]) || !(max[a] > min[a])) return SYLVA_EINVAL;
@@ -574,11 +576,12 @@ int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const
   memset(&ob, 0, sizeof ob);
   ob.id = id;
   ob.live = true;
+  ob.zone = zone;
   strcpy(ob.label, label);
   memcpy(ob.min, min, sizeof ob.min);
   memcpy(ob.max, max, sizeof ob.max);
   obstacle_voxels(g, &ob);
-  int rc = obstacle_reserve(g, &ob);
+  int rc = obstacle_reserve(g, &ob, zone);
   if (rc) return rc;
   /* nothing fails from here on */
   int s = g->obstacle_slots++;
@@ -588,6 +591,7 @@ int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const
   g->label_slot[label_entry(g, label)] = s;
   g->obstacle_count++;
   g->next_obstacle_id = id + 1;
+  if (zone) return id; /* listed by id and label only: it blocks and darkens nothing */
   int c0[2], c1[2];
   if (obstacle_columns(&ob, c0, c1)) {
     sylva__obstacle_box box = {{ob.lo[0], ob.lo[1], ob.lo[2]}, {ob.hi[0], ob.hi[1], ob.hi[2]}, id};
@@ -602,17 +606,23 @@ int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const
   return id;
 }
 
+int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
+                                const double max[3]) {
+  return sylva__grid_add_obstacle_kind(g, id, label, min, max, false);
+}
+
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]) {
-  return sylva__grid_add_obstacle_id(g, g->next_obstacle_id, label, min, max);
+  return sylva__grid_add_obstacle_kind(g, g->next_obstacle_id, label, min, max, false);
 }
 
 int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
   int s = slot_of(g, id);
   if (s < 0) return SYLVA_ENOTFOUND;
   sylva__obstacle *o = &g->obstacles[s];
+  bool zone = o->zone;
   int c0[2], c1[2];
-  if (obstacle_columns(o, c0, c1)) {
+  if (!zone && obstacle_columns(o, c0, c1)) {
     for (int cy = c0[1]; cy < c1[1]; cy++)
       for (int cx = c0[0]; cx < c1[0]; cx++) {
         sylva__obstacle_list *l = g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
@@ -627,6 +637,7 @@ int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
   for (int k = s + 1; k <= g->obstacle_slots; k += k & -k) g->obstacle_rank[k]--;
   g->obstacle_count--;
   if (g->obstacle_slots - g->obstacle_count > g->obstacle_count) compact_obstacles(g);
+  if (zone) return SYLVA_OK;
   site_forget(g);
   if (g->site) g->sky_top = sylva__site_top(g); /* a scan: removals are rare */
   return SYLVA_OK;

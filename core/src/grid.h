@@ -35,6 +35,7 @@ typedef struct sylva__chunk {
 typedef struct sylva__obstacle {
   int id;
   bool live; /* false: removed, a slot waiting for the next compaction */
+  bool zone; /* a clearance zone: listed, never in a column; it blocks nothing */
   char label[SYLVA_LABEL_MAX];
   double min[3], max[3];
   int lo[3], hi[3]; /* voxel box [lo, hi), clipped to the grid */
@@ -146,8 +147,14 @@ int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min
  *  SYLVA_EINVAL for an id at or below one. */
 int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
                                 const double max[3]);
+/** The same for a solid obstacle (zone false) or a clearance zone (zone true), which
+ *  is kept with its id and label but neither blocks, nor darkens, nor hides sky. */
+int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, const double min[3],
+                                  const double max[3], bool zone);
 /** Removes the obstacle of this id (never allocates); SYLVA_ENOTFOUND if none. */
 int sylva__grid_remove_obstacle(sylva__grid *g, int id);
+/** Slot of the live obstacle with this id, or -1. */
+int sylva__grid_obstacle_slot(const sylva__grid *g, int id);
 /** Id of the obstacle with this label, or SYLVA_ENOTFOUND. */
 int sylva__grid_find_obstacle(const sylva__grid *g, const char *label);
 /** The i-th live obstacle in the order they were added, 0 <= i < obstacle_count. */

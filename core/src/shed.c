@@ -4,8 +4,7 @@
 
 #include "world_impl.h"
 
-/* Removes doomed node i: its shade, its voxel, its slot. */
-static int remove_node(sylva_world *w, int32_t i) {
+int sylva__remove_node(sylva_world *w, int32_t i, bool pruned) {
   sylva__skeleton *s = &w->nodes;
   int rc = sylva__shade_node(w, i, -1);
   if (rc) return rc;
@@ -14,7 +13,10 @@ static int remove_node(sylva_world *w, int32_t i) {
   sylva__grid_vacate(&w->grid, v);
   s->flags[i] = 0;
   s->live--;
-  w->stems[s->stem[i]].stats.shed++;
+  if (pruned)
+    w->stems[s->stem[i]].stats.pruned++;
+  else
+    w->stems[s->stem[i]].stats.shed++;
   return SYLVA_OK;
 }
 
@@ -69,7 +71,7 @@ int sylva__shed(sylva_world *w, int iteration) {
   if (SYLVA__VEC_RESERVE(w->cells, doomed)) {
     for (size_t i = 0; i < s->count; i++) {
       if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-      int rc = remove_node(w, (int32_t)i);
+      int rc = sylva__remove_node(w, (int32_t)i, false);
       if (rc) return rc;
     }
   } else {
@@ -83,7 +85,7 @@ int sylva__shed(sylva_world *w, int iteration) {
     }
     qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
     for (size_t k = 0; k < w->cells.len; k++) {
-      int rc = remove_node(w, w->cells.data[k].item);
+      int rc = sylva__remove_node(w, w->cells.data[k].item, false);
       if (rc) return rc;
     }
   }

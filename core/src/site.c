@@ -27,7 +27,7 @@ static bool hits_box(const double p[3], const double d[3], const int32_t lo[3],
 double sylva__site_top(const sylva__grid *g) {
   double top = 0.0;
   for (int s = 0; s < g->obstacle_slots; s++)
-    if (g->obstacles[s].live && g->obstacles[s].hi[2] > top) top = g->obstacles[s].hi[2];
+    if (g->obstacles[s].live && !g->obstacles[s].zone && g->obstacles[s].hi[2] > top) top = g->obstacles[s].hi[2];
   return top;
 }
 

@@ -2,7 +2,10 @@
  * u32 version, u32 flags, u64 payload size, u64 FNV-1a 64 of the payload), then
  * the payload, little-endian. Flags: 0, or SKY when the world has a site's sky
  * (its directions follow the seed), so that a world without one has the same
- * bytes as before skies existed. The voxel grid is not stored: shade is an exact
+ * bytes as before skies existed; CONFLICTS when the world has zones, pruning
+ * schedules, zones entered or nodes pruned since its last step: each obstacle then
+ * carries its kind, each stem its pruned count, and the entered zones and the
+ * schedules follow the nodes. The voxel grid is not stored: shade is an exact
  * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -11,10 +14,11 @@
 
 #include "sylva/snapshot.h"
 #include "sylva/species_fields.h"
+#include "conflicts.h"
 #include "world_impl.h"
 
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
-enum { HEADER = 32, SKY = 1 };
+enum { HEADER = 32, SKY = 1, CONFLICTS = 2 };
 
 typedef struct writer {
   uint8_t *buf;
@@ -129,11 +133,22 @@ static void put_stats(writer *o, const sylva_stem_stats *s) {
   put_i32(o, s->cap);
 }
 
+/* Does the image need the CONFLICTS parts? */
+static bool has_conflicts(const sylva_world *w) {
+  if (w->reports || w->entered.len || w->prunes.len) return true;
+  for (int s = 0; s < w->grid.obstacle_slots; s++)
+    if (w->grid.obstacles[s].live && w->grid.obstacles[s].zone) return true;
+  for (int k = 0; k < w->stem_count; k++)
+    if (w->stems[k].stats.pruned) return true;
+  return false;
+}
+
 int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   *data = NULL;
   *size = 0;
   if (w->status) return w->status;
   writer o = {0};
+  bool conflicts = has_conflicts(w);
   uint8_t zero[HEADER] = {0};
   put(&o, zero, HEADER);
   for (int a = 0; a < 3; a++) put_f64(&o, w->def.min[a]);
@@ -167,6 +182,7 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     put_str(&o, ob->label);
     for (int a = 0; a < 3; a++) put_f64(&o, ob->min[a]);
     for (int a = 0; a < 3; a++) put_f64(&o, ob->max[a]);
+    if (conflicts) put_u8(&o, ob->zone);
   }
   put_u32(&o, (uint32_t)w->plant_count);
   for (int i = 0; i < w->plant_count; i++) {
@@ -180,6 +196,7 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     for (int a = 0; a < 3; a++) put_f64(&o, st->root[a]);
     put_u8(&o, st->finished);
     put_stats(&o, &st->stats);
+    if (conflicts) put_u64(&o, (uint64_t)st->stats.pruned);
   }
   /* live nodes, links as indices among live nodes */
   const sylva__skeleton *s = &w->nodes;
@@ -207,6 +224,20 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     put_u8(&o, s->flags[i]);
   }
   sylva__free(index);
+  if (conflicts) {
+    put_u32(&o, (uint32_t)w->entered.len);
+    for (size_t i = 0; i < w->entered.len; i++) {
+      put_i32(&o, w->entered.data[i].stem);
+      put_i32(&o, w->entered.data[i].zone);
+      put_i32(&o, w->entered.data[i].first);
+    }
+    put_u32(&o, (uint32_t)w->prunes.len);
+    for (size_t i = 0; i < w->prunes.len; i++) {
+      put_i32(&o, w->prunes.data[i].zone);
+      put_i32(&o, w->prunes.data[i].every);
+      put_i32(&o, w->prunes.data[i].from);
+    }
+  }
   if (o.failed) {
     sylva__free(o.buf);
     return SYLVA_ENOMEM;
@@ -216,7 +247,7 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   uint8_t *h = o.buf + 8;
   uint32_t version = SYLVA_SNAPSHOT_VERSION;
   for (int i = 0; i < 4; i++) h[i] = (uint8_t)(version >> (8 * i));
-  uint32_t flags = w->def.sky_count ? SKY : 0;
+  uint32_t flags = (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0);
   for (int i = 0; i < 4; i++) h[4 + i] = (uint8_t)(flags >> (8 * i));
   for (int i = 0; i < 8; i++) h[8 + i] = (uint8_t)(payload >> (8 * i));
   uint64_t sum = fnv1a(o.buf + HEADER, payload);
@@ -315,7 +346,7 @@ static void get_species(reader *r, sylva_species_def *d) {
     goto fail;            \
   } while (0)
 
-static int read_world(reader *r, bool has_sky, sylva_world **out) {
+static int read_world(reader *r, bool has_sky, bool conflicts, sylva_world **out) {
   int rc = SYLVA_OK;
   sylva_world *w = NULL;
   sylva_world_def def = sylva_default_world_def();
@@ -373,10 +404,11 @@ static int read_world(reader *r, bool has_sky, sylva_world **out) {
     double mn[3], mx[3];
     for (int a = 0; a < 3; a++) mn[a] = get_f64(r);
     for (int a = 0; a < 3; a++) mx[a] = get_f64(r);
+    uint8_t zone = conflicts ? get_u8(r) : 0;
     if (r->bad) break;
-    if (id < 0 || id >= next_obstacle) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    if (id < 0 || id >= next_obstacle || zone > 1) SYLVA__FAIL(SYLVA_EBADIMAGE);
     /* refuses an id at or below the previous one (SYLVA_EINVAL) */
-    int added = sylva__grid_add_obstacle_id(&w->grid, id, label, mn, mx);
+    int added = sylva__grid_add_obstacle_kind(&w->grid, id, label, mn, mx, zone != 0);
     if (added < 0) SYLVA__FAIL(added == SYLVA_ENOMEM ? added : SYLVA_EBADIMAGE);
   }
   w->grid.next_obstacle_id = next_obstacle;
@@ -416,11 +448,13 @@ static int read_world(reader *r, bool has_sky, sylva_world **out) {
       uint8_t fin = get_u8(r);
       st->finished = fin != 0;
       get_stats(r, &st->stats);
+      st->stats.pruned = conflicts ? (int64_t)get_u64(r) : 0;
       st->stats.plant = i;
       st->stats.stem = k;
       st->stats.finished = st->finished;
       st->root_slot = -1;
-      if (fin > 1 || st->born < 0 || st->born > iteration) SYLVA__FAIL(SYLVA_EBADIMAGE);
+      if (fin > 1 || st->born < 0 || st->born > iteration || st->stats.pruned < 0)
+        SYLVA__FAIL(SYLVA_EBADIMAGE);
     }
   uint32_t live = get_u32(r);
   if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
@@ -463,6 +497,35 @@ static int read_world(reader *r, bool has_sky, sylva_world **out) {
         SYLVA__FAIL(SYLVA_EBADIMAGE);
     }
   }
+  if (conflicts) {
+    uint32_t n = get_u32(r);
+    if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+    if ((uint64_t)n * 12 > r->len - r->pos) SYLVA__FAIL(SYLVA_ETRUNCATED);
+    for (uint32_t i = 0; i < n; i++) {
+      int32_t stem = get_i32(r), zone = get_i32(r), first = get_i32(r);
+      int slot = sylva__grid_obstacle_slot(&w->grid, zone);
+      if (stem < 0 || stem >= w->stem_count || zone < 0 || zone >= next_obstacle || first < 0 ||
+          first > iteration || (slot >= 0 && !w->grid.obstacles[slot].zone))
+        SYLVA__FAIL(SYLVA_EBADIMAGE);
+      int erc = sylva__entered_add(w, stem, zone, first);
+      if (erc) SYLVA__FAIL(erc == SYLVA_ENOMEM ? erc : SYLVA_EBADIMAGE);
+    }
+    n = get_u32(r);
+    if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+    if ((uint64_t)n * 12 > r->len - r->pos) SYLVA__FAIL(SYLVA_ETRUNCATED);
+    for (uint32_t i = 0; i < n; i++) {
+      sylva_prune_def d;
+      d.zone = get_i32(r);
+      d.every = get_i32(r);
+      d.from = get_i32(r);
+      /* its zone may have been removed since: the schedule then prunes nothing */
+      if (d.zone < 0 || d.zone >= next_obstacle || d.every < 0 || d.from < 1)
+        SYLVA__FAIL(SYLVA_EBADIMAGE);
+      if (SYLVA__VEC_RESERVE(w->prunes, w->prunes.len + 1)) SYLVA__FAIL(SYLVA_ENOMEM);
+      w->prunes.data[w->prunes.len++] = d;
+    }
+    w->reports = true;
+  }
   if (r->pos != r->len) SYLVA__FAIL(SYLVA_EBADIMAGE);
   s->next_id = next_id;
   /* links that point forward must be answered by the child's parent */
@@ -490,6 +553,8 @@ static int read_world(reader *r, bool has_sky, sylva_world **out) {
     orc = sylva__shade_node(w, (int32_t)i, +1);
     if (orc) SYLVA__FAIL(orc);
   }
+  rc = sylva__conflicts_update(w, 0); /* the zone lines and clearances, as saved */
+  if (rc) SYLVA__FAIL(rc);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   *out = w;
   return SYLVA_OK;
@@ -509,9 +574,9 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)SKY) return SYLVA_EBADIMAGE;
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS)) return SYLVA_EBADIMAGE;
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};
-  return read_world(&r, (reserved & SKY) != 0, out);
+  return read_world(&r, (reserved & SKY) != 0, (reserved & CONFLICTS) != 0, out);
 }

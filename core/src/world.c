@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "conflicts.h"
 #include "world_impl.h"
 
 int sylva__vec_reserve(void **data, size_t *cap, size_t n, size_t elem) {
@@ -101,6 +102,15 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->cell_items.data);
   sylva__free(w->cell_pos.data);
   sylva__free(w->cell_of.data);
+  sylva__free(w->entered.data);
+  sylva__free(w->prunes.data);
+  sylva__free(w->zone_stats.data);
+  sylva__free(w->clear_stats.data);
+  sylva__free(w->stem_box.data);
+  sylva__free(w->stem_nodes.data);
+  sylva__free(w->stem_nodes_first.data);
+  sylva__free(w->candidates.data);
+  sylva__free(w->pruned_ids.data);
   sylva__free(w);
 }
 
@@ -249,6 +259,8 @@ int sylva__index_plant(sylva_world *w, int p) {
   return SYLVA_OK;
 }
 
+static int reserve_scratch(sylva_world *w);
+
 /* ---- taking back a call that failed -------------------------------------------- */
 
 /* Notes the state a step or a new plant starts from (sylva__mark). */
@@ -382,6 +394,10 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       prev = slot;
     }
   }
+  if (sylva__conflicts_reserve(w, w->mark.stem_count)) {
+    take_back(w);
+    return SYLVA_ENOMEM;
+  }
   sylva__plant *pl = &w->plants[pid];
   memset(pl, 0, sizeof *pl);
   strcpy(pl->label, def->label);
@@ -391,18 +407,94 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   file_plant(w, pid);
   w->plant_count++;
   for (int r = 0; r < def->root_count; r++) sylva__stats_planted(w, pl->first_stem + r);
+  sylva__conflicts(w, w->iteration);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   return pid;
 }
 
 int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def) {
   if (w->status) return w->status;
-  return sylva__grid_add_obstacle(&w->grid, def->label, def->min, def->max);
+  if (def->kind != SYLVA_OBSTACLE_SOLID && def->kind != SYLVA_OBSTACLE_ZONE) return SYLVA_EINVAL;
+  int id = sylva__grid_add_obstacle_kind(&w->grid, w->grid.next_obstacle_id, def->label, def->min,
+                                         def->max, def->kind == SYLVA_OBSTACLE_ZONE);
+  if (id < 0) return id;
+  bool reports = w->reports;
+  w->reports |= def->kind == SYLVA_OBSTACLE_ZONE;
+  if (sylva__conflicts_update(w, 0)) {
+    w->reports = reports;
+    int next = w->grid.next_obstacle_id;
+    sylva__grid_remove_obstacle(&w->grid, id);
+    w->grid.next_obstacle_id = next - 1; /* as if never added */
+    return SYLVA_ENOMEM;
+  }
+  return id;
 }
 
 int sylva_world_remove_obstacle(sylva_world *w, int obstacle) {
   if (w->status) return w->status;
-  return sylva__grid_remove_obstacle(&w->grid, obstacle);
+  int rc = sylva__grid_remove_obstacle(&w->grid, obstacle);
+  if (rc) return rc;
+  /* fewer obstacles near fewer stems: the room reserved before is enough */
+  rc = sylva__conflicts_update(w, 0);
+  SYLVA_ASSERT(rc == SYLVA_OK);
+  return rc ? w->status = rc : SYLVA_OK;
+}
+
+int sylva_world_add_prune(sylva_world *w, const sylva_prune_def *def) {
+  if (w->status) return w->status;
+  int slot = sylva__grid_obstacle_slot(&w->grid, def->zone);
+  if (slot < 0 || !w->grid.obstacles[slot].zone || def->every < 0 || def->from < 1)
+    return SYLVA_EINVAL;
+  if (SYLVA__VEC_RESERVE(w->prunes, w->prunes.len + 1)) return SYLVA_ENOMEM;
+  w->prunes.data[w->prunes.len++] = *def;
+  w->reports = true;
+  return SYLVA_OK;
+}
+
+int sylva_world_prune_count(const sylva_world *w) { return (int)w->prunes.len; }
+
+int sylva_world_prune_at(const sylva_world *w, int i, sylva_prune_def *out) {
+  if (i < 0 || (size_t)i >= w->prunes.len) return SYLVA_ENOTFOUND;
+  *out = w->prunes.data[i];
+  return SYLVA_OK;
+}
+
+/* Drops the dead slots of the skeleton (parents before children stay in order). */
+static void compact_nodes(sylva_world *w) {
+  if (w->nodes.count == w->nodes.live) return;
+  sylva__skeleton_compact(&w->nodes, w->remap);
+  for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
+}
+
+int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[3],
+                          const int32_t **removed, size_t *removed_count) {
+  if (removed) *removed = NULL;
+  if (removed_count) *removed_count = 0;
+  if (w->status) return w->status;
+  for (int a = 0; a < 3; a++)
+    if (!isfinite(min[a]) || !isfinite(max[a]) || max[a] < min[a]) return SYLVA_EINVAL;
+  w->pruned_ids.len = 0;
+  if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count) ||
+      sylva__conflicts_reserve(w, 0))
+    return SYLVA_ENOMEM;
+  /* nothing fails from here on */
+  int T = w->iteration;
+  size_t n = sylva__prune(w, min, max, -1, T, false, w->pruned_ids.data, &w->pruned_ids.len);
+  if (n) {
+    w->reports = true;
+    sylva__light_collect(w, T + 1, NULL); /* as after a step's shedding */
+    /* the measures anew (stats.pruned goes on counting until the next step) */
+    if (T == 0)
+      for (int k = 0; k < w->stem_count; k++) sylva__stats_planted(w, k);
+    else
+      sylva__stats(w, T);
+  }
+  sylva__conflicts(w, T);
+  compact_nodes(w);
+  SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
+  if (removed) *removed = w->pruned_ids.data;
+  if (removed_count) *removed_count = w->pruned_ids.len;
+  return (int64_t)n;
 }
 
 int sylva_world_find_obstacle(const sylva_world *w, const char *label) {
@@ -450,7 +542,7 @@ static int reserve_rest(sylva_world *w) {
   if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
       SYLVA__VEC_RESERVE(w->shed, count) ||
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
-      SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count))
+      SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) || sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
   return SYLVA_OK;
 }
@@ -511,19 +603,27 @@ static int finish_step(sylva_world *w, int T) {
 
   rc = sylva__shed(w, T);
   if (rc) return rc;
+  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.pruned = 0; /* counted anew at T */
+  bool pruned = false;
+  for (size_t i = 0; i < w->prunes.len; i++) {
+    const sylva_prune_def *d = &w->prunes.data[i];
+    int slot = sylva__grid_obstacle_slot(&w->grid, d->zone);
+    if (slot < 0 || !sylva__prune_due(d, T)) continue; /* the zone was removed */
+    const sylva__obstacle *z = &w->grid.obstacles[slot];
+    pruned |= sylva__prune(w, z->min, z->max, z->id, T, true, w->shed.data, &w->shed.len) > 0;
+  }
+  if (pruned) sylva__light_collect(w, T + 1, NULL); /* as after shedding */
   SYLVA__CHECK_WORLD(w, SYLVA__AFTER_SHEDDING);
   double t5 = now(w);
   j->phase_seconds[SYLVA_PHASE_SHEDDING] = t5 - t4;
 
   collect_journal(w, T);
   sylva__stats(w, T);
+  sylva__conflicts(w, T);
   for (int s = 0; s < w->stem_count; s++) w->stats.data[s] = w->stems[s].stats;
   /* Keep the skeleton dense after every step: slots are node order, so queries
    * index live nodes directly. */
-  if (w->nodes.count != w->nodes.live) {
-    sylva__skeleton_compact(&w->nodes, w->remap);
-    for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
-  }
+  compact_nodes(w);
   j->phase_seconds[SYLVA_PHASE_STATS] = now(w) - t5;
   return SYLVA_OK;
 }
@@ -579,6 +679,7 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
   j->stats = w->stats.data;
   j->stem_count = (size_t)w->stem_count;
   j->order = w->order.data;
+  j->conflicts = sylva_world_conflicts(w);
   if (journal) *journal = j;
   return SYLVA_OK;
 }
@@ -631,7 +732,40 @@ int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out
   *out = w->stems[stem].stats;
   return SYLVA_OK;
 }
+bool sylva_world_reports_conflicts(const sylva_world *w) { return w->reports; }
+
+sylva_conflicts sylva_world_conflicts(const sylva_world *w) {
+  return (sylva_conflicts){w->zone_stats.data, w->zone_stats.len, w->clear_stats.data,
+                           w->clear_stats.len};
+}
+
+/* The first of n items of `size` bytes, sorted by their leading int32 stem, whose
+ * stem is not below `stem`. */
+static size_t first_of_stem(const void *items, size_t n, size_t size, int stem) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    int32_t at;
+    memcpy(&at, (const char *)items + mid * size, sizeof at);
+    if (at < stem) lo = mid + 1; else hi = mid;
+  }
+  return lo;
+}
+
+sylva_conflicts sylva_world_stem_conflicts(const sylva_world *w, int stem) {
+  sylva_conflicts c = sylva_world_conflicts(w);
+  size_t z = first_of_stem(c.zones, c.zone_count, sizeof *c.zones, stem), zn = 0;
+  size_t k = first_of_stem(c.clearances, c.clearance_count, sizeof *c.clearances, stem), kn = 0;
+  while (z + zn < c.zone_count && c.zones[z + zn].stem == stem) zn++;
+  while (k + kn < c.clearance_count && c.clearances[k + kn].stem == stem) kn++;
+  return (sylva_conflicts){c.zones + z, zn, c.clearances + k, kn};
+}
+
 int sylva_world_obstacle_count(const sylva_world *w) { return w->grid.obstacle_count; }
+const char *sylva_world_obstacle_label(const sylva_world *w, int obstacle) {
+  int slot = sylva__grid_obstacle_slot(&w->grid, obstacle);
+  return slot >= 0 ? w->grid.obstacles[slot].label : NULL;
+}
 int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
   if (!in_range(i, w->grid.obstacle_count)) return SYLVA_ENOTFOUND;
   const sylva__obstacle *o = sylva__grid_obstacle_at(&w->grid, i);
@@ -639,6 +773,7 @@ int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle
   out->label = o->label;
   memcpy(out->min, o->min, sizeof out->min);
   memcpy(out->max, o->max, sizeof out->max);
+  out->kind = o->zone ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID;
   return SYLVA_OK;
 }
 
@@ -703,7 +838,7 @@ uint64_t sylva_world_hash(const sylva_world *w) {
   }
   for (int s = 0; s < w->grid.obstacle_slots; s++) {
     const sylva__obstacle *o = &w->grid.obstacles[s];
-    if (!o->live) continue;
+    if (!o->live || o->zone) continue; /* zones change nothing in the world */
     h = fnv(h, o->label, strlen(o->label));
     h = fnv(h, o->min, sizeof(double) * 3);
     h = fnv(h, o->max, sizeof(double) * 3);

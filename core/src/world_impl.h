@@ -59,6 +59,24 @@ typedef struct sylva__keyed {
 /** Orders keyed items by key, then item. */
 int sylva__keyed_cmp(const void *a, const void *b);
 
+/** A box in metres. */
+typedef struct sylva__box {
+  double min[3], max[3];
+} sylva__box;
+
+/** A stem entered a zone: first is the iteration one of its nodes was first seen
+ *  inside. Kept sorted by (stem, zone) and stored in snapshots. */
+typedef struct sylva__entered {
+  int32_t stem, zone, first;
+} sylva__entered;
+
+/** An obstacle near a stem (conflicts.c): its slot, and what the pass found. */
+typedef struct sylva__candidate {
+  int32_t stem, slot;
+  int64_t count; /* zone: the stem's nodes inside */
+  double dist2;  /* solid: the least squared distance from the stem's nodes */
+} sylva__candidate;
+
 /** Where a step or a new plant started from. Until the point after which it cannot
  *  fail, such a call only appends nodes (casting their shade), draws from the
  *  generator and plants stems; a failure takes all of it back to the mark, so the
@@ -97,6 +115,14 @@ struct sylva_world {
   size_t plant_index_cap; /* a power of two, at least twice the plants */
   sylva__stem *stems;
   int stem_count, stem_cap;
+  /* Conflicts (conflicts.c): the zones each stem entered (state, in snapshots), the
+   * pruning schedules (state), and the zone lines and clearances now (as after the
+   * last step or edit). */
+  SYLVA__VEC(sylva__entered) entered;
+  SYLVA__VEC(sylva_prune_def) prunes;
+  SYLVA__VEC(sylva_zone_stat) zone_stats;
+  SYLVA__VEC(sylva_clearance_stat) clear_stats;
+  bool reports;  /* has held a zone, a schedule or pruned a node (sticky, in snapshots) */
 
   /* Per-step scratch, reused across steps. Each buffer has one meaning, named by the
    * phase that fills it; none is reused by a later phase for something else. */
@@ -122,6 +148,12 @@ struct sylva_world {
   SYLVA__VEC(int32_t) work;      /* pending (slot) stack for axes */
   SYLVA__VEC(double) work_r;     /* resource for pending axes */
   SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */
+  SYLVA__VEC(sylva__box) stem_box;        /* conflicts: each stem's nodes' box */
+  SYLVA__VEC(int32_t) stem_nodes;         /* conflicts: live slots grouped by stem */
+  SYLVA__VEC(int32_t) stem_nodes_first;   /* conflicts: each stem's first, stem_count + 1 */
+  SYLVA__VEC(sylva__candidate) candidates; /* conflicts: obstacles near each stem */
+  int conflicts_from;                      /* conflicts: the first stem of the reserve */
+  SYLVA__VEC(int32_t) pruned_ids;          /* sylva_world_prune: the subtrees' roots */
   SYLVA__VEC(sylva_node_info) added;
   SYLVA__VEC(sylva_radius_change) radii;
   SYLVA__VEC(int32_t) shed;
@@ -204,6 +236,9 @@ int sylva__shade_node(sylva_world *w, int32_t slot, int sign);
 int sylva__radii(sylva_world *w, int iteration);
 /** Shedding of dark lateral branches (needs a fresh light pass in q). */
 int sylva__shed(sylva_world *w, int iteration);
+/** Removes a node marked for removal: its shade, its voxel, its slot; counted in
+ *  its stem's stats.pruned or stats.shed. */
+int sylva__remove_node(sylva_world *w, int32_t slot, bool pruned);
 /** Per-stem measures into stems[].stats. */
 void sylva__stats(sylva_world *w, int iteration);
 /** Measures of a stem just planted (its vertical initial trunk), without a pass

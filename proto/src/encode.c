@@ -63,6 +63,33 @@ static void put_key(sylva__strbuf *b, bool first, const char *key, bool compact)
   sylva__strbuf_puts(b, compact ? "\":" : "\": ");
 }
 
+/* `"zones": {...}, "clearance": {...}` of one global stem, from the world's
+ * conflicts (sorted by stem). */
+static void put_conflicts(sylva__strbuf *b, const sylva_world *w, int stem, bool compact) {
+  sylva_conflicts c = sylva_world_stem_conflicts(w, stem);
+  put_key(b, false, "zones", compact);
+  sylva__strbuf_putc(b, '{');
+  for (size_t i = 0; i < c.zone_count; i++) {
+    const char *label = sylva_world_obstacle_label(w, c.zones[i].obstacle);
+    if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
+    sylva__strbuf_json_string(b, label ? label : "");
+    sylva__strbuf_printf(b, compact ? ":{\"nodes\":%" PRId64 ",\"first\":%" PRId32 "}"
+                                    : ": {\"nodes\": %" PRId64 ", \"first\": %" PRId32 "}",
+                         c.zones[i].nodes, c.zones[i].first);
+  }
+  sylva__strbuf_putc(b, '}');
+  put_key(b, false, "clearance", compact);
+  sylva__strbuf_putc(b, '{');
+  for (size_t i = 0; i < c.clearance_count; i++) {
+    const char *label = sylva_world_obstacle_label(w, c.clearances[i].obstacle);
+    if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
+    sylva__strbuf_json_string(b, label ? label : "");
+    sylva__strbuf_puts(b, compact ? ":" : ": ");
+    sylva__strbuf_fixed(b, c.clearances[i].distance, 4);
+  }
+  sylva__strbuf_putc(b, '}');
+}
+
 void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_stem_stats *s,
                            bool compact) {
   const char *label = sylva_world_plant_label(w, s->plant);
@@ -83,12 +110,19 @@ void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_s
   sylva__strbuf_printf(b, "%" PRId64, s->nodes);
   put_key(b, false, "shed", compact);
   sylva__strbuf_printf(b, "%" PRId64, s->shed);
+  if (sylva_world_reports_conflicts(w)) {
+    put_key(b, false, "pruned", compact);
+    sylva__strbuf_printf(b, "%" PRId64, s->pruned);
+  }
   put_key(b, false, "light", compact);
   sylva__strbuf_fixed(b, s->light, 3);
   put_key(b, false, "cap", compact);
   sylva__strbuf_printf(b, "%d", s->cap);
   put_key(b, false, "finished", compact);
-  sylva__strbuf_puts(b, s->finished ? "true}" : "false}");
+  sylva__strbuf_puts(b, s->finished ? "true" : "false");
+  if (sylva_world_reports_conflicts(w))
+    put_conflicts(b, w, sylva_world_stem_index(w, s->plant, s->stem), compact);
+  sylva__strbuf_putc(b, '}');
 }
 
 char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms) {

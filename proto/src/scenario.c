@@ -635,9 +635,10 @@ int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obs
   old = sylva__ptr_push(p, "kind");
   const char *kind = "";
   rc = sylva__want_string(p, member(obj, "kind"), &kind);
-  if (!rc && strcmp(kind, "box") != 0) {
+  o->kind = strcmp(kind, "zone") == 0 ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID;
+  if (!rc && strcmp(kind, "box") != 0 && strcmp(kind, "zone") != 0) {
     char q[80];
-    rc = sylva__fail(p, "unknown obstacle kind %s (known: box)", sylva__quote(q, kind));
+    rc = sylva__fail(p, "unknown obstacle kind %s (known: box, zone)", sylva__quote(q, kind));
   }
   sylva__ptr_pop(p, old);
   if (rc) return rc;
@@ -735,13 +736,14 @@ static void scenario_free_parts(sylva_scenario *s) {
   for (int i = 0; s->plants && i < s->plant_count; i++) free(s->plants[i].roots);
   free(s->plants);
   free(s->obstacles);
+  free(s->management);
   free(s);
 }
 
 void sylva_scenario_free(sylva_scenario *s) { scenario_free_parts(s); }
 
 static const char *const top_keys[] = {"format",  "name",    "seed",   "iterations", "world",
-                                       "species", "plants",  "obstacles", "light"};
+                                       "species", "plants",  "obstacles", "management", "light"};
 
 static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_scenario *s) {
   int rc = sylva__want_object(p, root);
@@ -944,6 +946,8 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
     sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
+  if ((item = member(root, "management")) && (rc = sylva__parse_management(p, item, s)))
+    return rc;
 
   if (!voxel) {
     /* rho / 2 of the smallest rho in use: of the planted species, or of all
@@ -1085,13 +1089,18 @@ char *sylva_scenario_json(const sylva_scenario *s) {
     const sylva_scenario_obstacle *o = &s->obstacles[i];
     sylva__strbuf_puts(&b, i ? ",\n    {\"id\": " : "\n    {\"id\": ");
     sylva__strbuf_json_string(&b, o->id);
-    sylva__strbuf_puts(&b, ", \"kind\": \"box\", \"min\": ");
+    sylva__strbuf_puts(&b, o->kind == SYLVA_OBSTACLE_ZONE ? ", \"kind\": \"zone\", \"min\": "
+                                                          : ", \"kind\": \"box\", \"min\": ");
     put_vec3(&b, o->min);
     sylva__strbuf_puts(&b, ", \"max\": ");
     put_vec3(&b, o->max);
     sylva__strbuf_putc(&b, '}');
   }
   sylva__strbuf_puts(&b, s->obstacle_count ? "\n  ]" : "]");
+  if (s->management_count) { /* none is the default: such scenarios stay as they were */
+    sylva__strbuf_puts(&b, ",\n  \"management\": ");
+    sylva__put_management(&b, s);
+  }
   if (s->light.site) { /* the zenith sky is the default: its scenarios stay as they were */
     sylva__strbuf_puts(&b, ",\n  \"light\": ");
     sylva__put_light(&b, &s->light);
@@ -1143,7 +1152,7 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
   /* Obstacles first, so that a root inside one is found when its plant is added. */
   for (int i = 0; i < s->obstacle_count; i++) {
     const sylva_scenario_obstacle *o = &s->obstacles[i];
-    sylva_obstacle_def od = {.label = o->id};
+    sylva_obstacle_def od = {.label = o->id, .kind = o->kind};
     memcpy(od.min, o->min, sizeof od.min);
     memcpy(od.max, o->max, sizeof od.max);
     rc = sylva_world_add_obstacle(w, &od);
@@ -1186,6 +1195,8 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
       goto fail;
     }
   }
+  rc = sylva__build_management(&p, s, w);
+  if (rc) goto fail;
   free(species_ids);
   *out = w;
   return 0;

@@ -98,6 +98,12 @@ int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *
                        const char **species_name);
 /** An obstacle object {"id", "kind": "box", "min", "max"} with max > min. */
 int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obstacle *o);
+/** Parses `management` (after the obstacles, which it names) into s. */
+int sylva__parse_management(sylva__parser *p, const cJSON *item, sylva_scenario *s);
+/** Writes s's management list in canonical form. */
+void sylva__put_management(struct sylva__strbuf *b, const sylva_scenario *s);
+/** Gives world w (built from s, obstacles in order) s's pruning schedules. */
+int sylva__build_management(sylva__parser *p, const sylva_scenario *s, sylva_world *w);
 
 /** A whole scenario from a cJSON tree, errors under the parser's current pointer
  *  (set p->base to its length); flags as for sylva_scenario_parse_ex(). On failure

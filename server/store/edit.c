@@ -26,6 +26,7 @@ void edit_free(edit *e) {
     free(e->plants[i].species);
     free(e->plants[i].roots);
   }
+  free(e->prune.zone);
   free(e->removals);
   free(e->obstacles);
   free(e->plants);
@@ -67,7 +68,7 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
   for (int i = 0; i < e->obstacle_count; i++) {
     const edit_obstacle *o = &e->obstacles[i];
     sylva_obstacle_def def = {o->id, {o->min[0], o->min[1], o->min[2]},
-                              {o->max[0], o->max[1], o->max[2]}};
+                              {o->max[0], o->max[1], o->max[2]}, o->kind};
     rc = sylva_world_add_obstacle(copy, &def);
     if (rc < 0) {
       snprintf(err, errlen, "/add_obstacles/%d/id: %s", i,
@@ -96,6 +97,32 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
                  rc == SYLVA_EINVAL ? "a plant with this id exists" : sylva_strerror(rc));
       sylva_world_destroy(copy);
       return rc == SYLVA_ENOMEM ? rc : SYLVA_EINVAL;
+    }
+  }
+  if (e->prune.set) {
+    double mn[3], mx[3];
+    memcpy(mn, e->prune.min, sizeof mn);
+    memcpy(mx, e->prune.max, sizeof mx);
+    if (e->prune.zone) {
+      int id = sylva_world_find_obstacle(copy, e->prune.zone);
+      sylva_obstacle_def z = {0};
+      for (int i = 0; id >= 0 && i < sylva_world_obstacle_count(copy); i++) {
+        int oid;
+        if (sylva_world_obstacle_at(copy, i, &oid, &z) == 0 && oid == id) break;
+      }
+      if (id < 0 || z.kind != SYLVA_OBSTACLE_ZONE) {
+        snprintf(err, errlen, "/prune/zone: no zone \"%s\"", e->prune.zone);
+        sylva_world_destroy(copy);
+        return SYLVA_EINVAL;
+      }
+      memcpy(mn, z.min, sizeof mn);
+      memcpy(mx, z.max, sizeof mx);
+    }
+    int64_t n = sylva_world_prune(copy, mn, mx, NULL, NULL);
+    if (n < 0) {
+      snprintf(err, errlen, "/prune: %s", sylva_strerror((int)n));
+      sylva_world_destroy(copy);
+      return n == SYLVA_ENOMEM ? SYLVA_ENOMEM : SYLVA_EINVAL;
     }
   }
   *out = copy;

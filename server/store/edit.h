@@ -5,6 +5,7 @@
 #ifndef SYLVA_SERVER_EDIT_H
 #define SYLVA_SERVER_EDIT_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "sylva/world.h"
@@ -16,14 +17,22 @@ typedef struct edit_plant {
   int root_count;
 } edit_plant;
 
-/** A box obstacle to add. */
+/** An obstacle to add: a solid box or a clearance zone. */
 typedef struct edit_obstacle {
   char *id;
   double min[3], max[3];
+  sylva_obstacle_kind kind;
 } edit_obstacle;
 
+/** Pruning now: of a zone (zone set) or of a box (zone NULL). */
+typedef struct edit_prune {
+  bool set;
+  char *zone;
+  double min[3], max[3];
+} edit_prune;
+
 /** One edit; every string and array is owned (edit_free). Applied in this order:
- *  removals, then obstacles, then plants. */
+ *  removals, then obstacles, then plants, then the prune. */
 typedef struct edit {
   char **removals; /**< ids of obstacles to remove */
   int removal_count;
@@ -31,6 +40,7 @@ typedef struct edit {
   int obstacle_count;
   edit_plant *plants;
   int plant_count;
+  edit_prune prune;
 } edit;
 
 /** Sizes the arrays of a zeroed edit (their elements zeroed); SYLVA_ENOMEM or 0.

@@ -164,7 +164,8 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
   sylva_obstacle_def board = {
       "board",
       {lo[0] + 0.05 * span[0], lo[1] + 0.05 * span[1], lo[2] + 0.8 * span[2]},
-      {lo[0] + 0.15 * span[0], lo[1] + 0.15 * span[1], lo[2] + 0.82 * span[2]}};
+      {lo[0] + 0.15 * span[0], lo[1] + 0.15 * span[1], lo[2] + 0.82 * span[2]},
+      SYLVA_OBSTACLE_SOLID};
   double root[1][3] = {{lo[0] + 0.25 * span[0], lo[1] + 0.25 * span[1], lo[2]}};
   sylva_plant_def tree = {0, "late", (const double(*)[3])root, 1};
   for (int k = 0; k < 2;) {

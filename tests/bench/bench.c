@@ -236,7 +236,7 @@ static void obstacles(int edits) {
   for (int i = 0; i < 1000; i++) {
     char label[16];
     snprintf(label, sizeof label, "box%d", i);
-    sylva_obstacle_def o = {label, {0}, {0}};
+    sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID};
     random_box(&r, 5.0, 2.0, o.min, o.max);
     if (sylva_world_add_obstacle(w, &o) < 0) exit(1);
   }
@@ -264,7 +264,7 @@ static void obstacles(int edits) {
   for (int i = 0; i < edits; i++) {
     char label[16];
     snprintf(label, sizeof label, "o%d", i);
-    sylva_obstacle_def o = {label, {0}, {0}};
+    sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID};
     random_box(&r, 1.0, 0.5, o.min, o.max);
     ids[i] = sylva_world_add_obstacle(w, &o);
     if (ids[i] < 0) exit(1);

@@ -32,7 +32,7 @@ static sylva_world *make_world(int iterations) {
   /* a label with a space: the OBJ object name must stay one token */
   sylva_plant_def p1 = {species, "oak", (const double(*)[3])tree, 1};
   sylva_plant_def p2 = {species, "hazel bush", (const double(*)[3])shrub, 2};
-  sylva_obstacle_def wall = {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}};
+  sylva_obstacle_def wall = {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID};
   if (species < 0 || sylva_world_add_plant(w, &p1, NULL) < 0 ||
       sylva_world_add_plant(w, &p2, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {
     sylva_world_destroy(w);
@@ -808,7 +808,7 @@ static void test_empty(void) {
   CHECK(p.ok && p.header_v == 0 && p.header_f == 0);
   parsed_free(&p);
   free(ply.data);
-  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}};
+  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}, SYLVA_OBSTACLE_SOLID};
   CHECK(sylva_world_add_obstacle(w, &box) >= 0);
   opt.obstacles = true;
   CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_OBJ, &opt, &v, &f), 0);

@@ -41,7 +41,7 @@ static sylva_world *site(void) {
   double root[1][3] = {{0, 0, 0}};
   sylva_plant_def pd = {s, "oak", (const double(*)[3])root, 1};
   sylva_world_add_plant(w, &pd, NULL);
-  sylva_obstacle_def wall = {"wall", {-3, -3, 0}, {-2.8, 3, 2}};
+  sylva_obstacle_def wall = {"wall", {-3, -3, 0}, {-2.8, 3, 2}, SYLVA_OBSTACLE_SOLID};
   sylva_world_add_obstacle(w, &wall);
   return w;
 }
@@ -49,7 +49,7 @@ static sylva_world *site(void) {
 /* The edit of `today`, made with the core's own calls. */
 static void edit_by_hand(sylva_world *w) {
   CHECK_INT(sylva_world_remove_obstacle(w, sylva_world_find_obstacle(w, "wall")), 0);
-  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}};
+  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID};
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
   double r1[1][3] = {{-1, 0.1, 0}}, r2[2][3] = {{1, -1, 0}, {1.3, -1.2, 0}};
   sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1};

@@ -4,8 +4,11 @@ import assert from 'node:assert/strict';
 import {
   round, wsAddress, connectionLabel, runSummary, runCells, runHash, runFromHash, mostRecentRun, initialRun,
   controlsDisabled, stepCount, exportHref, freeId, parsePoint, obstacleBox, obstacleFromFields, plantAt,
-  parseScenario, createErrorPlace, parseStatsCsv,
+  parseScenario, createErrorPlace, parseStatsCsv, zoneFromFields, skyOf, skyLabel,
 } from '../../web/helpers.mjs';
+import {
+  isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, stemLabel,
+} from '../../web/zones.mjs';
 
 const run = (id, name, status) => ({ run: id, name, status, iteration: 3, stems: 1, nodes: 40 });
 
@@ -172,4 +175,100 @@ test('stats.csv rows by iteration, typed', () => {
   ]);
   assert.deepEqual(rows.get(2), [{ iteration: 2, plant: 'tree', stem: 0, height: 2.25, dbh: 0.01, finished: true }]);
   assert.equal(parseStatsCsv('iteration,plant\n').size, 0);
+});
+
+test('a zone from the edit fields: two corners, from one height up to another', () => {
+  const fields = { cornerA: '0.5, -2', cornerB: '3, 2', base: '1', top: '6', thickness: '0.2' };
+  assert.deepEqual(zoneFromFields(fields, new Set(['zone1', 'wall1'])),
+    { obstacle: { id: 'zone2', kind: 'zone', min: [0.5, -2, 1], max: [3, 2, 6] } });
+  // one line of corners: as wide as the thickness across it
+  assert.deepEqual(zoneFromFields({ ...fields, cornerB: '0.5, 2' }, new Set()).obstacle,
+    { id: 'zone1', kind: 'zone', min: [0.4, -2, 1], max: [0.6, 2, 6] });
+  assert.match(zoneFromFields({ ...fields, cornerA: '1' }, new Set()).error, /both corners/);
+  for (const [base, top, thickness] of [['', '6', '0.2'], ['1', '', '0.2'], ['low', '6', '0.2'], ['1', '6', '0']]) {
+    assert.equal(zoneFromFields({ ...fields, base, top, thickness }, new Set()).error,
+      'the heights and the thickness must be numbers', `${base}, ${top}, ${thickness}`);
+  }
+  for (const [base, top] of [['2', '2'], ['3', '1'], ['1', '1.001']]) {
+    assert.equal(zoneFromFields({ ...fields, base, top }, new Set()).error, 'a zone\'s top must be above its bottom');
+  }
+});
+
+test('the sky of a scenario, and what its light slice is called', () => {
+  assert.equal(skyOf({ light: { sky: 'site', latitude: 48 } }), 'site');
+  assert.equal(skyOf({ light: { sky: 'zenith' } }), 'zenith');
+  assert.equal(skyOf({}), 'zenith');
+  assert.equal(skyOf(null), 'zenith');
+  assert.equal(skyLabel('site'), 'site light (sun and sky)');
+  assert.equal(skyLabel('zenith'), 'zenith light');
+  assert.equal(skyLabel(null), 'light');
+});
+
+const road = { id: 'road', kind: 'zone', min: [0, -1, 1], max: [2, 1, 3] };
+const strip = { id: 'strip', kind: 'zone', min: [-2, -1, 0], max: [-1, 1, 2] };
+const wall = { id: 'wall', kind: 'box', min: [-3, -3, 0], max: [-2.8, 3, 3] };
+
+test('zones and solid obstacles: the kind says which', () => {
+  assert.equal(isZone(road), true);
+  assert.equal(isZone(wall), false);
+  assert.equal(isZone({ id: 'old', min: [0, 0, 0], max: [1, 1, 1] }), false, 'no kind: solid');
+  assert.deepEqual(zonesOf([wall, road, strip]), [road, strip]);
+  assert.deepEqual(solidsOf([wall, road, strip]), [wall]);
+  assert.deepEqual(zonesOf(undefined), []);
+});
+
+test('a point is inside a box with its bounds included', () => {
+  assert.ok(insideBox(road, 1, 0, 2));
+  for (const p of [[0, -1, 1], [2, 1, 3], [0, 1, 3]]) assert.ok(insideBox(road, ...p), `corner ${p}`);
+  for (const p of [[-0.0001, 0, 2], [1, 1.0001, 2], [1, 0, 0.9999], [1, 0, 3.0001]]) {
+    assert.ok(!insideBox(road, ...p), `outside ${p}`);
+  }
+});
+
+test('internodes marked by the zone that holds them, as the page holds them (float32)', () => {
+  // slots: in road, on road's top bound, in strip, outside, dead in road, in both (road first)
+  const pts = [[1, 0, 2], [0.3, 0.1, 3], [-1.5, 0, 1], [5, 5, 5], [1, 0, 2], [0.1, 0.1, 1.1]];
+  const end = new Float32Array(pts.flat());
+  const dead = new Uint8Array([0, 0, 0, 0, 1, 0]);
+  const out = new Float32Array(6).fill(9);
+  markInZones(end, dead, 0, 6, [road, strip], out);
+  assert.deepEqual(Array.from(out), [1, 1, 2, 0, 0, 1]);
+  // a node on a bound that float32 rounds down (0.7 is held as 0.69999998...) is
+  // still inside: bounds included
+  assert.ok(Math.fround(0.7) < 0.7);
+  const onBound = { id: 'b', kind: 'zone', min: [0.7, 0.1, 1.1], max: [1, 1, 2] };
+  const mark = new Float32Array(1);
+  markInZones(new Float32Array([0.7, 0.1, 1.1]), null, 0, 1, [onBound], mark);
+  assert.equal(mark[0], 1);
+  assert.deepEqual(countInZones(new Float32Array([0.7, 0.1, 1.1]), null, 1, [onBound]), { b: 1 });
+  // only the slots asked for are marked
+  const part = new Float32Array(6).fill(7);
+  markInZones(end, dead, 2, 4, [road, strip], part);
+  assert.deepEqual(Array.from(part), [7, 7, 2, 0, 7, 7]);
+  // no zones: nothing is marked
+  markInZones(end, null, 0, 6, [], out);
+  assert.deepEqual(Array.from(out), [0, 0, 0, 0, 0, 0]);
+  // counted per zone, a node in two zones in both, dead slots and slots past count left out
+  const both = { id: 'both', kind: 'zone', min: [0, 0, 1], max: [0.2, 0.2, 1.2] };
+  assert.deepEqual(countInZones(end, dead, 6, [road, strip, both]), { road: 3, strip: 1, both: 1 });
+  assert.deepEqual(countInZones(end, dead, 2, [road]), { road: 2 });
+  assert.deepEqual(Array.from(end), pts.flat().map(Math.fround), 'the positions are not changed');
+});
+
+test('the conflicts rows: one per stem and zone, from the stats\' zones', () => {
+  const stats = [
+    { plant: 'tree', stem: 0, nodes: 40, zones: { road: { nodes: 12, first: 5 }, strip: { nodes: 0, first: 3 } } },
+    { plant: 'shrub', stem: 0, nodes: 8, zones: {} },
+    { plant: 'shrub', stem: 1, nodes: 9, zones: { road: { nodes: 2, first: 7 } }, clearance: { wall: 0.5 } },
+    { plant: 'old', stem: 0, nodes: 3 },   // a daemon from before zones
+  ];
+  assert.deepEqual(conflictRows(stats), [
+    { plant: 'tree', stem: 0, zone: 'road', first: 5, nodes: 12 },
+    { plant: 'tree', stem: 0, zone: 'strip', first: 3, nodes: 0 },
+    { plant: 'shrub', stem: 1, zone: 'road', first: 7, nodes: 2 },
+  ]);
+  assert.deepEqual(conflictRows([]), []);
+  assert.deepEqual(conflictRows(undefined), []);
+  assert.equal(stemLabel('tree', 0, 1), 'tree');
+  assert.equal(stemLabel('shrub', 1, 2), 'shrub/1');
 });

@@ -69,11 +69,30 @@ typedef struct sylva_plant_def {
   int root_count;
 } sylva_plant_def;
 
-/** A solid box that shades everything below it. */
+/** What an obstacle is. */
+typedef enum sylva_obstacle_kind {
+  SYLVA_OBSTACLE_SOLID = 0, /**< a box that blocks growth and shades (a wall, a board) */
+  SYLVA_OBSTACLE_ZONE = 1   /**< a clearance zone: blocks and shades nothing; the
+                                 nodes that grow into it are counted, and pruned */
+} sylva_obstacle_kind;
+
+/** An obstacle: a box, solid or a clearance zone. */
 typedef struct sylva_obstacle_def {
   const char *label;
   double min[3], max[3];
+  sylva_obstacle_kind kind; /**< SOLID when zero-initialised */
 } sylva_obstacle_def;
+
+/** Farthest a solid obstacle may be from a stem's nodes and still be reported in its
+ *  clearance, metres. */
+#define SYLVA_CLEARANCE_RANGE 10.0
+
+/** Pruning on a schedule: every `every` iterations from iteration `from` (the first
+ *  prune; every 0 prunes once), every node inside the zone goes with its subtree. */
+typedef struct sylva_prune_def {
+  int zone; /**< obstacle id of a zone */
+  int every, from;
+} sylva_prune_def;
 
 /** A node as the outside sees it. Ids are unique in a world and never reused. */
 typedef struct sylva_node_info {
@@ -94,18 +113,44 @@ typedef struct sylva_stem_stats {
   int32_t plant, stem;
   double height, dbh, crown_width, crown_base, light;
   int64_t nodes, shed;
+  int64_t pruned; /**< nodes pruned at this iteration (by schedule or edit) */
   int cap;
   bool finished;
 } sylva_stem_stats;
+
+/** A stem in a zone: the nodes inside now, and the iteration a node of the stem was
+ *  first seen inside (pruned or not since). One per stem and zone it ever entered. */
+typedef struct sylva_zone_stat {
+  int32_t stem;     /**< global stem index */
+  int32_t obstacle; /**< the zone's obstacle id */
+  int64_t nodes;
+  int32_t first;
+} sylva_zone_stat;
+
+/** A stem's clearance to a solid obstacle: the least distance from its nodes to the
+ *  box, metres (0 when a node touches it). One per stem and solid obstacle within
+ *  SYLVA_CLEARANCE_RANGE of a node. */
+typedef struct sylva_clearance_stat {
+  int32_t stem, obstacle;
+  double distance;
+} sylva_clearance_stat;
+
+/** Conflicts between stems and obstacles, both lists ordered by stem, then obstacle
+ *  id. */
+typedef struct sylva_conflicts {
+  const sylva_zone_stat *zones; size_t zone_count;
+  const sylva_clearance_stat *clearances; size_t clearance_count;
+} sylva_conflicts;
 
 /** What one iteration changed; valid until the next step or destroy. */
 typedef struct sylva_journal {
   int iteration;
   const sylva_node_info *added; size_t added_count;
   const sylva_radius_change *radii; size_t radii_count;
-  const int32_t *shed; size_t shed_count;        /**< roots of removed subtrees */
+  const int32_t *shed; size_t shed_count;        /**< roots of removed subtrees (shed or pruned) */
   const sylva_stem_stats *stats; size_t stem_count;
   const int32_t *order;                           /**< stem order of phase 4 (global stem indices) */
+  sylva_conflicts conflicts;                      /**< zones and clearances after the step */
   double phase_seconds[SYLVA_PHASE_COUNT];        /**< only with def.clock */
 } sylva_journal;
 
@@ -129,12 +174,28 @@ int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const 
  *  On failure *bad_root (if given) is the index of the root at fault, or -1. */
 int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root);
 /** Adds an obstacle; returns its id or a negative status (SYLVA_EINVAL for a
- *  duplicate label or an empty box). */
+ *  duplicate label, an empty box or an unknown kind). A zone added over nodes counts
+ *  them as entering at the current iteration. */
 int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def);
 /** Removes an obstacle by id. */
 int sylva_world_remove_obstacle(sylva_world *w, int obstacle);
 /** Id of the obstacle with this label, or SYLVA_ENOTFOUND. */
 int sylva_world_find_obstacle(const sylva_world *w, const char *label);
+
+/** Adds a pruning schedule (SYLVA_EINVAL when def->zone is not a zone, every < 0
+ *  or from < 1). Schedules prune at the end of the iterations they name, after
+ *  shedding, in the order they were added. */
+int sylva_world_add_prune(sylva_world *w, const sylva_prune_def *def);
+/** Number of pruning schedules, and the i-th (0 or SYLVA_ENOTFOUND). */
+int sylva_world_prune_count(const sylva_world *w);
+int sylva_world_prune_at(const sylva_world *w, int i, sylva_prune_def *out);
+/** Prunes now: every node inside the box [min, max] goes with its subtree, as
+ *  shedding removes nodes (a stem's root stays). Counted in the stems' `pruned`;
+ *  *removed (if given) receives the ids of the subtrees' roots, *removed_count their
+ *  number, valid until the next call that changes the world. Returns the nodes
+ *  removed, or SYLVA_ENOMEM with the world as it was. */
+int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[3],
+                          const int32_t **removed, size_t *removed_count);
 
 /** Sets (or clears, with NULL) the clock that times the phases of each step. */
 void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx);
@@ -170,12 +231,24 @@ int sylva_world_stem_root(const sylva_world *w, int stem, double root[3]);
 /** Current measures of a global stem (as after the last iteration); 0 or
  *  SYLVA_ENOTFOUND (out untouched). */
 int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out);
+/** Does the world report conflicts (stems' pruned counts, zones and clearances)?
+ *  Once it has held a clearance zone, a pruning schedule or pruned a node; a world
+ *  without any reports as worlds did before zones existed. */
+bool sylva_world_reports_conflicts(const sylva_world *w);
+/** Zones entered and clearances now (as after the last step or edit); valid until
+ *  the world changes. */
+sylva_conflicts sylva_world_conflicts(const sylva_world *w);
+/** The conflicts of one global stem (the parts of sylva_world_conflicts() that are
+ *  its own). */
+sylva_conflicts sylva_world_stem_conflicts(const sylva_world *w, int stem);
 /** Number of obstacles. */
 int sylva_world_obstacle_count(const sylva_world *w);
 /** The i-th obstacle (0 <= i < count), in the order they were added; the label
  *  points into the world and is valid until the obstacle is removed. 0 or
  *  SYLVA_ENOTFOUND (nothing written). */
 int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out);
+/** The label of the obstacle with this id, or NULL; valid until it is removed. */
+const char *sylva_world_obstacle_label(const sylva_world *w, int obstacle);
 /** Number of live nodes. */
 size_t sylva_world_node_count(const sylva_world *w);
 /** The i-th live node (0 <= i < count), in id order: parents before children. 0 or

@@ -59,11 +59,22 @@ typedef struct sylva_scenario_light {
 #define SYLVA_SITE_DIFFUSE 0.5
 #define SYLVA_SITE_SAMPLES 64
 
-/** An obstacle (kind "box"). */
+/** An obstacle: kind "box" (solid) or "zone" (a clearance zone). */
 typedef struct sylva_scenario_obstacle {
   char id[SYLVA_LABEL_MAX];
   double min[3], max[3];
+  sylva_obstacle_kind kind;
 } sylva_scenario_obstacle;
+
+/** Most entries of `management`. */
+#define SYLVA_SCENARIO_MAX_MANAGEMENT 1000
+
+/** A management action: pruning a zone on a schedule (docs/scenario.md). */
+typedef struct sylva_scenario_prune {
+  int zone;  /**< index into obstacles, a zone */
+  int every; /**< iterations between prunes; 0: once */
+  int from;  /**< the first iteration pruned */
+} sylva_scenario_prune;
 
 /** A parsed and validated scenario; free it with sylva_scenario_free(). Treat it
  *  as read-only, except that seed and iterations may be overridden (command-line
@@ -81,6 +92,8 @@ typedef struct sylva_scenario {
   int stem_count; /**< roots of all plants */
   sylva_scenario_obstacle *obstacles;
   int obstacle_count;
+  sylva_scenario_prune *management;
+  int management_count;
   sylva_scenario_light light;
 } sylva_scenario;
 
