@@ -63,31 +63,43 @@ static void put_key(sylva__strbuf *b, bool first, const char *key, bool compact)
   sylva__strbuf_puts(b, compact ? "\":" : "\": ");
 }
 
-/* `"zones": {...}, "clearance": {...}` of one global stem, from the world's
- * conflicts (sorted by stem). */
-static void put_conflicts(sylva__strbuf *b, const sylva_world *w, int stem, bool compact) {
-  sylva_conflicts c = sylva_world_stem_conflicts(w, stem);
-  put_key(b, false, "zones", compact);
+/* `{"road": {"nodes": 3, "first": 7}, ...}`: the zones one stem entered. */
+static void put_zones(sylva__strbuf *b, const sylva_world *w, const sylva_conflicts *c,
+                      bool compact) {
   sylva__strbuf_putc(b, '{');
-  for (size_t i = 0; i < c.zone_count; i++) {
-    const char *label = sylva_world_obstacle_label(w, c.zones[i].obstacle);
+  for (size_t i = 0; i < c->zone_count; i++) {
+    const char *label = sylva_world_obstacle_label(w, c->zones[i].obstacle);
     if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
     sylva__strbuf_json_string(b, label ? label : "");
     sylva__strbuf_printf(b, compact ? ":{\"nodes\":%" PRId64 ",\"first\":%" PRId32 "}"
                                     : ": {\"nodes\": %" PRId64 ", \"first\": %" PRId32 "}",
-                         c.zones[i].nodes, c.zones[i].first);
+                         c->zones[i].nodes, c->zones[i].first);
   }
   sylva__strbuf_putc(b, '}');
-  put_key(b, false, "clearance", compact);
+}
+
+/* `{"wall": 1.25, ...}`: one stem's clearances, metres with 4 decimals. */
+static void put_clearance(sylva__strbuf *b, const sylva_world *w, const sylva_conflicts *c,
+                          bool compact) {
   sylva__strbuf_putc(b, '{');
-  for (size_t i = 0; i < c.clearance_count; i++) {
-    const char *label = sylva_world_obstacle_label(w, c.clearances[i].obstacle);
+  for (size_t i = 0; i < c->clearance_count; i++) {
+    const char *label = sylva_world_obstacle_label(w, c->clearances[i].obstacle);
     if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
     sylva__strbuf_json_string(b, label ? label : "");
     sylva__strbuf_puts(b, compact ? ":" : ": ");
-    sylva__strbuf_fixed(b, c.clearances[i].distance, 4);
+    sylva__strbuf_fixed(b, c->clearances[i].distance, 4);
   }
   sylva__strbuf_putc(b, '}');
+}
+
+char *sylva_encode_stem_conflicts(const sylva_world *w, int stem, bool clearance) {
+  sylva__strbuf b = {0};
+  sylva_conflicts c = sylva_world_stem_conflicts(w, stem);
+  if (clearance)
+    put_clearance(&b, w, &c, true);
+  else
+    put_zones(&b, w, &c, true);
+  return sylva__strbuf_finish(&b);
 }
 
 void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_stem_stats *s,
@@ -120,8 +132,13 @@ void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_s
   sylva__strbuf_printf(b, "%d", s->cap);
   put_key(b, false, "finished", compact);
   sylva__strbuf_puts(b, s->finished ? "true" : "false");
-  if (sylva_world_reports_conflicts(w))
-    put_conflicts(b, w, sylva_world_stem_index(w, s->plant, s->stem), compact);
+  if (sylva_world_reports_conflicts(w)) {
+    sylva_conflicts c = sylva_world_stem_conflicts(w, sylva_world_stem_index(w, s->plant, s->stem));
+    put_key(b, false, "zones", compact);
+    put_zones(b, w, &c, compact);
+    put_key(b, false, "clearance", compact);
+    put_clearance(b, w, &c, compact);
+  }
   sylva__strbuf_putc(b, '}');
 }
 
@@ -211,7 +228,8 @@ void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w) {
     sylva_world_obstacle_at(w, i, &id, &o);
     sylva__strbuf_puts(b, i ? ",{\"id\":" : "{\"id\":");
     sylva__strbuf_json_string(b, o.label ? o.label : "");
-    sylva__strbuf_puts(b, ",\"kind\":\"box\",\"min\":");
+    sylva__strbuf_puts(b, o.kind == SYLVA_OBSTACLE_ZONE ? ",\"kind\":\"zone\",\"min\":"
+                                                      : ",\"kind\":\"box\",\"min\":");
     sylva__put_vec3(b, o.min);
     sylva__strbuf_puts(b, ",\"max\":");
     sylva__put_vec3(b, o.max);

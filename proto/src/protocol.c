@@ -42,7 +42,7 @@ static const msg_kind kinds[] = {
     [SYLVA_MSG_SUBSCRIBE] = KIND("subscribe", "run", "since"),
     [SYLVA_MSG_UNSUBSCRIBE] = KIND("unsubscribe", "run"),
     [SYLVA_MSG_CONTROL] = KIND("control", "run", "action", "count"),
-    [SYLVA_MSG_EDIT] = KIND("edit", "run", "add_plants", "add_obstacles", "remove_obstacles"),
+    [SYLVA_MSG_EDIT] = KIND("edit", "run", "add_plants", "add_obstacles", "remove_obstacles", "prune"),
     [SYLVA_MSG_FORK] = KIND("fork", "run", "iteration", "name"),
     [SYLVA_MSG_GET] = KIND("get", "run", "iteration"),
     [SYLVA_MSG_LIGHT] = KIND("light", "run", "z"),
@@ -186,12 +186,45 @@ static int check_unique(sylva__parser *p, const char *key, const char *what, con
   return rc;
 }
 
+/* "prune": {"zone": ID} or {"min": [x, y, z], "max": [x, y, z]}. */
+static int parse_prune(sylva__parser *p, const cJSON *item, sylva_msg *m) {
+  static const char *const keys[] = {"zone", "min", "max"};
+  size_t old = sylva__ptr_push(p, "prune");
+  int rc = sylva__want_object(p, item);
+  if (!rc) rc = sylva__check_keys(p, item, keys, 3);
+  const cJSON *zone = rc ? NULL : member(item, "zone");
+  m->prune = true;
+  if (!rc && zone) {
+    if (member(item, "min") || member(item, "max"))
+      rc = sylva__fail(p, "a zone or a box (min and max), not both");
+    size_t o2 = sylva__ptr_push(p, "zone");
+    if (!rc) rc = sylva__want_label(p, zone, m->prune_zone);
+    sylva__ptr_pop(p, o2);
+  } else if (!rc) {
+    if (!member(item, "min") || !member(item, "max"))
+      rc = sylva__fail(p, "expected {\"zone\": ID} or {\"min\": [x, y, z], \"max\": [x, y, z]}");
+    size_t o2 = sylva__ptr_push(p, "min");
+    if (!rc) rc = sylva__want_vec3(p, member(item, "min"), m->prune_min);
+    sylva__ptr_pop(p, o2);
+    o2 = sylva__ptr_push(p, "max");
+    if (!rc) rc = sylva__want_vec3(p, member(item, "max"), m->prune_max);
+    for (int a = 0; !rc && a < 3; a++)
+      if (m->prune_max[a] < m->prune_min[a])
+        rc = sylva__fail(p, "must not be below min (%c)", "xyz"[a]);
+    sylva__ptr_pop(p, o2);
+  }
+  sylva__ptr_pop(p, old);
+  return rc;
+}
+
 static int parse_edit(sylva__parser *p, const cJSON *root, sylva_msg *m) {
   const cJSON *plants, *obstacles, *removals;
   int plant_count, obstacle_count, removal_count;
   int rc = read_edit_array(p, root, "add_plants", &plants, &plant_count);
   if (!rc) rc = read_edit_array(p, root, "add_obstacles", &obstacles, &obstacle_count);
   if (!rc) rc = read_edit_array(p, root, "remove_obstacles", &removals, &removal_count);
+  const cJSON *prune = member(root, "prune");
+  if (!rc && prune) rc = parse_prune(p, prune, m);
   if (rc) return rc;
   int most = plant_count > obstacle_count ? plant_count : obstacle_count;
   if (removal_count > most) most = removal_count;

@@ -109,6 +109,7 @@ struct server {
   bool stopping;
   uint64_t stop_at;
   int64_t iterations_total;
+  int64_t pruned_total; /* nodes pruned by schedules while growing */
   int jobs;              /**< exports, histories and forks running */
   size_t memory_reserved; /**< estimated memory of the runs held and being forked */
   int runs_pending;      /**< forks on their way */

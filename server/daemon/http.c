@@ -104,6 +104,15 @@ static char *healthz_text(server *d) {
   return strdup(buf);
 }
 
+/* A Prometheus label value: backslash and double quote escaped (names hold no line
+ * breaks, protocol.md "create"). */
+static void label_value(FILE *f, const char *s) {
+  for (; *s; s++) {
+    if (*s == '\\' || *s == '"') fputc('\\', f);
+    fputc(*s, f);
+  }
+}
+
 static char *metrics_text(server *d) {
   int64_t runs = 0, running = 0;
   for (run *r = d->runs; r; r = r->next) {
@@ -131,6 +140,23 @@ static char *metrics_text(server *d) {
           (long long)runs, (long long)running, (long long)d->clients.count,
           (long long)d->iterations_total, d->iteration_ms_total / 1e3,
           (long long)d->clients.messages_received, (long long)d->clients.bytes_sent);
+  fprintf(f, "# HELP sylva_nodes_pruned_total Nodes pruned by management schedules while growing.\n"
+             "# TYPE sylva_nodes_pruned_total counter\nsylva_nodes_pruned_total %lld\n",
+          (long long)d->pruned_total);
+  /* the conflicts of each run that reports them (one with a zone), by name */
+  static const char *const conflict_metrics[2][2] = {
+      {"sylva_zone_nodes", "Nodes inside clearance zones now, by run."},
+      {"sylva_zone_conflicts", "Stem and zone pairs that ever met, by run."}};
+  for (int m = 0; m < 2; m++) {
+    fprintf(f, "# HELP %s %s\n# TYPE %s gauge\n", conflict_metrics[m][0], conflict_metrics[m][1],
+            conflict_metrics[m][0]);
+    for (run *r = d->runs; r; r = r->next)
+      if (r->conflicts.reported) {
+        fprintf(f, "%s{run=\"", conflict_metrics[m][0]);
+        label_value(f, r->name);
+        fprintf(f, "\"} %lld\n", (long long)(m ? r->conflicts.entered : r->conflicts.zone_nodes));
+      }
+  }
   if (fclose(f) != 0) {
     free(text);
     return NULL;

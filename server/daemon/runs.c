@@ -25,8 +25,17 @@ typedef struct pending_light {
 } pending_light;
 
 
+static run_conflicts conflicts_of(const sylva_world *w) {
+  run_conflicts out = {.reported = sylva_world_reports_conflicts(w)};
+  sylva_conflicts c = sylva_world_conflicts(w);
+  for (size_t i = 0; i < c.zone_count; i++) out.zone_nodes += c.zones[i].nodes;
+  out.entered = (int64_t)c.zone_count;
+  return out;
+}
+
 /* Caches what the loop may report while a worker has the world. */
 static void run_note(run *r) {
+  r->conflicts = conflicts_of(r->w);
   r->nodes = (int64_t)sylva_world_node_count(r->w);
   r->iteration = sylva_world_iteration(r->w);
   r->stems = sylva_world_stem_count(r->w);
@@ -248,6 +257,8 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
   res->obstacles = sylva_world_obstacle_count(r->w);
   res->nodes = (int64_t)sylva_world_node_count(r->w);
   res->finished = sylva_world_finished(r->w);
+  res->conflicts = conflicts_of(r->w);
+  for (size_t k = 0; k < j->stem_count; k++) res->pruned += j->stats[k].pruned;
   return true;
 }
 
@@ -278,7 +289,14 @@ static int edit_from_msg(const sylva_msg *m, edit *e) {
     edit_obstacle *eo = &e->obstacles[i];
     memcpy(eo->min, o->min, sizeof eo->min);
     memcpy(eo->max, o->max, sizeof eo->max);
+    eo->kind = o->kind;
     if (!(eo->id = strdup(o->id))) return SYLVA_ENOMEM;
+  }
+  if (m->prune) {
+    e->prune.set = true;
+    memcpy(e->prune.min, m->prune_min, sizeof e->prune.min);
+    memcpy(e->prune.max, m->prune_max, sizeof e->prune.max);
+    if (m->prune_zone[0] && !(e->prune.zone = strdup(m->prune_zone))) return SYLVA_ENOMEM;
   }
   for (int i = 0; i < m->add_plant_count; i++) {
     const sylva_scenario_plant *p = &m->add_plants[i];
@@ -378,6 +396,8 @@ static void done_step(run *r, const step_result *res) {
   }
   d->iterations_total++;
   d->iteration_ms_total += res->ms;
+  d->pruned_total += res->pruned;
+  r->conflicts = res->conflicts;
   r->iteration = res->iteration;
   r->stems = res->stems;
   r->obstacles = res->obstacles;

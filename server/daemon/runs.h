@@ -33,6 +33,13 @@ typedef enum run_task {
 #define RUN_SLICE_MS 100.0
 
 /** One iteration of a step task, as the worker made it. */
+/** What /metrics shows of a run's conflicts (sylva_world_reports_conflicts). */
+typedef struct run_conflicts {
+  bool reported;
+  int64_t zone_nodes; /**< nodes inside clearance zones now, all stems */
+  int64_t entered;    /**< (stem, zone) pairs that ever met */
+} run_conflicts;
+
 typedef struct step_result {
   int status;        /**< SYLVA_OK or why it failed */
   char error[256];
@@ -42,6 +49,8 @@ typedef struct step_result {
   int iteration, stems, obstacles;
   int64_t nodes;
   bool finished;
+  run_conflicts conflicts;
+  int64_t pruned; /**< nodes the iteration's pruning schedules removed */
 } step_result;
 
 /** A run the daemon holds. Its world is touched only by its task, one at a time
@@ -64,6 +73,7 @@ struct run {
   int iteration, stems, obstacles;
   int64_t nodes;
   bool finished;    /**< the growth equations ended every stem */
+  run_conflicts conflicts;
   size_t estimate;  /**< its share of the memory budget (runs_estimate) */
   bool busy;        /**< a task is queued or running */
   bool stop_after;  /**< stop requested while busy */

@@ -40,12 +40,20 @@ static int csv_row(const store_stats_row *r, void *ctx) {
   csv_number(f, r->crown_base, 4);
   fprintf(f, ",%lld,%lld,", (long long)r->nodes, (long long)r->shed);
   csv_number(f, r->light, 3);
-  fprintf(f, ",%d,%s\n", r->cap, r->finished ? "true" : "false");
+  fprintf(f, ",%d,%s,", r->cap, r->finished ? "true" : "false");
+  /* conflicts: empty where the run does not report them */
+  if (r->pruned >= 0) fprintf(f, "%lld", (long long)r->pruned);
+  fputc(',', f);
+  if (r->zones) csv_text(f, r->zones);
+  fputc(',', f);
+  if (r->clearance) csv_text(f, r->clearance);
+  fputc('\n', f);
   return ferror(f) ? SERVER_EWRITE : SERVER_OK;
 }
 
 int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
-  fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished\n",
+  fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished,"
+        "pruned,zones,clearance\n",
         f);
   if (ferror(f)) return SERVER_EWRITE;
   return store_each_stats(st, run, to, csv_row, f);

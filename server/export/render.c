@@ -184,6 +184,17 @@ static void draw_obstacles(cairo_t *cr, const sylva_world *w, const panel *p) {
     double x0 = panel_x(p, o.min[p->v->u]), x1 = panel_x(p, o.max[p->v->u]);
     double y0 = panel_y(p, o.max[p->v->v]), y1 = panel_y(p, o.min[p->v->v]);
     cairo_rectangle(cr, x0, y0, x1 - x0, y1 - y0);
+    if (o.kind == SYLVA_OBSTACLE_ZONE) { /* a clearance zone: a light amber wash, dashed */
+      cairo_set_source_rgba(cr, 1.0, 0.75, 0.2, RENDER_ZONE_ALPHA);
+      cairo_fill_preserve(cr);
+      double dash[2] = {4, 3};
+      cairo_set_dash(cr, dash, 2, 0);
+      cairo_set_source_rgb(cr, 0.8, 0.5, 0.0);
+      cairo_set_line_width(cr, 1);
+      cairo_stroke(cr);
+      cairo_set_dash(cr, NULL, 0, 0);
+      continue;
+    }
     cairo_set_source_rgba(cr, RENDER_OBSTACLE_GREY, RENDER_OBSTACLE_GREY, RENDER_OBSTACLE_GREY,
                           RENDER_OBSTACLE_ALPHA);
     cairo_fill_preserve(cr);

@@ -84,6 +84,8 @@ extern const unsigned render_palette[RENDER_PALETTE_SIZE];
  *  the white background it is the grey 1 - ALPHA * (1 - GREY). */
 #define RENDER_OBSTACLE_GREY 0.55
 #define RENDER_OBSTACLE_ALPHA 0.35
+/** Clearance zone fill: amber at RENDER_ZONE_ALPHA, with a dashed outline. */
+#define RENDER_ZONE_ALPHA 0.18
 
 /** The view called `name` (front, side, top, all); false for none. */
 bool render_view_parse(const char *name, render_view *out);

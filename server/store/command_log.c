@@ -18,7 +18,7 @@ static cJSON *vec3(const double v[3]) { return cJSON_CreateDoubleArray(v, 3); }
 static cJSON *encode_obstacle(const edit_obstacle *o) {
   cJSON *obj = cJSON_CreateObject();
   if (obj && cJSON_AddStringToObject(obj, "id", o->id) &&
-      cJSON_AddStringToObject(obj, "kind", "box") &&
+      cJSON_AddStringToObject(obj, "kind", o->kind == SYLVA_OBSTACLE_ZONE ? "zone" : "box") &&
       cJSON_AddItemToObject(obj, "min", vec3(o->min)) &&
       cJSON_AddItemToObject(obj, "max", vec3(o->max)))
     return obj;
@@ -51,6 +51,12 @@ char *command_log_encode(const edit *e) {
     ok = cJSON_AddItemToArray(obstacles, encode_obstacle(&e->obstacles[i]));
   for (int i = 0; ok && i < e->plant_count; i++)
     ok = cJSON_AddItemToArray(plants, encode_plant(&e->plants[i]));
+  if (ok && e->prune.set) {
+    cJSON *prune = cJSON_AddObjectToObject(root, "prune");
+    ok = prune && (e->prune.zone ? cJSON_AddStringToObject(prune, "zone", e->prune.zone) != NULL
+                                 : cJSON_AddItemToObject(prune, "min", vec3(e->prune.min)) &&
+                                       cJSON_AddItemToObject(prune, "max", vec3(e->prune.max)));
+  }
   char *text = ok ? cJSON_PrintUnformatted(root) : NULL;
   cJSON_Delete(root);
   return text;
@@ -58,11 +64,12 @@ char *command_log_encode(const edit *e) {
 
 /* ---- reading ---------------------------------------------------------------------- */
 
-/* Where a problem is: the JSON pointer of the value being read. */
+/* Where a problem is: the JSON pointer of the value being read; the format read. */
 typedef struct reader {
   char ptr[160];
   char *err;
   size_t errlen;
+  int format;
 } reader;
 
 static int bad(reader *r, const char *fmt, ...) {
@@ -138,8 +145,10 @@ static int read_obstacle(reader *r, const cJSON *item, edit_obstacle *o) {
   int rc = check_keys(r, item, keys, 4);
   const cJSON *kind = cJSON_GetObjectItemCaseSensitive(item, "kind");
   at(r, base, "kind", 0);
-  if (!rc && !(cJSON_IsString(kind) && strcmp(kind->valuestring, "box") == 0))
-    rc = bad(r, "expected \"box\"");
+  bool zone = r->format >= 2 && cJSON_IsString(kind) && strcmp(kind->valuestring, "zone") == 0;
+  if (!rc && !zone && !(cJSON_IsString(kind) && strcmp(kind->valuestring, "box") == 0))
+    rc = bad(r, r->format >= 2 ? "expected \"box\" or \"zone\"" : "expected \"box\"");
+  o->kind = zone ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID;
   at(r, base, "id", 0);
   if (!rc) rc = read_label(r, cJSON_GetObjectItemCaseSensitive(item, "id"), &o->id);
   at(r, base, "min", 0);
@@ -177,7 +186,30 @@ static int read_plant(reader *r, const cJSON *item, edit_plant *p) {
   return rc;
 }
 
-/* The three arrays of an edit, at the top level of the record. */
+/* The prune of a format-2 edit: {"zone": ID} or {"min": [..], "max": [..]}. */
+static int read_prune(reader *r, const cJSON *item, edit_prune *p) {
+  static const char *const keys[] = {"zone", "min", "max"};
+  r->ptr[0] = 0;
+  at(r, "", "prune", 0);
+  if (!cJSON_IsObject(item)) return bad(r, "expected an object");
+  int rc = check_keys(r, item, keys, 3);
+  if (rc) return rc;
+  p->set = true;
+  const cJSON *zone = cJSON_GetObjectItemCaseSensitive(item, "zone");
+  if (zone) {
+    at(r, "/prune", "zone", 0);
+    if (cJSON_GetObjectItemCaseSensitive(item, "min") || cJSON_GetObjectItemCaseSensitive(item, "max"))
+      return bad(r, "a zone or a box (min, max), not both");
+    return read_label(r, zone, &p->zone);
+  }
+  at(r, "/prune", "min", 0);
+  rc = read_vec3(r, cJSON_GetObjectItemCaseSensitive(item, "min"), p->min);
+  at(r, "/prune", "max", 0);
+  if (!rc) rc = read_vec3(r, cJSON_GetObjectItemCaseSensitive(item, "max"), p->max);
+  return rc;
+}
+
+/* The three arrays of an edit, at the top level of the record, and its prune. */
 static int read_edit(reader *r, const cJSON *root, edit *out) {
   const cJSON *removals = NULL, *obstacles = NULL, *plants = NULL;
   int nr = 0, no = 0, np = 0;
@@ -200,12 +232,14 @@ static int read_edit(reader *r, const cJSON *root, edit *out) {
     at(r, "/add_plants", NULL, i);
     rc = read_plant(r, c, &out->plants[i]);
   }
+  const cJSON *prune = cJSON_GetObjectItemCaseSensitive(root, "prune");
+  if (!rc && prune) rc = read_prune(r, prune, &out->prune);
   return rc;
 }
 
 static int read_record(reader *r, const cJSON *root, edit *out) {
-  static const char *const keys1[] = {"format", "command", "remove_obstacles", "add_obstacles",
-                                      "add_plants"};
+  static const char *const keys[] = {"format",        "command",    "remove_obstacles",
+                                     "add_obstacles", "add_plants", "prune"};
   static const char *const keys0[] = {"type", "run", "id", "remove_obstacles", "add_obstacles",
                                       "add_plants"};
   if (!cJSON_IsObject(root)) return bad(r, "expected an object");
@@ -229,13 +263,14 @@ static int read_record(reader *r, const cJSON *root, edit *out) {
   if (!cJSON_IsString(command) || strcmp(command->valuestring, "edit") != 0)
     return bad(r, "expected \"edit\" (the only command of format %d)", COMMAND_LOG_FORMAT);
   r->ptr[0] = 0;
-  int rc = check_keys(r, root, keys1, 5);
+  r->format = (int)v;
+  int rc = check_keys(r, root, keys, r->format >= 2 ? 6 : 5); /* prune: format 2 on */
   return rc ? rc : read_edit(r, root, out);
 }
 
 int command_log_decode(const char *json, edit *out, char *err, size_t errlen) {
   *out = (edit){0};
-  reader r = {"", err, errlen};
+  reader r = {"", err, errlen, 0};
   cJSON *root = cJSON_Parse(json);
   if (!root) return bad(&r, "not JSON");
   int rc = read_record(&r, root, out);

@@ -3,11 +3,13 @@
  * wire protocol, so that a later protocol still replays old stores
  * (docs/store.md, "The command log"):
  *
- *   {"format": 1, "command": "edit",
+ *   {"format": 2, "command": "edit",
  *    "remove_obstacles": ["wall"],
  *    "add_obstacles": [{"id": "box", "kind": "box", "min": [x, y, z], "max": [x, y, z]}],
- *    "add_plants": [{"id": "oak2", "species": "oak", "roots": [[x, y, z]]}]}
+ *    "add_plants": [{"id": "oak2", "species": "oak", "roots": [[x, y, z]]}],
+ *    "prune": {"zone": "road"}}
  *
+ * Format 2 added zones (kind "zone") and the optional prune; format 1 has neither.
  * Records without "format" are read as format 0: the protocol-1 `edit` message
  * that stores written before the format existed hold (the same three arrays,
  * beside "type", "run" and "id"). */
@@ -19,7 +21,7 @@
 #include "edit.h"
 
 /** The format this build writes; it reads every format up to it. */
-#define COMMAND_LOG_FORMAT 1
+#define COMMAND_LOG_FORMAT 2
 
 /** The record of an edit (malloc'd, no newline), or NULL when memory ran out. The
  *  same edit always gives the same bytes; numbers round-trip exactly. */
@@ -27,7 +29,7 @@ char *command_log_encode(const edit *e);
 
 /** Reads a record into *out (zeroed first; edit_free it in every case). Returns
  *  SERVER_OK, SERVER_EINPUT (err names the JSON pointer and the problem: "/format:
- *  format 2 is newer than this sylva reads (up to 1)") or SERVER_ENOMEM. */
+ *  format 3 is newer than this sylva reads (up to 2)") or SERVER_ENOMEM. */
 int command_log_decode(const char *json, edit *out, char *err, size_t errlen);
 
 #endif

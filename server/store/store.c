@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "command_log.h"
+#include "sylva/encode.h"
 #include "sylva/snapshot.h"
 
 struct store {
@@ -130,6 +131,10 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "  command TEXT NOT NULL,"
     "  created TEXT NOT NULL,"
     "  PRIMARY KEY (run, seq));",
+    /* 1 -> 2: conflicts (docs/store.md): NULL where the run does not report them */
+    "ALTER TABLE stats ADD COLUMN pruned INTEGER;"
+    "ALTER TABLE stats ADD COLUMN zones TEXT;"
+    "ALTER TABLE stats ADD COLUMN clearance TEXT;",
 };
 
 static int migrate(store *st) {
@@ -438,8 +443,9 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO stats (run, iteration, stem, plant, plant_stem, height, dbh,"
-                         " crown_width, crown_base, nodes, shed, light, cap, finished)"
-                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                         " crown_width, crown_base, nodes, shed, light, cap, finished, pruned,"
+                         " zones, clearance)"
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     fail(st, "storing iteration %d", it);
     rollback(st);
@@ -462,7 +468,21 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
     bind_real_or_null(q, 12, s->light);
     sqlite3_bind_int(q, 13, s->cap);
     sqlite3_bind_int(q, 14, s->finished);
-    if (sqlite3_step(q) != SQLITE_DONE) {
+    char *zones = NULL, *clearance = NULL;
+    bool ok = true;
+    if (sylva_world_reports_conflicts(w)) {
+      zones = sylva_encode_stem_conflicts(w, (int)k, false);
+      clearance = sylva_encode_stem_conflicts(w, (int)k, true);
+      ok = zones && clearance;
+      sqlite3_bind_int64(q, 15, s->pruned);
+      sqlite3_bind_text(q, 16, zones, -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(q, 17, clearance, -1, SQLITE_TRANSIENT);
+    } else {
+      for (int col = 15; col <= 17; col++) sqlite3_bind_null(q, col);
+    }
+    free(zones);
+    free(clearance);
+    if (!ok || sqlite3_step(q) != SQLITE_DONE) {
       fail(st, "storing iteration %d", it);
       sqlite3_finalize(q);
       rollback(st);
@@ -728,7 +748,8 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
                                int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
   sqlite3_stmt *q;
   if (prepare_run(st, "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
-                      " crown_base, nodes, shed, light, cap, finished FROM stats"
+                      " crown_base, nodes, shed, light, cap, finished, pruned, zones, clearance"
+                      " FROM stats"
                       " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
                   run, to, &q))
     return fail(st, "reading stats");
@@ -748,6 +769,9 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
         .light = column_real(q, 10),
         .cap = sqlite3_column_int(q, 11),
         .finished = sqlite3_column_int(q, 12) != 0,
+        .pruned = sqlite3_column_type(q, 13) == SQLITE_NULL ? -1 : sqlite3_column_int64(q, 13),
+        .zones = (const char *)sqlite3_column_text(q, 14),
+        .clearance = (const char *)sqlite3_column_text(q, 15),
     };
     if (!r.plant) r.plant = "";
     if (fn(&r, ctx)) {

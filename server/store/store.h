@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 1
+#define STORE_SCHEMA_VERSION 2
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 
@@ -119,6 +119,8 @@ typedef struct store_stats_row {
   double height, dbh, crown_width, crown_base, light; /**< NaN where null */
   int64_t nodes, shed;
   bool finished;
+  int64_t pruned;                /**< -1 where the run does not report conflicts */
+  const char *zones, *clearance; /**< compact JSON objects, or NULL (as pruned) */
 } store_stats_row;
 
 /** Calls fn for every stats row of a run up to iteration `to`, in iteration then

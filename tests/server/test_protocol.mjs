@@ -301,3 +301,102 @@ test('light: a slice of the light field, and too_large for a huge site', async (
     cleanup(d.dir);
   }
 });
+
+// A street whose keep-clear strips reach 5 cm from the trunks, pruned every 3
+// iterations from 3 (scenarios/street-pruned.json, made to conflict early).
+function nearStreet() {
+  const s = scenario('street-pruned.json', { iterations: 12 });
+  for (const o of s.obstacles) {
+    if (o.id === 'keep-clear-north') o.min[1] = 5.05;
+    if (o.id === 'keep-clear-south') o.max[1] = -5.05;
+  }
+  s.management = s.management.map((m) => ({ ...m, from: 3 }));
+  return s;
+}
+
+function nodesInside(model, box) {
+  let n = 0;
+  for (const p of model.plants) {
+    for (const s of p.stems) {
+      for (const [, parent, x, y, z] of s.nodes.values()) {
+        if (parent >= 0 && x >= box.min[0] && x <= box.max[0] && y >= box.min[1] && y <= box.max[1] &&
+            z >= box.min[2] && z <= box.max[2]) n++;
+      }
+    }
+  }
+  return n;
+}
+
+test('zones and pruning: stats carry pruned, zones and clearance as stored; prune now by edit', async () => {
+  const d = await startDaemon();
+  try {
+    const c = await connect(d.url);
+    const s = nearStreet();
+    c.send({ type: 'create', id: 'c', name: 'street "a"', start: false, scenario: s });
+    const run = (await c.type('created')).run;
+    c.send({ type: 'subscribe', run });
+    const snap = await c.type('snapshot');
+    assert.deepEqual(snap.obstacles.filter((o) => o.kind === 'zone').map((o) => o.id),
+      ['road', 'keep-clear-south', 'keep-clear-north']);
+    const model = new Model(snap);
+    c.send({ type: 'control', run, action: 'step', count: 9 });
+    const deltas = [];
+    for (let i = 1; i <= 9; i++) {
+      const delta = await c.type('delta', 60000);
+      model.apply(delta);
+      deltas.push(delta);
+      // after a prune of its zones no node is inside any of them
+      if (i >= 3 && (i - 3) % 3 === 0) {
+        for (const z of s.obstacles.filter((o) => o.kind === 'zone')) {
+          assert.equal(nodesInside(model, z), 0, `iteration ${i}: nodes left in ${z.id}`);
+        }
+      }
+    }
+    assert.ok(deltas.some((x) => x.stats.some((st) => st.pruned > 0)), 'a schedule pruned nodes');
+    const last = deltas.at(-1).stats;
+    assert.ok(last.some((st) => Object.keys(st.zones).length > 0), 'a stem entered a zone');
+    // the stored stats (CSV) equal the streamed ones
+    const csv = (await (await fetch(`${d.http}/api/runs/${encodeURIComponent('street "a"')}/stats.csv`)).text())
+      .trim().split('\n');
+    assert.match(csv[0], /,pruned,zones,clearance$/);
+    const lastRows = csv.slice(1).filter((r) => r.startsWith('9,'));
+    assert.equal(lastRows.length, last.length);
+    for (let k = 0; k < last.length; k++) {
+      const m = /,(\d+),"?(\{.*?\})"?,"?(\{.*\})"?$/.exec(lastRows[k]);
+      assert.ok(m, lastRows[k]);
+      assert.equal(Number(m[1]), last[k].pruned);
+      assert.deepEqual(JSON.parse(m[2].replaceAll('""', '"')), last[k].zones);
+      assert.deepEqual(JSON.parse(m[3].replaceAll('""', '"')), last[k].clearance);
+    }
+    const metrics = await (await fetch(`${d.http}/metrics`)).text();
+    const pruned = deltas.reduce((a, x) => a + x.stats.reduce((b, st) => b + st.pruned, 0), 0);
+    assert.match(metrics, new RegExp(`^sylva_nodes_pruned_total ${pruned}$`, 'm'));
+    const inZones = last.reduce((a, st) => a + Object.values(st.zones).reduce((b, z) => b + z.nodes, 0), 0);
+    assert.match(metrics, new RegExp(`^sylva_zone_nodes\\{run="street \\\\"a\\\\""\\} ${inZones}$`, 'm'));
+    // prune now: a new zone around one crown, added and pruned in one edit
+    const crown = { id: 'lift', kind: 'zone', min: [-5.5, 4.5, 0.35], max: [-4.5, 5.04, 3] };
+    const before = nodesInside(model, crown);
+    assert.ok(before > 0, 'nodes inside the new zone before the prune');
+    c.send({ type: 'edit', id: 'e1', run, add_obstacles: [crown], prune: { zone: 'lift' } });
+    const after = new Model(await c.type('snapshot'));
+    assert.equal((await c.next((m) => m.type === 'status' && m.ref === 'e1')).ref, 'e1');
+    assert.equal(nodesInside(after, crown), 0);
+    const exported = exportSkeleton(d.db, 'street "a"');
+    assert.equal(plantsJSON(exported), after.plantsJSON());
+    // a zone that is not there, and a solid box, are refused and change nothing
+    c.send({ type: 'edit', id: 'e2', run, prune: { zone: 'nowhere' } });
+    let err = await c.type('error');
+    assert.equal(err.message, '/prune/zone: no zone "nowhere"');
+    c.send({ type: 'edit', id: 'e3', run, prune: { zone: 'facade-north' } });
+    err = await c.type('error');
+    assert.equal(err.message, '/prune/zone: no zone "facade-north"');
+    c.send({ type: 'edit', id: 'e4', run, prune: { min: [0, 0, 0] } });
+    err = await c.type('error');
+    assert.match(err.message, /^\/prune: expected \{"zone": ID\}/);
+    assert.equal(plantsJSON(exportSkeleton(d.db, 'street "a"')), after.plantsJSON());
+    c.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});

@@ -33,7 +33,8 @@ from store_common import (Checks, Env, crash_text, query, read_bytes,  # noqa: E
 
 ITERATIONS = 10
 SNAPSHOT_EVERY = 3
-HEADER = "iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished"
+HEADER = ("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished,"
+          "pruned,zones,clearance")
 
 
 def main():
@@ -55,6 +56,7 @@ def main():
         resume_to_10(env, c, db, db_b, final, lines)
         bad_cases(env, c, scenario, db)
         site_sky(env, c)
+        street_pruned(env, c)
     finally:
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t0))
@@ -106,6 +108,35 @@ def site_sky(env, c):
     db, db_b, final = env.path("site.db"), env.path("site-b.db"), env.path("site-final.json")
     lines = run_with_store(env, c, scenario, db, final)
     export_iterations(env, c, scenario, db)
+    stop_at_5(env, c, scenario, db_b, lines)
+    resume_to_10(env, c, db, db_b, final, lines)
+
+
+def street_pruned(env, c):
+    """Zones, clearances and pruning every 3 iterations (scenarios/street-pruned.json,
+    a site sky too): stored, regrown and resumed iterations equal a run without a
+    store, and the CSV carries each stem's pruned count, zones and clearances as the
+    stats lines do."""
+    with open(env.scenario("street-pruned.json")) as f:
+        doc = json.load(f)
+    stems = sum(len(p["roots"]) for p in doc["plants"])
+    # keep-clear strips that reach 5 cm from the trunks, so that 10 iterations prune
+    for o in doc["obstacles"]:
+        if o["id"] == "keep-clear-north":
+            o["min"][1] = 5.05
+        if o["id"] == "keep-clear-south":
+            o["max"][1] = -5.05
+    scenario = env.path("street-pruned.json")
+    with open(scenario, "w") as f:
+        json.dump(doc, f)
+    db, db_b = env.path("street.db"), env.path("street-b.db")
+    final = env.path("street-final.json")
+    lines = run_with_store(env, c, scenario, db, final)
+    c.check(any(s["pruned"] > 0 for x in lines[:-1] for s in json.loads(x)["stems"]) and
+            any(s["zones"] for s in json.loads(lines[-2])["stems"]),
+            "street-pruned: nodes pruned, zones entered in 10 iterations")
+    export_iterations(env, c, scenario, db)
+    check_csv(env, c, db, "rt", lines, stems)
     stop_at_5(env, c, scenario, db_b, lines)
     resume_to_10(env, c, db, db_b, final, lines)
 
@@ -206,20 +237,23 @@ def check_csv(env, c, db, name, lines, stems):
             expected.append((obj["iteration"], s))
     mismatches = []
     for i, ((it, s), rec) in enumerate(zip(expected, records)):
-        if len(rec) != 12:
+        if len(rec) != 15:
             mismatches.append("row %d: %d fields" % (i + 1, len(rec)))
             continue
         num = lambda v: None if v == "" else float(v)  # noqa: E731
+        obj = lambda v: None if v == "" else json.loads(v)  # noqa: E731
         got = (int(rec[0]), rec[1], int(rec[2]), num(rec[3]), num(rec[4]), num(rec[5]),
-               num(rec[6]), int(rec[7]), int(rec[8]), num(rec[9]), int(rec[10]), rec[11])
+               num(rec[6]), int(rec[7]), int(rec[8]), num(rec[9]), int(rec[10]), rec[11],
+               None if rec[12] == "" else int(rec[12]), obj(rec[13]), obj(rec[14]))
         want = (it, s["plant"], s["stem"], s["height"], s["dbh"], s["crown_width"],
                 s["crown_base"], s["nodes"], s["shed"], s["light"], s["cap"],
-                "true" if s["finished"] else "false")
+                "true" if s["finished"] else "false", s.get("pruned"), s.get("zones"),
+                s.get("clearance"))
         if got != want:
             mismatches.append("row %d: %r != %r" % (i + 1, got, want))
     c.check(len(expected) == len(records) and not mismatches,
             "every CSV row equals the stats line of its iteration and stem "
-            "(height, dbh, crown, nodes, shed, light, cap, finished)",
+            "(height, dbh, crown, nodes, shed, light, cap, finished, pruned, zones, clearance)",
             "\n".join(mismatches[:10]))
     rc, data, err = env.export(db, name, fmt="csv", iteration=4)
     c.check(rc == 0 and data is not None and

@@ -16,6 +16,16 @@
 /* A record exactly as this build writes it: keep it byte for byte. A change of
  * the format is a new format number, and this record must still replay. */
 static const char today[] =
+    "{\"format\":2,\"command\":\"edit\",\"remove_obstacles\":[\"wall\"],"
+    "\"add_obstacles\":[{\"id\":\"board\",\"kind\":\"box\",\"min\":[1.25,-2,3],"
+    "\"max\":[1.5,2,3.2]},{\"id\":\"crown\",\"kind\":\"zone\",\"min\":[-3,-3,0.45],"
+    "\"max\":[3,3,6]}],"
+    "\"add_plants\":[{\"id\":\"oak2\",\"species\":\"x\",\"roots\":[[-1,0.1,0]]},"
+    "{\"id\":\"shrub2\",\"species\":\"x\",\"roots\":[[1,-1,0],[1.3,-1.2,0]]}],"
+    "\"prune\":{\"zone\":\"crown\"}}";
+
+/* A record of format 1 (before zones and pruning), as this build wrote it then. */
+static const char format1[] =
     "{\"format\":1,\"command\":\"edit\",\"remove_obstacles\":[\"wall\"],"
     "\"add_obstacles\":[{\"id\":\"board\",\"kind\":\"box\",\"min\":[1.25,-2,3],"
     "\"max\":[1.5,2,3.2]}],"
@@ -46,8 +56,8 @@ static sylva_world *site(void) {
   return w;
 }
 
-/* The edit of `today`, made with the core's own calls. */
-static void edit_by_hand(sylva_world *w) {
+/* The edit of `format1`, made with the core's own calls. */
+static void edit_by_hand_format1(sylva_world *w) {
   CHECK_INT(sylva_world_remove_obstacle(w, sylva_world_find_obstacle(w, "wall")), 0);
   sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID};
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
@@ -56,6 +66,21 @@ static void edit_by_hand(sylva_world *w) {
   sylva_plant_def b = {0, "shrub2", (const double(*)[3])r2, 2};
   CHECK(sylva_world_add_plant(w, &a, NULL) >= 0);
   CHECK(sylva_world_add_plant(w, &b, NULL) >= 0);
+}
+
+/* The edit of `today`: format 1's, a zone over the crowns, and their pruning. */
+static void edit_by_hand(sylva_world *w) {
+  CHECK_INT(sylva_world_remove_obstacle(w, sylva_world_find_obstacle(w, "wall")), 0);
+  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def crown = {"crown", {-3, -3, 0.45}, {3, 3, 6}, SYLVA_OBSTACLE_ZONE};
+  CHECK(sylva_world_add_obstacle(w, &board) >= 0);
+  CHECK(sylva_world_add_obstacle(w, &crown) >= 0);
+  double r1[1][3] = {{-1, 0.1, 0}}, r2[2][3] = {{1, -1, 0}, {1.3, -1.2, 0}};
+  sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1};
+  sylva_plant_def b = {0, "shrub2", (const double(*)[3])r2, 2};
+  CHECK(sylva_world_add_plant(w, &a, NULL) >= 0);
+  CHECK(sylva_world_add_plant(w, &b, NULL) >= 0);
+  CHECK(sylva_world_prune(w, crown.min, crown.max, NULL, NULL) > 0);
 }
 
 /* Decodes a record and applies it to a fresh site grown 4 iterations; the hash of
@@ -97,15 +122,33 @@ static void test_encoding_is_stable(void) {
   free(again);
   edit_free(&e);
   char *empty = command_log_encode(&e); /* the empty edit too */
-  CHECK(empty && strcmp(empty, "{\"format\":1,\"command\":\"edit\",\"remove_obstacles\":[],"
+  CHECK(empty && strcmp(empty, "{\"format\":2,\"command\":\"edit\",\"remove_obstacles\":[],"
                                "\"add_obstacles\":[],\"add_plants\":[]}") == 0);
   free(empty);
 }
 
-/* A protocol-1 edit message (format 0, older stores) replays as today's record. */
+/* Older formats replay: format 1 as the core's calls give it, and a protocol-1 edit
+ * message (format 0) as format 1. A zone or a prune is refused in format 1. */
 static void test_format0_replays(void) {
-  CHECK(replayed_hash(format0) == replayed_hash(today));
+  sylva_world *w = site();
+  for (int i = 0; i < 4; i++) sylva_world_step(w, NULL);
+  edit_by_hand_format1(w);
+  CHECK(replayed_hash(format1) == sylva_world_hash(w));
+  sylva_world_destroy(w);
+  CHECK(replayed_hash(format0) == replayed_hash(format1));
   CHECK(replayed_hash(format0) != 0);
+  CHECK(replayed_hash(format1) != replayed_hash(today));
+  edit e;
+  char err[256] = "";
+  CHECK_INT(command_log_decode("{\"format\":1,\"command\":\"edit\",\"prune\":{\"zone\":\"a\"}}", &e,
+                               err, sizeof err), SERVER_EINPUT);
+  CHECK(strstr(err, "/prune: unknown key") != NULL);
+  edit_free(&e);
+  CHECK_INT(command_log_decode("{\"format\":1,\"command\":\"edit\",\"add_obstacles\":[{\"id\":\"z\","
+                               "\"kind\":\"zone\",\"min\":[0,0,0],\"max\":[1,1,1]}]}", &e, err, sizeof err),
+            SERVER_EINPUT);
+  CHECK(strstr(err, "/add_obstacles/0/kind: expected \"box\"") != NULL);
+  edit_free(&e);
 }
 
 /* Bad records name the place and the problem; nothing is half-read. */
@@ -113,7 +156,7 @@ static void test_bad_records(void) {
   static const struct {
     const char *record, *message;
   } cases[] = {
-      {"{\"format\":2,\"command\":\"edit\"}", "/format: format 2 is newer than this sylva reads (up to 1)"},
+      {"{\"format\":3,\"command\":\"edit\"}", "/format: format 3 is newer than this sylva reads (up to 2)"},
       {"{\"format\":1.5,\"command\":\"edit\"}", "/format: expected an integer >= 1"},
       {"{\"format\":1,\"command\":\"prune\"}", "/command: expected \"edit\""},
       {"{\"format\":1,\"command\":\"edit\",\"colour\":1}", "/colour: unknown key"},

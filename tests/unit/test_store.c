@@ -249,12 +249,41 @@ static void test_newer_file_refused(void) {
   tmp_close(&t);
 }
 
+static int first_row(const store_stats_row *r, void *ctx) {
+  store_stats_row *out = ctx;
+  if (out->iteration < 0) *out = *r;
+  return 0;
+}
+
+/* A store of schema 1 (before conflicts) is migrated in place: its rows stay, and
+ * read as not reporting conflicts (pruned -1, zones and clearance NULL). */
+static void test_schema1_migrates(void) {
+  fixture f;
+  fixture_open(&f);
+  const char *path = f.path;
+  store_close(f.st);
+  f.st = NULL;
+  /* back to schema 1: the columns of migration 1 gone */
+  exec_sql(path, "ALTER TABLE stats DROP COLUMN clearance; ALTER TABLE stats DROP COLUMN zones;"
+                 " ALTER TABLE stats DROP COLUMN pruned; PRAGMA user_version = 1");
+  CHECK_INT(store_open(path, false, &f.st), 0);
+  store_stats_row r = {.iteration = -1};
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 7, first_row, &r), 0);
+  CHECK_INT(r.iteration, 1);
+  CHECK(r.pruned == -1 && r.zones == NULL && r.clearance == NULL);
+  int rows = 0;
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 7, count_rows, &rows), 0);
+  CHECK_INT(rows, 7 * 2);
+  fixture_close(&f);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(open_needs_create), CHECK_TEST(run_name_taken), CHECK_TEST(find_run),
       CHECK_TEST(load_world), CHECK_TEST(iteration_hash), CHECK_TEST(stats_rows),
       CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
-      CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused)};
+      CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused),
+      CHECK_TEST(schema1_migrates)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");
 }

@@ -2,6 +2,7 @@
 #ifndef SYLVA_ENCODE_H
 #define SYLVA_ENCODE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "sylva/world.h"
@@ -26,6 +27,11 @@ int sylva_fmt_shortest(char *buf, size_t n, double v);
  *  decimals, light with 3, elapsed_ms with 1, all trimmed. Returns a malloc'd
  *  string, NULL when out of memory. */
 char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms);
+
+/** One global stem's zones (`{"road":{"nodes":3,"first":7}}`) or, with clearance,
+ *  its clearances (`{"wall":1.25}`), as in the stats lines but compact. malloc'd;
+ *  NULL when out of memory. */
+char *sylva_encode_stem_conflicts(const sylva_world *w, int stem, bool clearance);
 
 /** The last line of `sylva run`, without the newline:
  *  {"done": true, "iterations": 24, "reason": "finished"}. malloc'd; NULL when out

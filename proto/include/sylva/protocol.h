@@ -97,12 +97,17 @@ typedef struct sylva_msg {
   sylva_scenario_plant *add_plants;
   char **add_plant_species;
   int add_plant_count;
-  /** edit: obstacles to add (kind "box", max > min on every axis). */
+  /** edit: obstacles to add (kind "box" or "zone", max > min on every axis). */
   sylva_scenario_obstacle *add_obstacles;
   int add_obstacle_count;
   /** edit: ids of obstacles to remove (labels). */
   char **remove_obstacles;
   int remove_obstacle_count;
+  /** edit: prune now (prune set): the zone prune_zone (a label), or when that is
+   *  empty the box [prune_min, prune_max] (max >= min). */
+  bool prune;
+  char prune_zone[SYLVA_LABEL_MAX];
+  double prune_min[3], prune_max[3];
 } sylva_msg;
 
 /** Parses one client message: the strict JSON check (RFC 8259, no "\u0000", nesting
