@@ -68,6 +68,12 @@ void sylva__grid_free(sylva__grid *g) {
   memset(g, 0, sizeof *g);
 }
 
+size_t sylva__grid_site_bytes(const sylva__grid *g) {
+  size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+  return g->site ? nchunks * sizeof(float *) + g->site->count * SYLVA__CHUNK_VOXELS * sizeof(float)
+                 : 0;
+}
+
 size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
@@ -77,9 +83,7 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
          (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
          (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes +
-         (size_t)g->sky_count * sizeof(sylva_sky_dir) +
-         (g->site ? nchunks * sizeof(float *) + g->site->count * SYLVA__CHUNK_VOXELS * sizeof(float)
-                  : 0);
+         (size_t)g->sky_count * sizeof(sylva_sky_dir) + sylva__grid_site_bytes(g);
 }
 
 bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v[3]) {

@@ -102,6 +102,8 @@ int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count);
 /** The site factor of voxel v (1 without a sky; cached per chunk). */
 double sylva__grid_site_factor(const sylva__grid *g, const int v[3]);
 void sylva__grid_free(sylva__grid *g);
+/** Bytes of the site factors cached so far (part of sylva__grid_bytes). */
+size_t sylva__grid_site_bytes(const sylva__grid *g);
 size_t sylva__grid_bytes(const sylva__grid *g);
 
 /** Voxel of a point; false when outside the grid. */

@@ -797,6 +797,7 @@ void sylva_world_dims(const sylva_world *w, int dims[3]) { memcpy(dims, w->grid.
 
 void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
+  out->site = sylva__grid_site_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
   out->other = w->scratch_cap * (3 * sizeof(double) + 2 * sizeof(int32_t)) +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
@@ -805,7 +806,12 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
                 w->finishing.cap + w->caps.cap + w->stem_first.cap) * sizeof(int32_t) +
                w->cell_pos.cap * sizeof(float) +
-               (size_t)w->stem_cap * sizeof(sylva__stem);
+               (size_t)w->stem_cap * sizeof(sylva__stem) +
+               w->entered.cap * sizeof(sylva__entered) + w->prunes.cap * sizeof(sylva_prune_def) +
+               w->zone_stats.cap * sizeof(sylva_zone_stat) +
+               w->clear_stats.cap * sizeof(sylva_clearance_stat) +
+               w->stem_box.cap * sizeof(sylva__box) + w->candidates.cap * sizeof(sylva__candidate) +
+               (w->stem_nodes.cap + w->stem_nodes_first.cap + w->pruned_ids.cap) * sizeof(int32_t);
 }
 
 static uint64_t fnv(uint64_t h, const void *data, size_t n) {

@@ -130,6 +130,47 @@ static sylva_world *from_file(const char *dir, const char *file, int *limit) {
   return w;
 }
 
+/* scenarios/street.json under its site sky and, the light key dropped, under the
+ * zenith sky: the site's cost per iteration and per grown internode, and the memory
+ * of the site factors. The two skies grow different trees (the facades shade the
+ * south sidewalk only under the sun), so the cost is compared per internode too. */
+static void street(const char *dir) {
+  summary r[2];
+  size_t site_bytes = 0, voxels = 0;
+  for (int k = 0; k < 2; k++) {
+    sylva_scenario *s = scenario_file(dir, "street.json");
+    if (k == 1) s->light.site = false;
+    char err[512];
+    sylva_world *w;
+    if (sylva_scenario_build(s, &w, err, sizeof err) < 0) {
+      fprintf(stderr, "bench: street.json: %s\n", err);
+      exit(1);
+    }
+    sylva_world_set_clock(w, now, NULL);
+    r[k] = grow(k ? "street.json, zenith sky" : "street.json, site sky (48 N)", w, s->iterations, 0);
+    report(&r[k]);
+    if (k == 0) {
+      sylva_memory m;
+      sylva_world_memory(w, &m);
+      site_bytes = m.site;
+      voxels = m.voxels;
+    }
+    sylva_world_destroy(w);
+    sylva_scenario_free(s);
+  }
+  double per_it[2], per_node[2];
+  for (int k = 0; k < 2; k++) {
+    per_it[k] = r[k].seconds * 1e3 / (r[k].iterations ? r[k].iterations : 1);
+    per_node[k] = r[k].seconds * 1e6 / (double)(r[k].created ? r[k].created : 1);
+  }
+  printf("-- street: site %.2f s, zenith %.2f s (%.2fx); per iteration %.1f ms vs %.1f ms; "
+         "per grown internode %.1f us vs %.1f us (%.2fx); site factors %.2f MB of %.1f MB of "
+         "voxels\n",
+         r[0].seconds, r[1].seconds, r[0].seconds / r[1].seconds, per_it[0], per_it[1], per_node[0],
+         per_node[1], per_node[0] / per_node[1], (double)site_bytes / 1048576.0,
+         (double)voxels / 1048576.0);
+}
+
 /* A world of `rows` x `rows` igm-fig17b trees `spacing` metres apart. */
 static sylva_world *generated_stand(int rows, double spacing) {
   sylva_world_def d = sylva_default_world_def();
@@ -377,6 +418,7 @@ int main(int argc, char **argv) {
     report(&s);
     sylva_world_destroy(w);
   }
+  if (all || strcmp(what, "street") == 0) street(dir);
   if (all || strcmp(what, "store5") == 0) {
     int limit;
     sylva_world *w = from_file(dir, "stand.json", &limit);

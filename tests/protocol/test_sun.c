@@ -8,6 +8,7 @@
 #include "../check.h"
 #include "sylva/sky.h"
 #include "sylva/sun.h"
+#include "sylva/sylva.h"
 
 enum { MARCH_20 = 79, JUNE_21 = 172, DECEMBER_21 = 355 };
 
@@ -193,13 +194,76 @@ static void test_sky_deterministic(void) {
   CHECK_NEAR(sums(&odd, c).sun, 0.6, 1e-12);
 }
 
+/* ---- site factors of a real sky (core/src/site.c with proto/src/sky.c) ---- */
+
+/* A 40 x 40 x 12 m world at 10 cm lit by def's sky (256 directions), with one
+ * solid box; the factor of a voxel is its light, nothing being planted. */
+static sylva_world *site_world(const sylva_sky_def *def, const sylva_obstacle_def *box) {
+  static sylva_sky_dir dirs[SYLVA_MAX_SKY];
+  sylva_sky_build(def, dirs);
+  sylva_world_def wd = sylva_default_world_def();
+  wd.min[0] = wd.min[1] = -20, wd.max[0] = wd.max[1] = 20, wd.max[2] = 12;
+  wd.voxel = 0.1;
+  wd.sky = dirs;
+  wd.sky_count = def->samples;
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  if (w && box) CHECK(sylva_world_add_obstacle(w, box) >= 0);
+  return w;
+}
+
+static double factor(const sylva_world *w, double x, double y, double z) {
+  double p[3] = {x, y, z};
+  return w ? sylva_world_light_at(w, p) : -1;
+}
+
+/* Open ground takes the whole sky; under a wide board at 1 m only the low sky
+ * past its edges arrives: above 0, below the diffuse share, below the open
+ * value. */
+static void test_site_open_and_board(void) {
+  sylva_sky_def def = munich;
+  def.latitude = 50, def.samples = 256;
+  sylva_obstacle_def board = {"board", {-6, -6, 1.0}, {6, 6, 1.1}, SYLVA_OBSTACLE_SOLID};
+  sylva_world *w = site_world(&def, &board);
+  double open = factor(w, 15.05, 15.05, 0.55), under = factor(w, 0.05, 0.05, 0.55);
+  CHECK_NEAR(open, 1.0, 1e-9);
+  CHECK(under > 0.0);
+  CHECK(under < def.diffuse);
+  CHECK(under < open);
+  printf("  site factor at 50 N: open %.4f, under a 12 m board at 1 m %.4f (diffuse %.2f)\n", open,
+         under, def.diffuse);
+  sylva_world_destroy(w);
+}
+
+/* 50 N: 1 m north of a 6 m east-west wall (north is +y) gets less than 1 m south
+ * of it; at the equator over the whole year the two sides are within 10%. */
+static void test_site_wall_sides(void) {
+  sylva_obstacle_def wall = {"wall", {-10, -0.1, 0}, {10, 0.1, 6}, SYLVA_OBSTACLE_SOLID};
+  sylva_sky_def def = munich;
+  def.latitude = 50, def.samples = 256;
+  sylva_world *w = site_world(&def, &wall);
+  double north = factor(w, 0.05, 1.15, 0.55), south = factor(w, 0.05, -1.15, 0.55);
+  CHECK(north < south);
+  CHECK(north > 0.0 && south < 1.0);
+  printf("  site factor 1 m from a 6 m east-west wall at 50 N: north %.4f, south %.4f\n", north,
+         south);
+  sylva_world_destroy(w);
+  def.latitude = 0, def.first_day = 1, def.last_day = 365;
+  w = site_world(&def, &wall);
+  north = factor(w, 0.05, 1.15, 0.55), south = factor(w, 0.05, -1.15, 0.55);
+  CHECK(fabs(north - south) <= 0.1 * fmax(north, south));
+  printf("  the same at the equator over the year: north %.4f, south %.4f\n", north, south);
+  sylva_world_destroy(w);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {CHECK_TEST(noon_50n_june), CHECK_TEST(noon_50n_december),
                                      CHECK_TEST(equator_equinox), CHECK_TEST(equator_june),
                                      CHECK_TEST(south), CHECK_TEST(symmetry), CHECK_TEST(polar),
                                      CHECK_TEST(sky_weights), CHECK_TEST(sky_north),
                                      CHECK_TEST(sky_equator), CHECK_TEST(sky_overcast),
-                                     CHECK_TEST(sky_polar_night), CHECK_TEST(sky_deterministic)};
+                                     CHECK_TEST(sky_polar_night), CHECK_TEST(sky_deterministic),
+                                     CHECK_TEST(site_open_and_board), CHECK_TEST(site_wall_sides)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("sun");
 }

@@ -157,6 +157,7 @@ typedef struct sylva_journal {
 /** Memory the world holds, bytes. */
 typedef struct sylva_memory {
   size_t voxels, skeleton, other;
+  size_t site; /**< of voxels: the site factors cached so far (0 without a site sky) */
 } sylva_memory;
 
 typedef struct sylva_world sylva_world;
