@@ -1,7 +1,7 @@
 // The viewer's wiring: the session with the daemon, the watched run, the 3D view,
-// the plots and the panels (runs, new run, controls, edit tools, timeline,
-// light), and what each daemon message and each change of the watched run
-// updates. window.sylva exposes the page's state for tests and debugging.
+// the plots and the panels (runs, zone conflicts, new run, controls, edit tools,
+// timeline, light), and what each daemon message and each change of the watched
+// run updates. window.sylva exposes the page's state for tests and debugging.
 import { $ } from './dom.mjs';
 import { Session } from './session.mjs';
 import { Watch } from './watch.mjs';
@@ -13,6 +13,8 @@ import { ControlsPanel } from './controls.mjs';
 import { EditTools } from './edit.mjs';
 import { Timeline } from './timeline.mjs';
 import { LightPanel } from './light.mjs';
+import { ConflictsPanel } from './conflicts.mjs';
+import { countInZones, zonesOf } from './zones.mjs';
 
 // What the daemon pushes (replies to requests go to their callers).
 const handlers = {
@@ -51,6 +53,7 @@ const controls = new ControlsPanel({ session, watch, onStatus: handlers.status, 
 const edit = new EditTools({ session, watch, view });
 const timeline = new Timeline({ session, watch });
 const light = new LightPanel({ session, watch, view });
+const conflicts = new ConflictsPanel({ watch, timeline });
 
 for (const b of document.querySelectorAll('[data-view]')) b.onclick = () => view.setView(b.dataset.view);
 
@@ -62,17 +65,21 @@ function changed(what) {
     light.hide();
     light.render();
     edit.render();
+    conflicts.render();
   } else if (what === 'snapshot') {
     edit.speciesOptions();
+    light.render();
   } else if (what === 'live') {
     timeline.liveChanged();
     controls.render();
     controls.renderExports();
     edit.render();
+    conflicts.render();
   } else if (what === 'shown') {
     timeline.render();
     controls.renderExports();
     edit.render();
+    conflicts.render();
   } else if (what === 'status') {
     controls.render();
   }
@@ -81,6 +88,7 @@ function changed(what) {
 controls.render();
 edit.render();
 light.render();
+conflicts.render();
 
 // ---- state for tests and debugging -------------------------------------------------
 
@@ -101,7 +109,13 @@ window.sylva = {
     species: watch.live.species.slice(),
     slice: light.slice,
     drawnInstances: (view.branches.mesh?.geometry.instanceCount ?? 0) - (view.branches.sk?.deadCount ?? 0),
-    drawnObstacles: view.obstacleGroup.children.filter((m) => m.name).map((m) => m.name.slice('obstacle:'.length)),
+    drawnObstacles: view.drawnBoxes('obstacle').map((b) => b.id),
+    drawnZones: view.drawnBoxes('zone'),
+    zones: zonesOf(watch.shown().obstacles).map((o) => o.id),
+    highlighted: view.branches.highlighted(),
+    inZones: countInZones(watch.shown().end, watch.shown().dead, watch.shown().count, zonesOf(watch.shown().obstacles)),
+    conflicts: conflicts.rows(),
+    sky: light.sky,
     frames: view.frames,
     auth: session.auth,
     authed: session.authed,

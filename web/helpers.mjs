@@ -128,6 +128,24 @@ export function obstacleFromFields({ kind, cornerA, cornerB, z, thickness }, tak
   return { obstacle: { id: freeId(kind, taken), kind: 'box', ...obstacleBox(kind, a, b, zm, t) } };
 }
 
+// The zone of the edit tools' fields: the box over two ground corners (at
+// least `thickness` wide each way) from height `base` up to height `top`, named
+// by the first free `zoneN` among the ids `taken`: {obstacle} for
+// `add_obstacles` (`"kind": "zone"`), or {error} saying what is wrong.
+export function zoneFromFields({ cornerA, cornerB, base, top, thickness }, taken) {
+  const a = parsePoint(cornerA), b = parsePoint(cornerB);
+  const z0 = Number(base), z1 = Number(top), t = Number(thickness);
+  if (!a || !b) return { error: 'give both corners as "x, y" (or pick them on the ground)' };
+  if (base.trim() === '' || top.trim() === '' || !Number.isFinite(z0) || !Number.isFinite(z1) ||
+      !Number.isFinite(t) || t <= 0) {
+    return { error: 'the heights and the thickness must be numbers' };
+  }
+  if (!(round(z1) > round(z0))) return { error: 'a zone\'s top must be above its bottom' };
+  const { min, max } = obstacleBox('board', a, b, 0, t);
+  return { obstacle: { id: freeId('zone', taken), kind: 'zone', min: [min[0], min[1], round(z0)],
+    max: [max[0], max[1], round(z1)] } };
+}
+
 // A new plant of `species` rooted at the ground point (x, y), named by the first
 // free `treeN` among the plant ids `taken`, for `add_plants`.
 export function plantAt(x, y, species, taken) {
@@ -154,22 +172,64 @@ export function createErrorPlace(message, fromDaemon) {
 
 // ---- plots -----------------------------------------------------------------------
 
+// The cells of one CSV line (RFC 4180: a quoted cell may hold commas, and "" is
+// a quote in it).
+export function csvCells(line) {
+  const cells = [];
+  let i = 0;
+  for (;;) {
+    let cell = '';
+    if (line[i] === '"') {
+      for (i++; i < line.length; i++) {
+        if (line[i] !== '"') cell += line[i];
+        else if (line[i + 1] === '"') { cell += '"'; i++; }
+        else { i++; break; }
+      }
+      const comma = line.indexOf(',', i);
+      i = comma < 0 ? line.length : comma;
+    } else {
+      const comma = line.indexOf(',', i);
+      cell = line.slice(i, comma < 0 ? line.length : comma);
+      i = comma < 0 ? line.length : comma;
+    }
+    cells.push(cell);
+    if (i >= line.length) return cells;
+    i++;   // past the comma
+  }
+}
+
+// Cells of stats.csv that hold JSON objects (zones entered, clearances).
+const JSON_COLUMNS = new Set(['zones', 'clearance']);
+
 // `sylva export --format csv` (stats.csv) text as a Map from iteration to its
 // stats rows, one per stem: numbers, booleans, null for an empty cell, `plant` as
-// text.
+// text, `zones` and `clearance` as the objects their JSON cells hold.
 export function parseStatsCsv(text) {
   const lines = text.trim().split('\n');
-  const head = lines.shift().split(',');
+  const head = csvCells(lines.shift());
   const byIteration = new Map();
   for (const line of lines) {
     if (!line) continue;
-    const cells = line.split(',');
+    const cells = csvCells(line);
     const row = Object.fromEntries(head.map((h, i) => {
-      const c = cells[i];
-      return [h, h === 'plant' ? c : c === '' ? null : c === 'true' ? true : c === 'false' ? false : Number(c)];
+      const c = cells[i] ?? '';
+      if (h === 'plant') return [h, c];
+      if (c === '') return [h, null];
+      if (JSON_COLUMNS.has(h)) return [h, JSON.parse(c)];
+      return [h, c === 'true' ? true : c === 'false' ? false : Number(c)];
     }));
     if (!byIteration.has(row.iteration)) byIteration.set(row.iteration, []);
     byIteration.get(row.iteration).push(row);
   }
   return byIteration;
+}
+
+// ---- light -----------------------------------------------------------------------
+
+// What the light slice is called for a run's sky ('site', 'zenith', or null
+// before the run's snapshot names it).
+export function skyLabel(sky) {
+  if (sky === 'site') return 'site light (sun and sky)';
+  if (sky === 'zenith') return 'zenith light';
+  return 'light';
 }

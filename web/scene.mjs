@@ -1,22 +1,29 @@
 // The 3D view: branches as instanced cylinders drawn straight from the skeleton's
 // typed arrays (a vertex shader places each unit cylinder between a node and its
-// parent, scaled by the node's radius), obstacles as translucent boxes, the
-// ground with a 1 m grid and labelled scales, a light-slice heat map, and
-// orbit/front/side/top cameras. z is up, as in the model.
+// parent, scaled by the node's radius), solid obstacles as translucent boxes and
+// clearance zones as fainter amber ones, the internodes inside a zone in a colour
+// of their own, the ground with a 1 m grid and labelled scales, a light-slice heat
+// map, and orbit/front/side/top cameras. z is up, as in the model.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { isZone, markInZones, zonesOf } from './zones.mjs';
 
 // One colour per plant (by its index in the snapshot), shared with the plots.
 export const PALETTE = ['#2e8b3a', '#c46a1b', '#2f6fb3', '#b8326e', '#7d5bb5', '#1a9a8f', '#a08a12',
   '#d04a3a', '#4f7d1f', '#8a4b2a', '#3d8fd1', '#c27bb0'];
 export const plantColor = (i) => PALETTE[i % PALETTE.length];
+// Clearance zones (translucent boxes) and the internodes inside one.
+export const ZONE_COLOR = '#f0a020';
+export const ZONE_NODE_COLOR = '#e8112d';
 
 const VERTEX = `
 attribute vec3 aStart;
 attribute vec3 aEnd;
 attribute float aRadius;
 attribute float aPlant;
+attribute float aZone;       // 1 + the index of the zone the node is in, 0 for none
 uniform vec3 uPalette[${PALETTE.length}];
+uniform vec3 uZoneColor;
 uniform float uPixelPersp;   // world size of a pixel per unit of distance (perspective)
 uniform float uPixelOrtho;   // world size of a pixel (orthographic)
 uniform float uMinPixels;    // thinnest drawn radius, pixels
@@ -36,7 +43,7 @@ void main() {
   vec3 p = aStart + axis * (position.y + 0.5) + (u * position.x + v * position.z) * r;
   vNormal = normalize(normalMatrix * (u * normal.x + v * normal.z));
   int k = int(aPlant + 0.5) - ${PALETTE.length} * (int(aPlant + 0.5) / ${PALETTE.length});
-  vColor = uPalette[k];
+  vColor = aZone > 0.5 ? uZoneColor : uPalette[k];
   gl_Position = projectionMatrix * modelViewMatrix * vec4(p, 1.0);
 }`;
 
@@ -62,6 +69,24 @@ class Branches {
     this.end = null;
     this.radius = null;
     this.plant = null;
+    this.zone = null;       // the aZone attribute: its array is the page's own (zones.mjs)
+    this.zones = [];        // the zones the marks are of
+    this.zonesDirty = false; // the zones changed since the marks were made
+  }
+
+  // The clearance zones whose internodes are drawn in the zone colour.
+  setZones(zones) {
+    this.zones = zones;
+    this.zonesDirty = true;
+  }
+
+  // Internodes drawn in the zone colour (the marks of the live slots).
+  highlighted() {
+    if (!this.sk || !this.zone) return 0;
+    const a = this.zone.array;
+    let n = 0;
+    for (let k = 0, count = this.sk.count; k < count; k++) if (a[k] > 0) n++;
+    return n;
   }
 
   rebuild(sk) {
@@ -78,11 +103,16 @@ class Branches {
     this.end = new THREE.InstancedBufferAttribute(sk.end, 3);
     this.radius = new THREE.InstancedBufferAttribute(sk.radius, 1);
     this.plant = new THREE.InstancedBufferAttribute(sk.plant, 1);
-    for (const a of [this.start, this.end, this.radius, this.plant]) a.setUsage(THREE.DynamicDrawUsage);
+    const marks = new Float32Array(sk.capacity);
+    markInZones(sk.end, sk.dead, 0, sk.count, this.zones, marks);
+    this.zonesDirty = false;
+    this.zone = new THREE.InstancedBufferAttribute(marks, 1);
+    for (const a of [this.start, this.end, this.radius, this.plant, this.zone]) a.setUsage(THREE.DynamicDrawUsage);
     g.setAttribute('aStart', this.start);
     g.setAttribute('aEnd', this.end);
     g.setAttribute('aRadius', this.radius);
     g.setAttribute('aPlant', this.plant);
+    g.setAttribute('aZone', this.zone);
     g.instanceCount = sk.count;
     this.mesh = new THREE.Mesh(g, this.material);
     this.mesh.frustumCulled = false;
@@ -92,7 +122,8 @@ class Branches {
   }
 
   // Uploads what changed since the last sync: the moved and added slots, and the
-  // radii (changed radii are spread over the skeleton, so all of them go up).
+  // radii (changed radii are spread over the skeleton, so all of them go up); the
+  // zone marks of the changed slots, or of every slot when the zones changed.
   sync(sk) {
     if (this.sk !== sk || this.version !== sk.version) {
       this.rebuild(sk);
@@ -111,6 +142,14 @@ class Branches {
     this.radius.clearUpdateRanges();
     this.radius.addUpdateRange(0, n);
     this.radius.needsUpdate = true;
+    const zfrom = this.zonesDirty ? 0 : from;
+    this.zonesDirty = false;
+    this.zone.clearUpdateRanges();
+    if (zfrom < n) {
+      markInZones(sk.end, sk.dead, zfrom, n, this.zones, this.zone.array);
+      this.zone.addUpdateRange(zfrom, n - zfrom);
+      this.zone.needsUpdate = true;
+    }
     this.mesh.geometry.instanceCount = n;
   }
 }
@@ -155,6 +194,7 @@ export class View {
       vertexShader: VERTEX, fragmentShader: FRAGMENT,
       uniforms: {
         uPalette: { value: PALETTE.map((c) => new THREE.Color(c)) },
+        uZoneColor: { value: new THREE.Color(ZONE_NODE_COLOR) },
         uPixelPersp: { value: 0 }, uPixelOrtho: { value: 0 }, uMinPixels: { value: 0.6 },
       },
     });
@@ -278,25 +318,42 @@ export class View {
     if (first) this.setView('persp');
   }
 
+  // Solid obstacles (`obstacle:ID`) and clearance zones (`zone:ID`) as boxes.
   setObstacles(obstacles) {
     const key = JSON.stringify(obstacles);
     if (key === this.obstacleKey) return;
     this.obstacleKey = key;
-    for (const m of this.obstacleGroup.children) m.geometry?.dispose();
+    for (const m of this.obstacleGroup.children) {
+      m.geometry?.dispose();
+      m.material?.dispose();
+    }
     this.obstacleGroup.clear();
     for (const o of obstacles) {
+      const zone = isZone(o);
       const size = [0, 1, 2].map((i) => Math.max(o.max[i] - o.min[i], 1e-3));
       const geo = new THREE.BoxGeometry(...size);
       const box = new THREE.Mesh(geo, new THREE.MeshBasicMaterial({
-        color: 0x8c7b6b, transparent: true, opacity: 0.35, depthWrite: false }));
+        color: zone ? ZONE_COLOR : 0x8c7b6b, transparent: true, opacity: zone ? 0.25 : 0.35, depthWrite: false }));
       box.position.set(...[0, 1, 2].map((i) => (o.min[i] + o.max[i]) / 2));
-      box.name = `obstacle:${o.id}`;
+      box.name = `${zone ? 'zone' : 'obstacle'}:${o.id}`;
       const edges = new THREE.LineSegments(new THREE.EdgesGeometry(geo),
-        new THREE.LineBasicMaterial({ color: 0x5a4a3a }));
+        new THREE.LineBasicMaterial({ color: zone ? 0xb87400 : 0x5a4a3a }));
       edges.position.copy(box.position);
       this.obstacleGroup.add(box, edges);
     }
+    this.branches.setZones(zonesOf(obstacles));
     this.invalidate();
+  }
+
+  // The boxes drawn for obstacles of a kind ('obstacle' or 'zone'), from their
+  // meshes: [{id, min, max}].
+  drawnBoxes(kind) {
+    const prefix = `${kind}:`;
+    return this.obstacleGroup.children.filter((m) => m.name.startsWith(prefix)).map((m) => {
+      const p = m.geometry.parameters, half = [p.width / 2, p.height / 2, p.depth / 2];
+      const c = m.position.toArray();
+      return { id: m.name.slice(prefix.length), min: c.map((v, i) => v - half[i]), max: c.map((v, i) => v + half[i]) };
+    });
   }
 
   // Cameras: 'persp' orbits; 'front' (looking along +y), 'side' (along -x) and

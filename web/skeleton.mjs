@@ -139,6 +139,7 @@ export class Skeleton {
     this.plants = msg.plants;
     this.species = msg.species || [];
     this.obstacles = msg.obstacles || [];
+    this.sky = msg.sky ?? null; // 'site' or 'zenith' (protocol.md, "snapshot")
     this.world = msg.world;
     this.voxel = msg.voxel;
     this.iteration = msg.iteration;

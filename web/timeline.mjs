@@ -27,6 +27,13 @@ export class Timeline {
     this.watch.goLive();
   }
 
+  // Moves the slider to an iteration and shows it (the conflicts table's rows).
+  jumpTo(it) {
+    clearTimeout(this.timer);
+    this.slider.value = String(Math.min(it, this.watch.live.iteration));
+    return this.showIteration(it);
+  }
+
   async showIteration(it) {
     if (!this.watch.run) return;
     if (it >= this.watch.live.iteration) { this.goLive(); return; }

@@ -569,7 +569,8 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const c
     if (k) sylva__strbuf_putc(&b, ',');
     put_string(&b, sylva_world_species_label(w, k));
   }
-  sylva__strbuf_putc(&b, ']');
+  /* the sky that lights the run (scenario.md, "Light") */
+  sylva__strbuf_puts(&b, sylva_world_get_def(w)->sky_count ? "],\"sky\":\"site\"" : "],\"sky\":\"zenith\"");
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }

@@ -1181,7 +1181,7 @@ static void test_snapshot(void) {
     CHECK_INT(cJSON_GetArraySize(labels), 2);
     CHECK_STR(cJSON_GetStringValue(cJSON_GetArrayItem(labels, 0)), "oak");
     CHECK_STR(cJSON_GetStringValue(cJSON_GetArrayItem(labels, 1)), "big \"leaf\"");
-    CHECK(snap && strstr(snap, "],\"species\":[\"oak\",\"big \\\"leaf\\\"\"],\"ref\":\"sub\"}"));
+    CHECK(snap && strstr(snap, "],\"species\":[\"oak\",\"big \\\"leaf\\\"\"],\"sky\":\"zenith\",\"ref\":\"sub\"}"));
     model_load(&m, sj);
   }
   check_snapshot_matches_skeleton(snap, w);

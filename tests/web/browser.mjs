@@ -41,10 +41,12 @@ export async function until(page, pred, what, ms = 60000) {
   }
 }
 
-// Counts the tree-coloured pixels (plant 0's green, lit or shaded) inside a
-// rectangle [x0, y0, x1, y1] of a PNG screenshot, decoding it in the page.
-export async function treePixels(page, png, rect) {
-  return page.evaluate(async ([src, [x0, y0, x1, y1]]) => {
+// Counts the pixels of one colour kind inside a rectangle [x0, y0, x1, y1] (null:
+// the whole picture) of a PNG screenshot, decoding it in the page. Kinds: 'tree'
+// (plant 0's green, lit or shaded) and 'highlight' (the zone highlight's red,
+// #e8112d).
+export async function countPixels(page, png, rect, kind) {
+  return page.evaluate(async ([src, rect, kind]) => {
     const img = new Image();
     img.src = `data:image/png;base64,${src}`;
     await img.decode();
@@ -53,13 +55,19 @@ export async function treePixels(page, png, rect) {
     c.height = img.height;
     const g = c.getContext('2d');
     g.drawImage(img, 0, 0);
+    const [x0, y0, x1, y1] = rect ?? [0, 0, img.width, img.height];
     const w = Math.max(1, Math.round(x1 - x0)), h = Math.max(1, Math.round(y1 - y0));
     const d = g.getImageData(Math.round(x0), Math.round(y0), w, h).data;
+    const is = kind === 'tree'
+      ? (r, gr, b) => gr > r + 25 && gr > b + 15
+      : (r, gr, b) => r > 150 && gr < 70 && b < 90;
     let n = 0;
-    for (let i = 0; i < d.length; i += 4) if (d[i + 1] > d[i] + 25 && d[i + 1] > d[i + 2] + 15) n++;
+    for (let i = 0; i < d.length; i += 4) if (is(d[i], d[i + 1], d[i + 2])) n++;
     return n;
-  }, [png.toString('base64'), rect]);
+  }, [png.toString('base64'), rect, kind]);
 }
+
+export const treePixels = (page, png, rect) => countPixels(page, png, rect, 'tree');
 
 // GET over a fresh connection (no keep-alive pool: the daemon may close idle
 // connections between a test's steps). Resolves with {status, headers, body}.

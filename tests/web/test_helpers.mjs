@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import {
   round, wsAddress, connectionLabel, runSummary, runCells, runHash, runFromHash, mostRecentRun, initialRun,
   controlsDisabled, stepCount, exportHref, freeId, parsePoint, obstacleBox, obstacleFromFields, plantAt,
-  parseScenario, createErrorPlace, parseStatsCsv, zoneFromFields, skyOf, skyLabel,
+  parseScenario, createErrorPlace, parseStatsCsv, csvCells, zoneFromFields, skyLabel,
 } from '../../web/helpers.mjs';
 import {
   isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, stemLabel,
@@ -177,6 +177,27 @@ test('stats.csv rows by iteration, typed', () => {
   assert.equal(parseStatsCsv('iteration,plant\n').size, 0);
 });
 
+test('CSV cells: quoted ones may hold commas and doubled quotes', () => {
+  assert.deepEqual(csvCells('1,tree,,0.5'), ['1', 'tree', '', '0.5']);
+  assert.deepEqual(csvCells('"a,b",c'), ['a,b', 'c']);
+  assert.deepEqual(csvCells('x,"say ""hi""",'), ['x', 'say "hi"', '']);
+  assert.deepEqual(csvCells('""'), ['']);
+  assert.deepEqual(csvCells(''), ['']);
+});
+
+test('stats.csv rows with zones entered, clearances and pruned counts', () => {
+  const csv = 'iteration,plant,stem,nodes,shed,pruned,light,zones,clearance\n' +
+    '7,tree,0,17,0,0,17.889,"{""road"":{""nodes"":2,""first"":7}}","{""wall"":2.4}"\n' +
+    '7,"a, b",0,5,0,3,1.5,,\n';
+  assert.deepEqual(parseStatsCsv(csv).get(7), [
+    { iteration: 7, plant: 'tree', stem: 0, nodes: 17, shed: 0, pruned: 0, light: 17.889,
+      zones: { road: { nodes: 2, first: 7 } }, clearance: { wall: 2.4 } },
+    { iteration: 7, plant: 'a, b', stem: 0, nodes: 5, shed: 0, pruned: 3, light: 1.5, zones: null, clearance: null },
+  ]);
+  // the conflicts rows of the parsed stats
+  assert.deepEqual(conflictRows(parseStatsCsv(csv).get(7)), [{ plant: 'tree', stem: 0, zone: 'road', first: 7, nodes: 2 }]);
+});
+
 test('a zone from the edit fields: two corners, from one height up to another', () => {
   const fields = { cornerA: '0.5, -2', cornerB: '3, 2', base: '1', top: '6', thickness: '0.2' };
   assert.deepEqual(zoneFromFields(fields, new Set(['zone1', 'wall1'])),
@@ -194,11 +215,7 @@ test('a zone from the edit fields: two corners, from one height up to another', 
   }
 });
 
-test('the sky of a scenario, and what its light slice is called', () => {
-  assert.equal(skyOf({ light: { sky: 'site', latitude: 48 } }), 'site');
-  assert.equal(skyOf({ light: { sky: 'zenith' } }), 'zenith');
-  assert.equal(skyOf({}), 'zenith');
-  assert.equal(skyOf(null), 'zenith');
+test('what a light slice is called for a run\'s sky', () => {
   assert.equal(skyLabel('site'), 'site light (sun and sky)');
   assert.equal(skyLabel('zenith'), 'zenith light');
   assert.equal(skyLabel(null), 'light');

@@ -1,0 +1,39 @@
+// The conflicts panel: one row per stem and clearance zone it ever entered, from
+// the live run's latest stats (each stem's `zones`: the iteration a node of it
+// first entered the zone, and its nodes inside now). A click on a row shows that
+// first iteration on the timeline; the row of the shown stored iteration is
+// marked.
+import { $ } from './dom.mjs';
+import { conflictRows, stemLabel } from './zones.mjs';
+
+export class ConflictsPanel {
+  constructor({ watch, timeline }) {
+    this.watch = watch;
+    this.timeline = timeline;
+    this.body = $('conflicts').tBodies[0];
+    this.key = '';   // what the table shows, to rebuild it only when that changes
+  }
+
+  // The rows of the live run's latest stats (zones.mjs, conflictRows).
+  rows() { return conflictRows(this.watch.live.stats); }
+
+  render() {
+    const rows = this.rows();
+    const shown = this.watch.history ? this.watch.shown().iteration : null;
+    const key = JSON.stringify([this.watch.run?.run ?? null, shown, rows]);
+    if (key === this.key) return;
+    this.key = key;
+    const stems = new Map(this.watch.live.plants.map((p) => [p.id, p.stems.length]));
+    this.body.textContent = '';
+    for (const r of rows) {
+      const tr = this.body.insertRow();
+      Object.assign(tr.dataset, { plant: r.plant, stem: r.stem, zone: r.zone, first: r.first, nodes: r.nodes });
+      tr.title = `show iteration ${r.first}, when ${r.plant} first grew into ${r.zone}`;
+      tr.classList.toggle('selected', shown === r.first);
+      for (const v of [stemLabel(r.plant, r.stem, stems.get(r.plant) ?? 1), r.zone, String(r.first),
+        r.nodes.toLocaleString('en')]) tr.insertCell().textContent = v;
+      tr.onclick = () => this.timeline.jumpTo(r.first);
+    }
+    $('conflicts-empty').hidden = rows.length > 0;
+  }
+}
