@@ -80,8 +80,9 @@ int sylva__entered_add(sylva_world *w, int32_t stem, int32_t zone, int32_t first
 /* ---- the conflicts ----------------------------------------------------------- */
 
 bool sylva__conflicts_any(const sylva_world *w) {
-  return w->grid.obstacle_count > 0 || w->entered.len > 0 || w->zone_stats.len > 0 ||
-         w->clear_stats.len > 0;
+  /* a world that does not report conflicts spends nothing on them */
+  return w->reports && (w->grid.obstacle_count > 0 || w->entered.len > 0 ||
+                        w->zone_stats.len > 0 || w->clear_stats.len > 0);
 }
 
 int sylva__conflicts_reserve(sylva_world *w, int first_stem) {

@@ -4,7 +4,8 @@
 
 #include "world_impl.h"
 
-/** True when the world has anything to report: obstacles, or zones entered before. */
+/** True when the world reports conflicts (sylva_world_reports_conflicts) and has
+ *  anything to report: obstacles, or zones entered before. */
 bool sylva__conflicts_any(const sylva_world *w);
 /** Finds, for stems from first_stem on, the obstacles near them, and makes room for
  *  their conflicts (zone lines, clearances, zones entered). 0 or SYLVA_ENOMEM, which
