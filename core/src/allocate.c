@@ -106,6 +106,7 @@ static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap) {
   sylva__skeleton *s = &w->nodes;
   int32_t root = w->stems[stem].root_slot;
   w->work.len = w->work_r.len = 0;
+  if (s->axis_child[root] < 0) return SYLVA_OK; /* pruned down to its root: a stump */
   int rc = allocate_axis(w, stem, s->axis_child[root], w->q[root], true, local, cap);
   while (!rc && w->work.len) {
     int32_t first = w->work.data[--w->work.len];
