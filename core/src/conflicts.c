@@ -212,7 +212,7 @@ int sylva__conflicts_update(sylva_world *w, int first_stem) {
 
 /* ---- pruning ------------------------------------------------------------------- */
 
-size_t sylva__prune(sylva_world *w, const double mn[3], const double mx[3], int zone, int T,
+size_t sylva__prune(sylva_world *w, const double mn[3], const double mx[3], int T,
                     bool announced_only, int32_t *roots, size_t *root_count) {
   sylva__skeleton *s = &w->nodes;
   sylva__obstacle box;
@@ -231,7 +231,6 @@ size_t sylva__prune(sylva_world *w, const double mn[3], const double mx[3], int 
     if (!inside(&box, s->x[i], s->y[i], s->z[i])) continue;
     s->flags[i] |= SYLVA__NODE_DOOMED;
     doomed++;
-    if (zone >= 0) enter(w, s->stem[i], zone, T);
     /* a cut: a lateral leaves a scar on its parent, whose bud does not sprout again;
      * a cut leader leaves its parent as the axis's apex */
     if (s->flags[i] & SYLVA__NODE_LATERAL) {

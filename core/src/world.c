@@ -474,14 +474,19 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   for (int a = 0; a < 3; a++)
     if (!isfinite(min[a]) || !isfinite(max[a]) || max[a] < min[a]) return SYLVA_EINVAL;
   w->pruned_ids.len = 0;
+  /* a world that prunes reports conflicts from now on: room for them first */
+  bool reports = w->reports;
+  w->reports = true;
   if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count) ||
-      sylva__conflicts_reserve(w, 0))
+      sylva__conflicts_reserve(w, 0)) {
+    w->reports = reports;
     return SYLVA_ENOMEM;
+  }
   /* nothing fails from here on */
   int T = w->iteration;
-  size_t n = sylva__prune(w, min, max, -1, T, false, w->pruned_ids.data, &w->pruned_ids.len);
+  size_t n = sylva__prune(w, min, max, T, false, w->pruned_ids.data, &w->pruned_ids.len);
+  if (!n) w->reports = reports; /* nothing cut: as it was */
   if (n) {
-    w->reports = true;
     sylva__light_collect(w, T + 1, NULL); /* as after a step's shedding */
     /* the measures anew (stats.pruned goes on counting until the next step) */
     if (T == 0)
@@ -604,13 +609,18 @@ static int finish_step(sylva_world *w, int T) {
   rc = sylva__shed(w, T);
   if (rc) return rc;
   for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.pruned = 0; /* counted anew at T */
+  /* the zones entered by the nodes grown, before a prune cuts them: a branch cut
+   * the iteration it grew in still dates the conflict, in every zone it reached */
+  bool due = false;
+  for (size_t i = 0; i < w->prunes.len; i++) due |= sylva__prune_due(&w->prunes.data[i], T);
+  if (due) sylva__conflicts(w, T);
   bool pruned = false;
   for (size_t i = 0; i < w->prunes.len; i++) {
     const sylva_prune_def *d = &w->prunes.data[i];
     int slot = sylva__grid_obstacle_slot(&w->grid, d->zone);
     if (slot < 0 || !sylva__prune_due(d, T)) continue; /* the zone was removed */
     const sylva__obstacle *z = &w->grid.obstacles[slot];
-    pruned |= sylva__prune(w, z->min, z->max, z->id, T, true, w->shed.data, &w->shed.len) > 0;
+    pruned |= sylva__prune(w, z->min, z->max, T, true, w->shed.data, &w->shed.len) > 0;
   }
   if (pruned) sylva__light_collect(w, T + 1, NULL); /* as after shedding */
   SYLVA__CHECK_WORLD(w, SYLVA__AFTER_SHEDDING);

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "../check.h"
+#include "../conflicts_check.h"
 #include "../scenario_file.h"
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
@@ -414,11 +415,206 @@ static void test_site_wall(void) {
   sylva_world_destroy(open);
 }
 
+/* ---- clearance zones and pruning (street.json, street-pruned.json) ---- */
+
+enum { STREET_STEMS = 16, STREET_OBSTACLES = 16 };
+
+/* The world's zone lines and clearances against a count over every node and
+ * obstacle (tests/conflicts_check.h); first[stem][zone] as there. */
+static int street_conflicts(const sylva_world *w, int first[][STREET_OBSTACLES], bool exact_first) {
+  return conflicts_brute_force(w, &first[0][0], STREET_OBSTACLES, exact_first, "street");
+}
+
+/* street.json grows the same with and without its three zones, hash for hash; its
+ * zone lines and clearances equal a count over every node; its run lines carry
+ * zones where the street without them carries none. */
+static void test_street_zones(void) {
+  sylva_scenario *s = load("street.json"), *bare = load("street.json");
+  int kept = 0;
+  for (int i = 0; i < bare->obstacle_count; i++)
+    if (bare->obstacles[i].kind != SYLVA_OBSTACLE_ZONE)
+      bare->obstacles[kept++] = bare->obstacles[i];
+  CHECK_INT(bare->obstacle_count - kept, 3);
+  bare->obstacle_count = kept;
+  sylva_world *a = build(s), *b = build(bare);
+  CHECK(sylva_world_reports_conflicts(a));
+  CHECK(!sylva_world_reports_conflicts(b));
+  static int first[STREET_STEMS][STREET_OBSTACLES];
+  memset(first, 0xff, sizeof first);
+  int mismatches = sylva_world_hash(a) != sylva_world_hash(b);
+  int bad = street_conflicts(a, first, true);
+  int64_t inside = 0;
+  const sylva_journal *ja, *jb;
+  while (!sylva_world_finished(a) && sylva_world_iteration(a) < s->iterations) {
+    CHECK_INT(sylva_world_step(a, &ja), 0);
+    CHECK_INT(sylva_world_step(b, &jb), 0);
+    if (!ja || !jb) break;
+    mismatches += sylva_world_hash(a) != sylva_world_hash(b);
+    bad += street_conflicts(a, first, true);
+    for (size_t i = 0; i < ja->conflicts.zone_count; i++) inside += ja->conflicts.zones[i].nodes;
+    if (ja->iteration == 1) {
+      char *la = sylva_encode_stats_line(a, ja, 0.0), *lb = sylva_encode_stats_line(b, jb, 0.0);
+      CHECK(strstr(la, "\"zones\"") && strstr(la, "\"clearance\"") && strstr(la, "\"pruned\""));
+      CHECK(!strstr(lb, "\"zones\"") && !strstr(lb, "\"clearance\"") && !strstr(lb, "\"pruned\""));
+      free(la);
+      free(lb);
+    }
+  }
+  int entered = 0;
+  for (int k = 0; k < STREET_STEMS; k++)
+    for (int o = 0; o < STREET_OBSTACLES; o++) entered += first[k][o] >= 0;
+  printf("street: %d iterations, %d (stem, zone) pairs entered, %lld node-iterations inside "
+         "zones\n",
+         sylva_world_iteration(a), entered, (long long)inside);
+  CHECK(sylva_world_iteration(a) >= 15);
+  CHECK_INT(mismatches, 0);
+  CHECK_INT(bad, 0);
+  CHECK(entered >= 2);
+  CHECK(inside > 0);
+  sylva_world_destroy(a);
+  sylva_world_destroy(b);
+  sylva_scenario_free(s);
+  sylva_scenario_free(bare);
+}
+
+typedef struct street_state {
+  uint64_t hash;
+  int64_t pruned[STREET_STEMS];
+  sylva_zone_stat *z;
+  size_t nz;
+  sylva_clearance_stat *c;
+  size_t nc;
+} street_state;
+
+static street_state street_state_of(const sylva_world *w) {
+  sylva_conflicts c = sylva_world_conflicts(w);
+  street_state st = {.hash = sylva_world_hash(w),
+                     .z = malloc((c.zone_count + 1) * sizeof *st.z),
+                     .nz = c.zone_count,
+                     .c = malloc((c.clearance_count + 1) * sizeof *st.c),
+                     .nc = c.clearance_count};
+  if (c.zone_count) memcpy(st.z, c.zones, c.zone_count * sizeof *st.z);
+  if (c.clearance_count) memcpy(st.c, c.clearances, c.clearance_count * sizeof *st.c);
+  for (int k = 0; k < sylva_world_stem_count(w) && k < STREET_STEMS; k++) {
+    sylva_stem_stats ss;
+    sylva_world_stem_stats(w, k, &ss);
+    st.pruned[k] = ss.pruned;
+  }
+  return st;
+}
+
+static bool street_state_equal(const street_state *a, const sylva_world *w) {
+  if (a->hash != sylva_world_hash(w)) return false;
+  for (int k = 0; k < sylva_world_stem_count(w) && k < STREET_STEMS; k++) {
+    sylva_stem_stats ss;
+    sylva_world_stem_stats(w, k, &ss);
+    if (ss.pruned != a->pruned[k]) return false;
+  }
+  return conflicts_lists_equal(a->z, a->nz, a->c, a->nc, sylva_world_conflicts(w));
+}
+
+/* street-pruned.json: after every iteration its schedules name, no node but a root
+ * is inside the three zones; nothing is pruned at the other iterations; and
+ * snapshots taken at 5, 6 (a pruning), 7, 8 and 12 continue with the hash, conflicts
+ * and pruned counts of the run that never stopped (the last one to the end). */
+static void test_street_pruned(void) {
+  sylva_scenario *s = load("street-pruned.json");
+  CHECK_INT(s->management_count, 3);
+  sylva_world *w = build(s);
+  CHECK_INT(sylva_world_prune_count(w), 3);
+  enum { LIMIT = 40 };
+  static const int at[] = {5, 6, 7, 8, 12};
+  enum { NS = sizeof at / sizeof at[0] };
+  static street_state ref[LIMIT + 1];
+  static int first[STREET_STEMS][STREET_OBSTACLES];
+  memset(first, 0xff, sizeof first);
+  uint8_t *img[NS] = {0};
+  size_t len[NS] = {0};
+  int ns = 0, left_inside = 0, pruned_off_schedule = 0, pruning_steps = 0, bad = 0;
+  int64_t total = 0;
+  ref[0] = street_state_of(w);
+  bad += street_conflicts(w, first, false);
+  const sylva_journal *j;
+  while (!sylva_world_finished(w) && sylva_world_iteration(w) < s->iterations &&
+         sylva_world_iteration(w) < LIMIT) {
+    CHECK_INT(sylva_world_step(w, &j), 0);
+    if (!j) break;
+    int T = j->iteration;
+    bool due = false;
+    int64_t pruned = 0;
+    for (size_t k = 0; k < j->stem_count; k++) pruned += j->stats[k].pruned;
+    for (int i = 0; i < sylva_world_prune_count(w); i++) {
+      sylva_prune_def d;
+      sylva_world_prune_at(w, i, &d);
+      bool now = T >= d.from && (d.every ? (T - d.from) % d.every == 0 : T == d.from);
+      if (!now) continue;
+      due = true;
+      sylva_obstacle_def od;
+      for (int o = 0; o < sylva_world_obstacle_count(w); o++) {
+        int id;
+        sylva_world_obstacle_at(w, o, &id, &od);
+        if (id != d.zone) continue;
+        for (size_t i2 = 0; i2 < sylva_world_node_count(w); i2++) {
+          sylva_node_info ni;
+          sylva_world_node_at(w, i2, &ni);
+          left_inside += ni.parent >= 0 && conflicts_in_box(&ni, od.min, od.max);
+        }
+      }
+    }
+    if (due && pruned > 0) pruning_steps++;
+    if (!due) pruned_off_schedule += pruned != 0;
+    total += pruned;
+    bad += street_conflicts(w, first, false);
+    ref[T] = street_state_of(w);
+    if (ns < NS && at[ns] == T) {
+      CHECK_INT(sylva_snapshot_save(w, &img[ns], &len[ns]), 0);
+      ns++;
+    }
+  }
+  int last = sylva_world_iteration(w);
+  printf("street-pruned: %d iterations, %lld nodes pruned over %d iterations\n", last,
+         (long long)total, pruning_steps);
+  CHECK_INT(ns, NS);
+  CHECK_INT(left_inside, 0);
+  CHECK_INT(pruned_off_schedule, 0);
+  CHECK_INT(bad, 0);
+  CHECK(pruning_steps >= 2);
+  int mismatches = 0, compared = 0;
+  for (int i = 0; i < ns; i++) {
+    sylva_world *r = NULL;
+    CHECK_INT(sylva_snapshot_load(img[i], len[i], &r), 0);
+    free(img[i]);
+    if (!r) continue;
+    CHECK_INT(sylva_world_prune_count(r), 3);
+    /* six iterations on (two prunes at least), the last to the end of the run */
+    int end = i + 1 < ns && at[i] + 6 < last ? at[i] + 6 : last;
+    for (int T = at[i]; T <= end; T++) {
+      if (T > at[i] && sylva_world_step(r, NULL) != 0) {
+        mismatches++;
+        break;
+      }
+      mismatches += !street_state_equal(&ref[T], r);
+      compared++;
+    }
+    if (end == last) CHECK(sylva_world_finished(r) == sylva_world_finished(w));
+    sylva_world_destroy(r);
+  }
+  CHECK_INT(mismatches, 0);
+  CHECK(compared >= 4 * 7 + 8);
+  for (int T = 0; T <= last; T++) {
+    free(ref[T].z);
+    free(ref[T].c);
+  }
+  sylva_world_destroy(w);
+  sylva_scenario_free(s);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(simplified), CHECK_TEST(wall), CHECK_TEST(board), CHECK_TEST(stand),
       CHECK_TEST(competition), CHECK_TEST(determinism_and_order), CHECK_TEST(snapshot_continuation),
-      CHECK_TEST(golden), CHECK_TEST(site_wall)};
+      CHECK_TEST(golden), CHECK_TEST(site_wall), CHECK_TEST(street_zones),
+      CHECK_TEST(street_pruned)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("behaviour");
 }
