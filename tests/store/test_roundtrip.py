@@ -21,6 +21,7 @@
 import csv
 import io
 import json
+import math
 import os
 import sqlite3
 import sys
@@ -57,6 +58,7 @@ def main():
         bad_cases(env, c, scenario, db)
         site_sky(env, c)
         street_pruned(env, c)
+        street_exports(env, c)
     finally:
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t0))
@@ -139,6 +141,67 @@ def street_pruned(env, c):
     check_csv(env, c, db, "rt", lines, stems)
     stop_at_5(env, c, scenario, db_b, lines)
     resume_to_10(env, c, db, db_b, final, lines)
+
+
+def street_exports(env, c):
+    """scenarios/street.json stored, then every iteration exported: each stem's zone
+    lines (nodes inside, first iteration) and clearances in the stats lines equal a
+    count over the exported skeleton's nodes and obstacles. Positions are exported
+    with 4 decimals, so a node within 0.1 mm of a zone's face may be counted either
+    way, and distances agree within 0.2 mm."""
+    scenario = env.scenario("street.json")
+    db = env.path("street-x.db")
+    rc, out, err = env.sylva("run", scenario, "--db", db, "--name", "sx", "--quiet-progress")
+    if not c.check(rc == 0, "street.json stored", "exit %s: %s" % (rc, err)):
+        return
+    lines = [json.loads(x) for x in out.splitlines()[:-1]]
+    eps, first, problems, lines_seen = 1e-4, {}, [], 0
+    for line in lines:
+        t = line["iteration"]
+        rc, data, err = env.export(db, "sx", iteration=t)
+        if rc != 0:
+            problems.append("export %d: %s" % (t, err))
+            continue
+        sk = json.loads(data)
+        zones = [o for o in sk["obstacles"] if o["kind"] == "zone"]
+        solids = [o for o in sk["obstacles"] if o["kind"] == "box"]
+        stems = [(p["id"], k, st["nodes"]) for p in sk["plants"] for k, st in enumerate(p["stems"])]
+        for (plant, k, nodes), got in zip(stems, line["stems"]):
+            for z in zones:
+                def inside(n, m):
+                    return all(z["min"][a] - m <= n[2 + a] <= z["max"][a] + m for a in range(3))
+                sure = sum(1 for n in nodes if inside(n, -eps))
+                maybe = sum(1 for n in nodes if inside(n, eps))
+                key = (plant, k, z["id"])
+                if maybe and key not in first:
+                    first[key] = (t if sure else None, t)  # (surely by, at the earliest)
+                line_z = got["zones"].get(z["id"])
+                if line_z is None:
+                    if maybe:
+                        problems.append("T=%d %s %s: no line, %d inside" % (t, plant, z["id"], sure))
+                    continue
+                lines_seen += 1
+                if not sure <= line_z["nodes"] <= maybe:
+                    problems.append("T=%d %s %s: %d nodes, the skeleton has %d to %d" %
+                                    (t, plant, z["id"], line_z["nodes"], sure, maybe))
+                earliest = first.get(key, (None, None))[1]
+                if earliest is None or line_z["first"] < earliest:
+                    problems.append("T=%d %s %s: first %d before any node was inside" %
+                                    (t, plant, z["id"], line_z["first"]))
+            for o in solids:
+                d = min(math.dist([n[2], n[3], n[4]],
+                                  [min(max(n[2 + a], o["min"][a]), o["max"][a]) for a in range(3)])
+                        for n in nodes)
+                got_d = got["clearance"].get(o["id"])
+                if got_d is None:
+                    if d < 10 - 2e-4:
+                        problems.append("T=%d %s %s: no clearance, %.4f m" % (t, plant, o["id"], d))
+                elif abs(got_d - d) > 2e-4 or d > 10 + 2e-4:
+                    problems.append("T=%d %s %s: clearance %.4f, the skeleton %.4f" %
+                                    (t, plant, o["id"], got_d, d))
+    c.check(lines_seen > 0 and not problems,
+            "street.json: every iteration's zone lines and clearances equal a count over its "
+            "exported skeleton (%d zone lines)" % lines_seen, "\n".join(problems[:10]))
 
 
 def export_iterations(env, c, scenario, db):
