@@ -17,7 +17,8 @@ static void validate_usage(FILE *f) {
         "Checks a scenario without running it: JSON syntax, every key and value, at\n"
         "least one plant, and that each root lies inside the world and outside the\n"
         "obstacles. Prints\n"
-        "  ok: NAME: P plants, S stems, O obstacles, voxel V m, NXxNYxNZ voxels\n"
+        "  ok: NAME: P plants, S stems, O obstacles[ (Z zones)][, M pruning schedules]\n"
+        "      [, site sky at latitude L], voxel V m, NXxNYxNZ voxels\n"
         "or the error, named by its JSON pointer, on stderr (exit status 2).\n"
         "\n"
         "Options:\n",
@@ -55,9 +56,14 @@ int cmd_validate(int argc, char **argv) {
   sylva_world_dims(w, dims);
   char voxel[SYLVA_FMT_BUFSIZE];
   sylva_fmt_shortest(voxel, sizeof voxel, s->voxel);
-  printf("ok: %s: %d plants, %d stems, %d obstacles, voxel %s m, %dx%dx%d voxels\n", s->name,
-         sylva_world_plant_count(w), sylva_world_stem_count(w), sylva_world_obstacle_count(w),
-         voxel, dims[0], dims[1], dims[2]);
+  int zones = 0;
+  for (int i = 0; i < s->obstacle_count; i++) zones += s->obstacles[i].kind == SYLVA_OBSTACLE_ZONE;
+  printf("ok: %s: %d plants, %d stems, %d obstacles", s->name, sylva_world_plant_count(w),
+         sylva_world_stem_count(w), sylva_world_obstacle_count(w));
+  if (zones) printf(" (%d zones)", zones);
+  if (s->management_count) printf(", %d pruning schedules", s->management_count);
+  if (s->light.site) printf(", site sky at latitude %g", s->light.sky.latitude);
+  printf(", voxel %s m, %dx%dx%d voxels\n", voxel, dims[0], dims[1], dims[2]);
   sylva_world_destroy(w);
   sylva_scenario_free(s);
   if (fflush(stdout) != 0) return CLI_EXIT_FAILURE;
