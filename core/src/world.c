@@ -619,6 +619,10 @@ static int finish_step(sylva_world *w, int T) {
     const sylva_prune_def *d = &w->prunes.data[i];
     int slot = sylva__grid_obstacle_slot(&w->grid, d->zone);
     if (slot < 0 || !sylva__prune_due(d, T)) continue; /* the zone was removed */
+    bool done = false; /* a zone two schedules name is cut once an iteration */
+    for (size_t k = 0; k < i && !done; k++)
+      done = w->prunes.data[k].zone == d->zone && sylva__prune_due(&w->prunes.data[k], T);
+    if (done) continue;
     const sylva__obstacle *z = &w->grid.obstacles[slot];
     pruned |= sylva__prune(w, z->min, z->max, T, true, w->shed.data, &w->shed.len) > 0;
   }

@@ -390,7 +390,8 @@ static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
     sylva_obstacle_def o;
     sylva_world_obstacle_at(w, i, NULL, &o);
     name_token(o.label, name);
-    fprintf(out, "comment obstacle %d %s\n", i, name);
+    /* a clearance zone is written as a box too, named for what it is */
+    fprintf(out, "comment %s %d %s\n", o.kind == SYLVA_OBSTACLE_ZONE ? "zone" : "obstacle", i, name);
   }
   fprintf(out,
           "element vertex %zu\n"
@@ -422,7 +423,7 @@ static bool write_body(mesh_writer *mw) {
       sylva_obstacle_def o;
       sylva_world_obstacle_at(mw->w, i, NULL, &o);
       name_token(o.label, name);
-      fprintf(mw->out, "o obstacle_%s\n", name);
+      fprintf(mw->out, "o %s_%s\n", o.kind == SYLVA_OBSTACLE_ZONE ? "zone" : "obstacle", name);
       write_box_vertices(mw, i);
       write_box_faces(mw, i);
       if (!stream_ok(mw)) return false;

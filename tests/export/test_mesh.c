@@ -820,6 +820,19 @@ static void test_empty(void) {
   if (p.nobj == 1) CHECK(strcmp(p.obj_name[0], "obstacle_a_box") == 0);
   parsed_free(&p);
   free(obj.data);
+  /* a clearance zone is a box too, named a zone */
+  sylva_obstacle_def zone = {"road", {0, 0, 0}, {1, 1, 1}, SYLVA_OBSTACLE_ZONE};
+  CHECK(sylva_world_add_obstacle(w, &zone) >= 0);
+  obj = write_blob(w, SYLVA_MESH_OBJ, &opt);
+  p = parse_obj(&obj);
+  CHECK(p.ok && p.nv == 16 && p.nf == 24 && p.nobj == 2);
+  if (p.nobj == 2) CHECK(strcmp(p.obj_name[1], "zone_road") == 0);
+  parsed_free(&p);
+  free(obj.data);
+  ply = write_blob(w, SYLVA_MESH_PLY, &opt);
+  CHECK(ply.rc == 0 && ply.data && strstr((const char *)ply.data, "comment obstacle 0 a_box\n") &&
+        strstr((const char *)ply.data, "comment zone 1 road\n"));
+  free(ply.data);
   sylva_world_destroy(w);
 }
 
