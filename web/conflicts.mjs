@@ -2,25 +2,30 @@
 // the live run's latest stats (each stem's `zones`: the iteration a node of it
 // first entered the zone, and its nodes inside now). A click on a row shows that
 // first iteration on the timeline; the row of the shown stored iteration is
-// marked.
+// marked. Below, each stem's clearance: the nearest solid obstacle within 10 m
+// and how far its nodes keep from it, with the nodes pruned at the iteration.
 import { $ } from './dom.mjs';
-import { conflictRows, stemLabel } from './zones.mjs';
+import { clearanceRows, conflictRows, stemLabel } from './zones.mjs';
 
 export class ConflictsPanel {
   constructor({ watch, timeline }) {
     this.watch = watch;
     this.timeline = timeline;
     this.body = $('conflicts').tBodies[0];
+    this.clearBody = $('clearances').tBodies[0];
     this.key = '';   // what the table shows, to rebuild it only when that changes
   }
 
   // The rows of the live run's latest stats (zones.mjs, conflictRows).
   rows() { return conflictRows(this.watch.live.stats); }
 
+  // The clearances of the live run's latest stats (zones.mjs, clearanceRows).
+  clearances() { return clearanceRows(this.watch.live.stats); }
+
   render() {
-    const rows = this.rows();
+    const rows = this.rows(), clear = this.clearances();
     const shown = this.watch.history ? this.watch.shown().iteration : null;
-    const key = JSON.stringify([this.watch.run?.run ?? null, shown, rows]);
+    const key = JSON.stringify([this.watch.run?.run ?? null, shown, rows, clear]);
     if (key === this.key) return;
     this.key = key;
     const stems = new Map(this.watch.live.plants.map((p) => [p.id, p.stems.length]));
@@ -35,5 +40,13 @@ export class ConflictsPanel {
       tr.onclick = () => this.timeline.jumpTo(r.first);
     }
     $('conflicts-empty').hidden = rows.length > 0;
+    this.clearBody.textContent = '';
+    for (const r of clear) {
+      const tr = this.clearBody.insertRow();
+      Object.assign(tr.dataset, { plant: r.plant, stem: r.stem, obstacle: r.obstacle });
+      for (const v of [stemLabel(r.plant, r.stem, stems.get(r.plant) ?? 1), r.obstacle,
+        r.distance.toFixed(2), String(r.pruned)]) tr.insertCell().textContent = v;
+    }
+    $('clearances').hidden = clear.length === 0;
   }
 }

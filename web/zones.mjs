@@ -82,6 +82,22 @@ export function conflictRows(stats) {
   return rows;
 }
 
+// The clearances table's rows from the per-stem stats: one per stem that has a
+// solid obstacle within range (the stats' `clearance`), naming the nearest (the
+// first of the stem's order on a tie) and its distance in metres, with the
+// nodes pruned at this iteration: {plant, stem, obstacle, distance, pruned}.
+export function clearanceRows(stats) {
+  const rows = [];
+  for (const st of stats || []) {
+    let best = null;
+    for (const [obstacle, distance] of Object.entries(st.clearance || {})) {
+      if (!best || distance < best.distance) best = { obstacle, distance };
+    }
+    if (best) rows.push({ plant: st.plant, stem: st.stem, ...best, pruned: st.pruned ?? 0 });
+  }
+  return rows;
+}
+
 // The plant cell of a conflicts row: the plant's id, with the stem's index
 // after a slash when the plant has several stems (a shrub).
 export function stemLabel(plant, stem, stemsOfPlant) {

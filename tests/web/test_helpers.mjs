@@ -7,7 +7,7 @@ import {
   parseScenario, createErrorPlace, parseStatsCsv, csvCells, zoneFromFields, skyLabel,
 } from '../../web/helpers.mjs';
 import {
-  isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, stemLabel,
+  isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, clearanceRows, stemLabel,
 } from '../../web/zones.mjs';
 
 const run = (id, name, status) => ({ run: id, name, status, iteration: 3, stems: 1, nodes: 40 });
@@ -286,6 +286,17 @@ test('the conflicts rows: one per stem and zone, from the stats\' zones', () => 
   ]);
   assert.deepEqual(conflictRows([]), []);
   assert.deepEqual(conflictRows(undefined), []);
+  // the nearest solid of each stem that has one, and its pruned count
+  assert.deepEqual(clearanceRows([
+    { plant: 'tree', stem: 0, pruned: 4, clearance: { wall: 1.5, awning: 0.25, post: 0.25 } },
+    { plant: 'shrub', stem: 1, clearance: { wall: 0.5 } },
+    { plant: 'old', stem: 0 },
+    { plant: 'far', stem: 0, pruned: 0, clearance: {} },
+  ]), [
+    { plant: 'tree', stem: 0, obstacle: 'awning', distance: 0.25, pruned: 4 },
+    { plant: 'shrub', stem: 1, obstacle: 'wall', distance: 0.5, pruned: 0 },
+  ]);
+  assert.deepEqual(clearanceRows(undefined), []);
   assert.equal(stemLabel('tree', 0, 1), 'tree');
   assert.equal(stemLabel('shrub', 1, 2), 'shrub/1');
 });

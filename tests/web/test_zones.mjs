@@ -118,6 +118,11 @@ test('zones drawn and highlighted, the conflicts table and its rows, pruning and
     assert.deepEqual(await page.$$eval('#conflicts tbody td', (tds) => tds.map((td) => td.textContent)),
       ['tree', 'road', want[0].first, want[0].nodes]);
     assert.ok(await page.isHidden('#conflicts-empty'));
+    // the clearances table: the tree's nearest solid (the wall) as the stats give it
+    const clear = Object.entries(snap.stats[0].clearance);
+    assert.deepEqual(clear.map(([o]) => o), ['wall']);
+    assert.deepEqual(await page.$$eval('#clearances tbody td', (tds) => tds.map((td) => td.textContent)),
+      ['tree', 'wall', clear[0][1].toFixed(2), String(snap.stats[0].pruned)]);
     // and the stored stats say the same
     const csv = parseStatsCsv((await httpGet(`${d.http}/api/runs/street/stats.csv`)).body.toString());
     assert.deepEqual(statsRows(csv.get(10)), want, 'stats.csv at iteration 10');
