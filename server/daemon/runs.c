@@ -783,6 +783,7 @@ int runs_load(server *d) {
     r->iteration = sr->last_iteration;
     r->nodes = sr->nodes;
     r->stems = sr->stems;
+    r->conflicts = (run_conflicts){sr->reports_conflicts, sr->zone_nodes, sr->zone_pairs};
   }
   store_runs_free(stored, n);
   /* the growing runs load now, as many as the budget holds; the others when a client

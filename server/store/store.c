@@ -327,7 +327,14 @@ static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
   " (SELECT max(iteration) FROM iterations i WHERE i.run = r.id),"                          \
   " (SELECT nodes FROM iterations i WHERE i.run = r.id ORDER BY iteration DESC LIMIT 1),"   \
   " (SELECT count(*) FROM stats s WHERE s.run = r.id AND s.iteration ="                     \
-  "   (SELECT max(iteration) FROM stats t WHERE t.run = r.id))"                             \
+  "   (SELECT max(iteration) FROM stats t WHERE t.run = r.id)),"                            \
+  " (SELECT count(s.zones) FROM stats s WHERE s.run = r.id AND s.iteration ="               \
+  "   (SELECT max(iteration) FROM stats t WHERE t.run = r.id)),"                            \
+  " (SELECT total(json_extract(z.value, '$.nodes')) FROM stats s, json_each(s.zones) z"     \
+  "   WHERE s.run = r.id AND s.iteration = (SELECT max(iteration) FROM stats t"             \
+  "   WHERE t.run = r.id)),"                                                                \
+  " (SELECT count(*) FROM stats s, json_each(s.zones) z WHERE s.run = r.id AND"             \
+  "   s.iteration = (SELECT max(iteration) FROM stats t WHERE t.run = r.id))"               \
   " FROM runs r"
 
 static int read_run(sqlite3_stmt *q, store_run *r) {
@@ -348,6 +355,9 @@ static int read_run(sqlite3_stmt *q, store_run *r) {
   r->last_iteration = sqlite3_column_int(q, 10);
   r->nodes = sqlite3_column_int64(q, 11);
   r->stems = sqlite3_column_int(q, 12);
+  r->reports_conflicts = sqlite3_column_int(q, 13) > 0;
+  r->zone_nodes = (int64_t)sqlite3_column_double(q, 14);
+  r->zone_pairs = sqlite3_column_int64(q, 15);
   return r->name && r->scenario ? 0 : SERVER_EFAIL;
 }
 

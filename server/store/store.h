@@ -50,6 +50,10 @@ typedef struct store_run {
   int64_t nodes;      /**< live nodes after it */
   int stems;          /**< stems at the last iteration with stats (plants an edit
                            added since are not counted until the next iteration) */
+  /* the conflicts of that iteration's stats (docs/store.md): whether the run reports
+   * them, the nodes inside its zones, and the stem and zone pairs that ever met */
+  bool reports_conflicts;
+  int64_t zone_nodes, zone_pairs;
 } store_run;
 
 /** Opens (create: also creates) a store file and brings its schema up to date

@@ -395,6 +395,20 @@ test('zones and pruning: stats carry pruned, zones and clearance as stored; prun
     assert.match(err.message, /^\/prune: expected \{"zone": ID\}/);
     assert.equal(plantsJSON(exportSkeleton(d.db, 'street "a"')), after.plantsJSON());
     c.close();
+    // restarted, the daemon reports the run's conflicts from the store without
+    // loading it: those of its last stored iteration
+    assert.equal((await stopDaemon(d)).code, 0);
+    const d2 = await startDaemon({ dir: d.dir });
+    try {
+      const m2 = await (await fetch(`${d2.http}/metrics`)).text();
+      const pairs = last.reduce((a, st) => a + Object.keys(st.zones).length, 0);
+      assert.match(m2, new RegExp(`^sylva_zone_nodes\\{run="street \\\\"a\\\\""\\} ${inZones}$`, 'm'));
+      assert.match(m2, new RegExp(`^sylva_zone_conflicts\\{run="street \\\\"a\\\\""\\} ${pairs}$`, 'm'));
+      const health = await (await fetch(`${d2.http}/healthz`)).json();
+      assert.equal(health.loading, 0);
+    } finally {
+      await stopDaemon(d2);
+    }
   } finally {
     await stopDaemon(d);
     cleanup(d.dir);
