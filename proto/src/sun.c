@@ -44,5 +44,22 @@ sylva_sun sylva_sun_at(double latitude, int day, double hours) {
 
 void sylva_sun_day(double latitude, int day, const double *hours, int count, sylva_sun *out) {
   double noon = transit(day);
-  for (int i = 0; i < count; i++) out[i] = sun_at_jd(latitude, noon + hours[i] / 24.0);
+  /* The sun's right ascension and declination half a day either side of the
+   * transit, and between them a straight line: they move about 1 and at most 0.4
+   * degrees a day, so the line strays from libnova's curve by thousandths of a
+   * degree, for two of its series instead of one per hour. */
+  struct ln_equ_posn a, b;
+  ln_get_solar_equ_coords(noon - 0.5, &a);
+  ln_get_solar_equ_coords(noon + 0.5, &b);
+  double dra = b.ra - a.ra;
+  if (dra < -180.0) dra += 360.0; /* across 0 h of right ascension */
+  struct ln_lnlat_posn site = {.lng = 0.0, .lat = latitude};
+  for (int i = 0; i < count; i++) {
+    double f = 0.5 + hours[i] / 24.0;
+    struct ln_equ_posn sun = {.ra = fmod(a.ra + f * dra + 360.0, 360.0),
+                              .dec = a.dec + f * (b.dec - a.dec)};
+    struct ln_hrz_posn at;
+    ln_get_hrz_from_equ(&sun, &site, noon + hours[i] / 24.0, &at);
+    out[i] = (sylva_sun){.elevation = at.alt, .azimuth = fmod(at.az + 180.0, 360.0)};
+  }
 }

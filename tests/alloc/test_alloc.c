@@ -156,7 +156,8 @@ static bool save(const sylva_world *w, uint8_t **image, size_t *size, faults *f,
 }
 
 /* An edit between steps, as the daemon makes them: a board and a new tree in a
- * corner of the world, each retried while memory runs out (transient). */
+ * corner of the world, then a prune of a box over the middle of the world from a
+ * fifth of its height up, each retried while memory runs out (transient). */
 static bool edit(sylva_world *w, faults *f, outcome *o) {
   const sylva_world_def *d = sylva_world_get_def(w);
   double span[3], lo[3];
@@ -168,10 +169,14 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
       SYLVA_OBSTACLE_SOLID};
   double root[1][3] = {{lo[0] + 0.25 * span[0], lo[1] + 0.25 * span[1], lo[2]}};
   sylva_plant_def tree = {0, "late", (const double(*)[3])root, 1};
-  for (int k = 0; k < 2;) {
+  double cut_min[3] = {lo[0] + 0.4 * span[0], lo[1] + 0.4 * span[1], lo[2] + 0.2 * span[2]};
+  double cut_max[3] = {lo[0] + 0.6 * span[0], lo[1] + 0.6 * span[1], lo[2] + span[2]};
+  for (int k = 0; k < 3;) {
     uint64_t before = sylva_world_hash(w);
     int plants = sylva_world_plant_count(w), obstacles = sylva_world_obstacle_count(w);
-    int rc = k == 0 ? sylva_world_add_obstacle(w, &board) : sylva_world_add_plant(w, &tree, NULL);
+    int64_t rc = k == 0   ? sylva_world_add_obstacle(w, &board)
+                 : k == 1 ? sylva_world_add_plant(w, &tree, NULL)
+                          : sylva_world_prune(w, cut_min, cut_max, NULL, NULL);
     if (rc >= 0) {
       k++;
       continue;
@@ -179,7 +184,7 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
     CHECK(sylva_world_hash(w) == before);
     CHECK_INT(sylva_world_plant_count(w), plants);
     CHECK_INT(sylva_world_obstacle_count(w), obstacles);
-    if (!out_of_memory(rc, f, o) || f->persistent) return false;
+    if (!out_of_memory((int)rc, f, o) || f->persistent) return false;
   }
   return true;
 }

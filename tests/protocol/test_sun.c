@@ -11,6 +11,7 @@
 #include "sylva/sylva.h"
 
 enum { MARCH_20 = 79, JUNE_21 = 172, DECEMBER_21 = 355 };
+#define DEG (3.14159265358979323846 / 180.0)
 
 /* How far azimuth a is from b, degrees (0 to 180, across north too). */
 static double azimuth_off(double a, double b) {
@@ -194,6 +195,28 @@ static void test_sky_deterministic(void) {
   CHECK_NEAR(sums(&odd, c).sun, 0.6, 1e-12);
 }
 
+/* A day's positions (interpolated between two of libnova's) stay within 0.01
+ * degree of libnova's own at every hour, over the year and the latitudes. */
+static void test_day_matches(void) {
+  double hours[25];
+  for (int k = 0; k < 25; k++) hours[k] = -12.0 + k;
+  double worst = 0.0;
+  for (int day = 1; day <= 365; day += 13)
+    for (double lat = -80.0; lat <= 80.0; lat += 32.0) {
+      sylva_sun path[25];
+      sylva_sun_day(lat, day, hours, 25, path);
+      for (int k = 0; k < 25; k++) {
+        sylva_sun one = sylva_sun_at(lat, day, hours[k]);
+        double de = fabs(path[k].elevation - one.elevation);
+        /* azimuth matters as far as the sun stands off the zenith */
+        double da = azimuth_off(path[k].azimuth, one.azimuth) * cos(one.elevation * DEG);
+        worst = fmax(worst, fmax(de, da));
+      }
+    }
+  CHECK(worst < 0.01);
+  printf("  a day's positions within %.5f degree of libnova's own\n", worst);
+}
+
 /* ---- site factors of a real sky (core/src/site.c with proto/src/sky.c) ---- */
 
 /* A 40 x 40 x 12 m world at 10 cm lit by def's sky (256 directions), with one
@@ -263,7 +286,8 @@ int main(int argc, char **argv) {
                                      CHECK_TEST(sky_weights), CHECK_TEST(sky_north),
                                      CHECK_TEST(sky_equator), CHECK_TEST(sky_overcast),
                                      CHECK_TEST(sky_polar_night), CHECK_TEST(sky_deterministic),
-                                     CHECK_TEST(site_open_and_board), CHECK_TEST(site_wall_sides)};
+                                     CHECK_TEST(site_open_and_board), CHECK_TEST(site_wall_sides),
+                                     CHECK_TEST(day_matches)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("sun");
 }

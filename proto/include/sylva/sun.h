@@ -16,8 +16,9 @@ typedef struct sylva_sun {
  *  year (1 to 365), `hours` hours after its transit (negative: before). */
 sylva_sun sylva_sun_at(double latitude, int day, double hours);
 
-/** The same for count hours of one day (out[i] at hours[i]); the transit is found
- *  once. */
+/** The same for count hours of one day (out[i] at hours[i]): the transit is found
+ *  once, and the sun's equatorial position is libnova's half a day either side of
+ *  it, interpolated (within 0.01 degree of sylva_sun_at). */
 void sylva_sun_day(double latitude, int day, const double *hours, int count, sylva_sun *out);
 
 #endif
