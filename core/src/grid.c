@@ -610,11 +610,6 @@ int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, con
   return id;
 }
 
-int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
-                                const double max[3]) {
-  return sylva__grid_add_obstacle_kind(g, id, label, min, max, false);
-}
-
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]) {
   return sylva__grid_add_obstacle_kind(g, g->next_obstacle_id, label, min, max, false);

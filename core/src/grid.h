@@ -145,12 +145,10 @@ int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, i
  *  label or a label in use, SYLVA_ENOMEM leaving the grid as it was. */
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]);
-/** The same with a given id, above every id given so far (a snapshot's obstacles);
- *  SYLVA_EINVAL for an id at or below one. */
-int sylva__grid_add_obstacle_id(sylva__grid *g, int id, const char *label, const double min[3],
-                                const double max[3]);
-/** The same for a solid obstacle (zone false) or a clearance zone (zone true), which
- *  is kept with its id and label but neither blocks, nor darkens, nor hides sky. */
+/** The same with a given id, above every id given so far (a snapshot's obstacles;
+ *  SYLVA_EINVAL for an id at or below one), solid (zone false) or a clearance zone
+ *  (zone true), which is kept with its id and label but neither blocks, nor darkens,
+ *  nor hides sky. */
 int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, const double min[3],
                                   const double max[3], bool zone);
 /** Removes the obstacle of this id (never allocates); SYLVA_ENOTFOUND if none. */

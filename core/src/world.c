@@ -776,18 +776,26 @@ sylva_conflicts sylva_world_stem_conflicts(const sylva_world *w, int stem) {
 }
 
 int sylva_world_obstacle_count(const sylva_world *w) { return w->grid.obstacle_count; }
-const char *sylva_world_obstacle_label(const sylva_world *w, int obstacle) {
-  int slot = sylva__grid_obstacle_slot(&w->grid, obstacle);
-  return slot >= 0 ? w->grid.obstacles[slot].label : NULL;
-}
-int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
-  if (!in_range(i, w->grid.obstacle_count)) return SYLVA_ENOTFOUND;
-  const sylva__obstacle *o = sylva__grid_obstacle_at(&w->grid, i);
-  if (id) *id = o->id;
+/* The def of a grid obstacle, its label pointing into the grid. */
+static void obstacle_def(const sylva__obstacle *o, sylva_obstacle_def *out) {
   out->label = o->label;
   memcpy(out->min, o->min, sizeof out->min);
   memcpy(out->max, o->max, sizeof out->max);
   out->kind = o->zone ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID;
+}
+
+int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
+  if (!in_range(i, w->grid.obstacle_count)) return SYLVA_ENOTFOUND;
+  const sylva__obstacle *o = sylva__grid_obstacle_at(&w->grid, i);
+  if (id) *id = o->id;
+  obstacle_def(o, out);
+  return SYLVA_OK;
+}
+
+int sylva_world_obstacle(const sylva_world *w, int obstacle, sylva_obstacle_def *out) {
+  int slot = sylva__grid_obstacle_slot(&w->grid, obstacle);
+  if (slot < 0) return SYLVA_ENOTFOUND;
+  obstacle_def(&w->grid.obstacles[slot], out);
   return SYLVA_OK;
 }
 

@@ -64,13 +64,18 @@ static void put_key(sylva__strbuf *b, bool first, const char *key, bool compact)
 }
 
 /* `{"road": {"nodes": 3, "first": 7}, ...}`: the zones one stem entered. */
+/* The label of the obstacle with this id ("" for none). */
+static const char *obstacle_label(const sylva_world *w, int id) {
+  sylva_obstacle_def o;
+  return sylva_world_obstacle(w, id, &o) == 0 ? o.label : "";
+}
+
 static void put_zones(sylva__strbuf *b, const sylva_world *w, const sylva_conflicts *c,
                       bool compact) {
   sylva__strbuf_putc(b, '{');
   for (size_t i = 0; i < c->zone_count; i++) {
-    const char *label = sylva_world_obstacle_label(w, c->zones[i].obstacle);
     if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
-    sylva__strbuf_json_string(b, label ? label : "");
+    sylva__strbuf_json_string(b, obstacle_label(w, c->zones[i].obstacle));
     sylva__strbuf_printf(b, compact ? ":{\"nodes\":%" PRId64 ",\"first\":%" PRId32 "}"
                                     : ": {\"nodes\": %" PRId64 ", \"first\": %" PRId32 "}",
                          c->zones[i].nodes, c->zones[i].first);
@@ -83,9 +88,8 @@ static void put_clearance(sylva__strbuf *b, const sylva_world *w, const sylva_co
                           bool compact) {
   sylva__strbuf_putc(b, '{');
   for (size_t i = 0; i < c->clearance_count; i++) {
-    const char *label = sylva_world_obstacle_label(w, c->clearances[i].obstacle);
     if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
-    sylva__strbuf_json_string(b, label ? label : "");
+    sylva__strbuf_json_string(b, obstacle_label(w, c->clearances[i].obstacle));
     sylva__strbuf_puts(b, compact ? ":" : ": ");
     sylva__strbuf_fixed(b, c->clearances[i].distance, 4);
   }

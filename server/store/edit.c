@@ -104,13 +104,9 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
     memcpy(mn, e->prune.min, sizeof mn);
     memcpy(mx, e->prune.max, sizeof mx);
     if (e->prune.zone) {
-      int id = sylva_world_find_obstacle(copy, e->prune.zone);
-      sylva_obstacle_def z = {0};
-      for (int i = 0; id >= 0 && i < sylva_world_obstacle_count(copy); i++) {
-        int oid;
-        if (sylva_world_obstacle_at(copy, i, &oid, &z) == 0 && oid == id) break;
-      }
-      if (id < 0 || z.kind != SYLVA_OBSTACLE_ZONE) {
+      sylva_obstacle_def z;
+      if (sylva_world_obstacle(copy, sylva_world_find_obstacle(copy, e->prune.zone), &z) != 0 ||
+          z.kind != SYLVA_OBSTACLE_ZONE) {
         snprintf(err, errlen, "/prune/zone: no zone \"%s\"", e->prune.zone);
         sylva_world_destroy(copy);
         return SYLVA_EINVAL;

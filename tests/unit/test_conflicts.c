@@ -1049,7 +1049,9 @@ static void test_snapshot_format(void) {
   CHECK_INT(load_patched(img, n, prunes_at, v, 4), SYLVA_EBADIMAGE);
   /* an obstacle's kind byte (after its label and box) other than 0 or 1; and the
    * zone of the first entered pair made solid: a pair then names a solid */
-  const char *zl = sylva_world_obstacle_label(zoned, zoned->entered.data[0].zone);
+  sylva_obstacle_def zdef;
+  CHECK_INT(sylva_world_obstacle(zoned, zoned->entered.data[0].zone, &zdef), 0);
+  const char *zl = zdef.label;
   uint8_t label[4 + SYLVA_LABEL_MAX];
   size_t ll = strlen(zl);
   put32(label, (int32_t)ll);
@@ -1089,6 +1091,14 @@ static void test_schedule_rules(void) {
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
     CHECK_INT(sylva_world_add_prune(w, &bad[i]), SYLVA_EINVAL);
   CHECK_INT(sylva_world_prune_count(w), 0);
+  /* an obstacle by id: its kind and box; an id that is not there */
+  sylva_obstacle_def od;
+  CHECK_INT(sylva_world_obstacle(w, road, &od), 0);
+  CHECK(od.kind == SYLVA_OBSTACLE_ZONE && strcmp(od.label, "road") == 0 && od.max[2] == 3.5);
+  CHECK_INT(sylva_world_obstacle(w, wall, &od), 0);
+  CHECK(od.kind == SYLVA_OBSTACLE_SOLID);
+  CHECK_INT(sylva_world_obstacle(w, 99, &od), SYLVA_ENOTFOUND);
+  CHECK_INT(sylva_world_obstacle(w, -1, &od), SYLVA_ENOTFOUND);
   sylva_prune_def out;
   CHECK_INT(sylva_world_prune_at(w, 0, &out), SYLVA_ENOTFOUND);
   sylva_prune_def once = {road, 0, 7}, every = {road, 4, 3};

@@ -248,8 +248,9 @@ int sylva_world_obstacle_count(const sylva_world *w);
  *  points into the world and is valid until the obstacle is removed. 0 or
  *  SYLVA_ENOTFOUND (nothing written). */
 int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out);
-/** The label of the obstacle with this id, or NULL; valid until it is removed. */
-const char *sylva_world_obstacle_label(const sylva_world *w, int obstacle);
+/** The obstacle with this id (its label points into the world, valid until it is
+ *  removed). 0 or SYLVA_ENOTFOUND (nothing written). */
+int sylva_world_obstacle(const sylva_world *w, int obstacle, sylva_obstacle_def *out);
 /** Number of live nodes. */
 size_t sylva_world_node_count(const sylva_world *w);
 /** The i-th live node (0 <= i < count), in id order: parents before children. 0 or
