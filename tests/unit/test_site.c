@@ -203,6 +203,10 @@ static void test_board_light(void) {
   CHECK_NEAR(sylva_world_light_at(s, under), 0.0, 1e-6);
   CHECK_INT(sylva_world_remove_obstacle(s, id), SYLVA_OK);
   CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
+  /* a clearance zone where the wall stood hides no sky */
+  sylva_obstacle_def zone = {"lane", {2, -3, 0}, {2.2, 3, 4}, SYLVA_OBSTACLE_ZONE};
+  CHECK(sylva_world_add_obstacle(s, &zone) >= 0);
+  CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
   sylva_world_destroy(z);
   sylva_world_destroy(s);
 }
