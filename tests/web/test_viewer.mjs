@@ -236,7 +236,9 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     const at3 = await until(page, (x) => !x.live && x.iteration === 3, 'iteration 3 from the store');
     await page.fill('#fork-name', 'site-3');
     await page.click('#fork');
-    s = await until(page, (x) => x.name === 'site-3' && x.live && x.seq >= 0, 'the fork');
+    // (its status comes with the run list, which may follow the snapshot)
+    s = await until(page, (x) => x.name === 'site-3' && x.live && x.seq >= 0 && Boolean(x.status),
+      'the fork and its status');
     assert.equal(s.iteration, 3);
     assert.equal(s.nodes, at3.nodes);
     assert.equal(s.status, 'paused');
