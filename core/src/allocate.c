@@ -34,7 +34,8 @@ static int push_sprout(sylva_world *w, int32_t slot, int32_t stem, int32_t n, do
 static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b, bool trunk,
                          int local, int cap) {
   sylva__skeleton *s = &w->nodes;
-  const sylva_species_def *d = &w->species[w->stems[stem].species].def;
+  const sylva__species *sp = &w->species[w->stems[stem].species];
+  const sylva_species_def *d = &sp->def;
   w->axis.len = 0;
   for (int32_t n = first; n >= 0; n = s->axis_child[n]) {
     if (SYLVA__VEC_RESERVE(w->axis, w->axis.len + 1)) return SYLVA_ENOMEM;
@@ -51,6 +52,8 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
     /* Apical dominance: a free bud fewer than apical_zone internodes below the
      * axis's apex stays dormant and takes no share (docs/model.md, "Allocation"). */
     if (s->lateral_child[n] < 0 && i < nb - 1 && nb - 1 - i < d->apical_zone) rbh = 0.0;
+    /* a node between buds (ref_rho: one bud per ref_rho of axis) has none to feed */
+    if (s->lateral_child[n] < 0 && i < nb - 1 && !sylva__has_bud(sp, s->depth[n])) rbh = 0.0;
     w->ranked.data[i] = (sylva__ranked){rbh, 0.0, i};
   }
   /* The trunk's apex continues the main flow: besides its own light it takes the
@@ -136,7 +139,7 @@ int sylva__allocate(sylva_world *w, int iteration) {
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
     int local = sylva__stem_local(st, iteration);
-    caps[k] = st->finished ? 0 : sylva_equation_cap(&w->species[st->species].def.growth, local);
+    caps[k] = st->finished ? 0 : sylva__species_cap(&w->species[st->species], local);
   }
   /* stems that stop at this iteration (phase 2) grow nothing */
   for (size_t i = 0; i < w->finishing.len; i++) caps[w->finishing.data[i]] = 0;
@@ -154,10 +157,12 @@ int sylva__allocate(sylva_world *w, int iteration) {
     for (size_t i = 0; i < s->count; i++) {
       if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->parent[i] < 0) continue;
       int32_t k = s->stem[i];
-      const sylva_species_def *d = &w->species[w->stems[k].species].def;
+      const sylva__species *sp = &w->species[w->stems[k].species];
+      const sylva_species_def *d = &sp->def;
       if (caps[k] <= 0 || d->allocation != SYLVA_ALLOC_NONE) continue;
       bool apex = s->axis_child[i] < 0;
       if (!apex && (s->lateral_child[i] >= 0 || (s->flags[i] & SYLVA__NODE_SCAR) ||
+                    !sylva__has_bud(sp, s->depth[i]) ||
                     !sylva__bears_leaves(d, s->birth[i], iteration)))
         continue;
       int v[3];

@@ -1,5 +1,6 @@
 /* Phase 6b: shedding of lateral branches whose mean relative light E = Q / (alpha N)
  * is below r_s (after Takenaka 1994). */
+#include <math.h>
 #include <stdlib.h>
 
 #include "world_impl.h"
@@ -38,6 +39,19 @@ int sylva__shed(sylva_world *w, int iteration) {
   }
   for (size_t i = s->count; i-- > 0;)
     if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) n[s->parent[i]] += n[i];
+  /* A branch is shed below r_s, or (acclimation a) below r_s times the stem's own
+   * mean light E to the power a: a stem in shade keeps the branches that are as
+   * lit as the rest of its crown (docs/model.md, "Shedding"). */
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva__stem *st = &w->stems[k];
+    const sylva_species_def *sd = &w->species[st->species].def;
+    st->shed_below = sd->r_s;
+    if (sd->acclimation > 0.0) {
+      int32_t root = st->root_slot;
+      double mean = n[root] > 0 ? w->q[root] / (sd->alpha * (double)n[root]) : 0.0;
+      if (mean < 1.0) st->shed_below = sd->r_s * pow(mean, sd->acclimation);
+    }
+  }
   size_t doomed = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
@@ -49,7 +63,7 @@ int sylva__shed(sylva_world *w, int iteration) {
       const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
       /* mean relative light per leaf-bearing node; a branch without leaves is dead */
       double e = n[i] > 0 ? w->q[i] / (d->alpha * (double)n[i]) : 0.0;
-      if (e < d->r_s) {
+      if (e < w->stems[s->stem[i]].shed_below || (n[i] == 0 && d->acclimation > 0.0)) {
         s->flags[i] |= SYLVA__NODE_DOOMED;
         doomed++;
         /* a branch born this iteration was never announced as added: it is not

@@ -211,7 +211,9 @@ static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int ite
     bool lateral = k == 0 && !sp->apex;
     if (lateral) {
       double axis[3] = {vd[0], vd[1], vd[2]};
-      sylva__lateral_direction(axis, d->theta, (double)s->depth[tip] * d->divergence, vd);
+      /* successive buds of an axis stand divergence apart */
+      int32_t bud = s->depth[tip] / w->species[st->species].bud_every;
+      sylva__lateral_direction(axis, d->theta, (double)bud * d->divergence, vd);
     }
     double p0[3] = {s->x[tip], s->y[tip], s->z[tip]};
     double vo[3];

@@ -5,7 +5,8 @@
  * bytes as before skies existed; CONFLICTS when the world has zones, pruning
  * schedules, zones entered or nodes pruned since its last step: each obstacle then
  * carries its kind, each stem its pruned count, and the entered zones and the
- * schedules follow the nodes. The voxel grid is not stored: shade is an exact
+ * schedules follow the nodes; SCALED when a species has ref_rho, acclimation, years
+ * or a nursery: every species record then has those four places too. The voxel grid is not stored: shade is an exact
  * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -18,7 +19,9 @@
 #include "world_impl.h"
 
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
-enum { HEADER = 32, SKY = 1, CONFLICTS = 2 };
+enum { HEADER = 32, SKY = 1, CONFLICTS = 2, SCALED = 4 };
+/* Places of the species record that every image has; the rest only with SCALED. */
+enum { PLACES_BEFORE_SCALED = 37 };
 
 typedef struct writer {
   uint8_t *buf;
@@ -107,8 +110,8 @@ _Static_assert(0 SYLVA_SPECIES_FIELDS(SYLVA__COUNT) + 6 == SYLVA_SPECIES_SNAPSHO
                "a snapshot place of the species record is empty");
 #undef SYLVA__COUNT
 
-static void put_species(writer *o, const sylva_species_def *d) {
-  for (int i = 0; i < SYLVA_SPECIES_SNAPSHOT_FIELDS; i++) {
+static void put_species(writer *o, const sylva_species_def *d, int places) {
+  for (int i = 0; i < places; i++) {
     const char *at = (const char *)d + species_record[i].offset;
     if (species_record[i].is_int) {
       int v;
@@ -149,6 +152,12 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   if (w->status) return w->status;
   writer o = {0};
   bool conflicts = has_conflicts(w);
+  bool scaled = false;
+  for (int i = 0; i < w->species_count; i++) {
+    const sylva_species_def *d = &w->species[i].given;
+    scaled = scaled || d->ref_rho != 0.0 || d->acclimation != 0.0 || d->years || d->nursery;
+  }
+  int places = scaled ? SYLVA_SPECIES_SNAPSHOT_FIELDS : PLACES_BEFORE_SCALED;
   uint8_t zero[HEADER] = {0};
   put(&o, zero, HEADER);
   for (int a = 0; a < 3; a++) put_f64(&o, w->def.min[a]);
@@ -167,11 +176,11 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   put_i32(&o, w->nodes.next_id);
   put_u32(&o, (uint32_t)w->species_count);
   for (int i = 0; i < w->species_count; i++) {
-    const sylva_species_def *d = &w->species[i].def;
+    const sylva_species_def *d = &w->species[i].given;
     put_str(&o, w->species[i].label);
     put_u32(&o, (uint32_t)d->growth.kind);
     put_u32(&o, (uint32_t)d->allocation);
-    put_species(&o, d);
+    put_species(&o, d, places);
   }
   put_i32(&o, w->grid.next_obstacle_id);
   put_u32(&o, (uint32_t)w->grid.obstacle_count);
@@ -247,7 +256,8 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   uint8_t *h = o.buf + 8;
   uint32_t version = SYLVA_SNAPSHOT_VERSION;
   for (int i = 0; i < 4; i++) h[i] = (uint8_t)(version >> (8 * i));
-  uint32_t flags = (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0);
+  uint32_t flags =
+      (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0);
   for (int i = 0; i < 4; i++) h[4 + i] = (uint8_t)(flags >> (8 * i));
   for (int i = 0; i < 8; i++) h[8 + i] = (uint8_t)(payload >> (8 * i));
   uint64_t sum = fnv1a(o.buf + HEADER, payload);
@@ -327,8 +337,8 @@ static void get_stats(reader *r, sylva_stem_stats *s) {
   s->cap = get_i32(r);
 }
 
-static void get_species(reader *r, sylva_species_def *d) {
-  for (int i = 0; i < SYLVA_SPECIES_SNAPSHOT_FIELDS; i++) {
+static void get_species(reader *r, sylva_species_def *d, int places) {
+  for (int i = 0; i < places; i++) {
     char *at = (char *)d + species_record[i].offset;
     if (species_record[i].is_int) {
       int v = get_i32(r);
@@ -346,7 +356,8 @@ static void get_species(reader *r, sylva_species_def *d) {
     goto fail;            \
   } while (0)
 
-static int read_world(reader *r, bool has_sky, bool conflicts, sylva_world **out) {
+static int read_world(reader *r, bool has_sky, bool conflicts, bool scaled,
+                      sylva_world **out) {
   int rc = SYLVA_OK;
   sylva_world *w = NULL;
   sylva_world_def def = sylva_default_world_def();
@@ -388,7 +399,7 @@ static int read_world(reader *r, bool has_sky, bool conflicts, sylva_world **out
     sylva_species_def d = sylva_default_species_def();
     d.growth.kind = (sylva_equation_kind)get_u32(r);
     d.allocation = (sylva_allocation)get_u32(r);
-    get_species(r, &d);
+    get_species(r, &d, scaled ? SYLVA_SPECIES_SNAPSHOT_FIELDS : PLACES_BEFORE_SCALED);
     if (r->bad) break;
     int id = sylva_world_add_species(w, &d, label);
     if (id < 0) SYLVA__FAIL(id == SYLVA_ENOMEM ? id : SYLVA_EBADIMAGE);
@@ -452,8 +463,14 @@ static int read_world(reader *r, bool has_sky, bool conflicts, sylva_world **out
       st->stats.plant = i;
       st->stats.stem = k;
       st->stats.finished = st->finished;
+      /* the measures that follow from the stored ones (stats.c) */
+      const sylva_species_def *sd = &w->species[st->species].def;
+      st->stats.crown_height = st->stats.height - st->stats.crown_base;
+      st->stats.age = sd->years ? (int32_t)(iteration - st->born - sd->nursery) : -1;
       st->root_slot = -1;
-      if (fin > 1 || st->born < 0 || st->born > iteration || st->stats.pruned < 0)
+      /* a stem grown in the nursery was planted before the world's first iteration */
+      int nursery = w->species[st->species].def.years ? -(SYLVA_MAX_AGE + 200) : 0;
+      if (fin > 1 || st->born < nursery || st->born > iteration || st->stats.pruned < 0)
         SYLVA__FAIL(SYLVA_EBADIMAGE);
     }
   uint32_t live = get_u32(r);
@@ -574,9 +591,10 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)(SKY | CONFLICTS)) return SYLVA_EBADIMAGE;
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED)) return SYLVA_EBADIMAGE;
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};
-  return read_world(&r, (reserved & SKY) != 0, (reserved & CONFLICTS) != 0, out);
+  return read_world(&r, (reserved & SKY) != 0, (reserved & CONFLICTS) != 0, (reserved & SCALED) != 0,
+                    out);
 }

@@ -10,6 +10,8 @@ static void stats_reset(sylva__stem *st) {
   o->plant = st->plant;
   o->stem = st->index;
   o->nodes = 0;
+  o->age = -1;
+  o->crown_height = NAN;
   o->finished = st->finished;
   st->ext[0] = st->ext[2] = INFINITY;
   st->ext[1] = st->ext[3] = st->ext[4] = -INFINITY;
@@ -31,6 +33,13 @@ static void stats_shape(const sylva_world *w, sylva__stem *st) {
     if (isnan(o->dbh) && p >= 0 && h >= 1.3 && s->z[p] - rz < 1.3) o->dbh = 2.0 * s->radius[n];
     if (isnan(o->crown_base) && s->lateral_child[n] >= 0) o->crown_base = h;
   }
+  o->crown_height = o->height - o->crown_base; /* NaN with the crown base */
+}
+
+/* Years since planting: the stem's seasons less those it spent in the nursery. */
+static int32_t stem_age(const sylva_world *w, const sylva__stem *st, int iteration) {
+  const sylva_species_def *d = &w->species[st->species].def;
+  return d->years ? (int32_t)(sylva__stem_local(st, iteration) - d->nursery) : -1;
 }
 
 static void extend(sylva__stem *st, const sylva__skeleton *s, size_t i) {
@@ -54,9 +63,10 @@ void sylva__stats(sylva_world *w, int iteration) {
   for (int k = 0; k < w->stem_count; k++) {
     sylva__stem *st = &w->stems[k];
     stats_shape(w, st);
+    st->stats.age = stem_age(w, st, iteration);
     st->stats.light = w->q[st->root_slot];
     int local = sylva__stem_local(st, iteration);
-    st->stats.cap = local >= 1 ? sylva_equation_cap(&w->species[st->species].def.growth, local) : 0;
+    st->stats.cap = local >= 1 ? sylva__species_cap(&w->species[st->species], local) : 0;
   }
 }
 
@@ -68,14 +78,19 @@ void sylva__stats_planted(sylva_world *w, int stem) {
   st->stats.shed = 0;
   st->stats.cap = 0;
   st->stats.light = 0.0;
-  for (int32_t n = st->root_slot; n >= 0; n = s->axis_child[n]) {
+  /* its nodes are the last slots: the initial trunk, or a stem grown in the nursery */
+  int next = w->iteration + 1;
+  for (size_t n = (size_t)st->root_slot; n < s->count; n++) {
+    if (s->stem[n] != stem || !(s->flags[n] & SYLVA__NODE_ALIVE)) continue;
     st->stats.nodes++;
-    extend(st, s, (size_t)n);
+    extend(st, s, n);
+    if (!sylva__bears_leaves(&sp->def, s->birth[n], next)) continue;
     int v[3];
-    sylva__node_voxel(w, n, v);
-    /* as the first iteration will collect it: every node one iteration old */
+    sylva__node_voxel(w, (int32_t)n, v);
+    /* as the next iteration will collect it: every node one iteration older */
     st->stats.light += sylva__collected(sp->def.alpha, sylva__grid_light(&w->grid, v),
-                                        sylva__species_age_pow(sp, 1));
+                                        sylva__species_age_pow(sp, next - s->birth[n]));
   }
   stats_shape(w, st);
+  st->stats.age = stem_age(w, st, w->iteration);
 }

@@ -123,6 +123,52 @@ static int first_t95(const sylva_equation *eq) {
   return INT_MAX;
 }
 
+static int round_count(double v, int lo, int hi) {
+  double r = floor(v + 0.5);
+  return r < lo ? lo : r > hi ? hi : (int)r;
+}
+
+/* The counts of a species with ref_rho, scaled by s = ref_rho / rho so that they act
+ * as lengths (docs/model.md, "Species in years"): the growth equation, the initial
+ * trunk, the apical zone and the marker cone in internodes, the shade pyramid in
+ * voxels (whose edge follows rho) with its base taken to the power 1 / s, so that
+ * it fades over the same metres. */
+static void scale_counts(sylva__species *sp) {
+  sylva_species_def *d = &sp->def;
+  sp->shade_scale = 1.0;
+  sp->bud_every = 1;
+  if (!(d->ref_rho > 0.0)) return;
+  double s = d->ref_rho / d->rho;
+  switch (d->growth.kind) {
+  case SYLVA_EQ_LOGISTIC: d->growth.p[0] *= s; d->growth.p[1] *= s; break;
+  default: d->growth.p[0] *= s; break; /* beta1, omega1 and A are the limits */
+  }
+  d->initial_nodes = round_count(d->initial_nodes * s, 1, 1000);
+  d->apical_zone = round_count(d->apical_zone * s, 0, 100000);
+  d->cone_radius *= s;
+  d->pyramid_depth = round_count(d->pyramid_depth * s, 1, 64);
+  d->b_min = pow(d->b_min, 1.0 / s);
+  d->b_max = pow(d->b_max, 1.0 / s);
+  sp->shade_scale = 1.0 / s;
+  sp->bud_every = round_count(s, 1, 1000);
+}
+
+int sylva__species_cap(const sylva__species *sp, int local) {
+  if (!(sp->def.ref_rho > 0.0)) return sylva_equation_cap(&sp->def.growth, local);
+  /* the difference of the rounded path lengths: over the years the caps add up to
+   * X(T) to within half an internode at any rho, where rounding each year's rate
+   * would lose or gain up to half an internode a year */
+  double a = floor(sylva_equation_value(&sp->def.growth, (double)local) + 0.5);
+  double b = floor(sylva_equation_value(&sp->def.growth, (double)(local - 1)) + 0.5);
+  return a > b ? (int)(a - b) : 0;
+}
+
+bool sylva__species_stops(const sylva__species *sp, int local) {
+  /* judged on the equation as given, in internodes of ref_rho, so that a species
+   * stops in the same year at any rho */
+  return sylva_equation_stops(&sp->given.growth, local);
+}
+
 int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const char *label) {
   if (!label || strlen(label) >= SYLVA_LABEL_MAX) return SYLVA_EINVAL;
   if (sylva_species_check(def, NULL)) return SYLVA_ERANGE;
@@ -136,8 +182,10 @@ int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const 
   sylva__species *sp = &w->species[w->species_count];
   memset(sp, 0, sizeof *sp);
   sp->def = *def;
+  sp->given = *def;
+  scale_counts(sp);
   strcpy(sp->label, label);
-  sp->t95 = first_t95(&def->growth);
+  sp->t95 = first_t95(&sp->def.growth);
   sp->shade_cache_t = -1;
   return w->species_count++;
 }
@@ -155,10 +203,10 @@ const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
     double b = sylva__species_b(sp, t);
     p->depth = sp->def.pyramid_depth;
     for (int q = 1; q <= p->depth; q++) {
-      p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * SYLVA__SHADE_ONE + 0.5);
+      p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * sp->shade_scale * SYLVA__SHADE_ONE + 0.5);
       p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
     }
-    p->column = (int64_t)floor(sp->def.shade_column * SYLVA__SHADE_ONE + 0.5);
+    p->column = (int64_t)floor(sp->def.shade_column * sp->shade_scale * SYLVA__SHADE_ONE + 0.5);
     sp->shade_cache_t = t;
   }
   return &sp->shade;
@@ -322,6 +370,99 @@ static int check_trunk(const sylva_world *w, const sylva_species_def *sp, const 
   return SYLVA_OK;
 }
 
+/* ---- the nursery --------------------------------------------------------------- */
+
+/* Grows the plant alone under the open sky for `seasons` iterations, in a world of its
+ * own around its roots with the voxel edge of w (docs/model.md, "Species in years").
+ * Its generator is seeded from the world's seed and the plant's label, so the
+ * nursery draws nothing from w's generator and a plant's stock depends only on them. */
+static int grow_in_nursery(const sylva_world *w, const sylva_plant_def *def, int seasons,
+                           sylva_world **out) {
+  const sylva__species *sp = &w->species[def->species];
+  sylva_world_def nd = sylva_default_world_def();
+  double reach = sylva_equation_limit(&sp->def.growth) * sp->def.rho;
+  if (!(reach < 200.0)) reach = 200.0; /* taller than any tree: the box only bounds it */
+  for (int a = 0; a < 3; a++) {
+    nd.min[a] = nd.max[a] = def->roots[0][a];
+    for (int r = 1; r < def->root_count; r++) {
+      if (def->roots[r][a] < nd.min[a]) nd.min[a] = def->roots[r][a];
+      if (def->roots[r][a] > nd.max[a]) nd.max[a] = def->roots[r][a];
+    }
+  }
+  for (int a = 0; a < 2; a++) {
+    nd.min[a] -= reach;
+    nd.max[a] += reach;
+  }
+  nd.max[2] += reach + 1.0;
+  nd.voxel = w->def.voxel;
+  nd.seed = w->def.seed ^ (uint64_t)label_hash(def->label);
+  sylva_world *n = NULL;
+  int rc = sylva_world_create(&nd, &n);
+  if (rc) return rc;
+  int sp_id = sylva_world_add_species(n, &sp->given, sp->label);
+  sylva_plant_def pd = *def;
+  pd.species = sp_id;
+  pd.age = 0;
+  rc = sp_id < 0 ? sp_id : sylva_world_add_plant(n, &pd, NULL);
+  for (int t = 0; rc >= 0 && t < seasons; t++) {
+    const sylva_journal *j;
+    rc = sylva_world_step(n, &j);
+    if (rc == SYLVA_EFINISHED) { /* a stem that stopped stays as it is */
+      n->iteration++;
+      rc = SYLVA_OK;
+    }
+  }
+  if (rc < 0) {
+    sylva_world_destroy(n);
+    return rc;
+  }
+  *out = n;
+  return SYLVA_OK;
+}
+
+/* Places the nursery's stems as stems first_stem.. of w, planted `seasons` iterations
+ * before now: every node at its position, with its birth, radius and state. A node
+ * that cannot be placed (outside the world, in an obstacle or another stem's voxel)
+ * is left out with everything it carries, as a prune would cut it. Fails only for
+ * memory, after which take_back() undoes it. */
+static int transplant(sylva_world *w, const sylva_world *n, int first_stem, int seasons) {
+  const sylva__skeleton *ns = &n->nodes;
+  int32_t *map = sylva__malloc((ns->count ? ns->count : 1) * sizeof *map);
+  if (!map) return SYLVA_ENOMEM;
+  int rc = SYLVA_OK;
+  int32_t shift = (int32_t)(w->iteration - seasons);
+  for (size_t i = 0; i < ns->count && !rc; i++) {
+    map[i] = -1;
+    if (!(ns->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    int32_t parent = ns->parent[i] >= 0 ? map[ns->parent[i]] : -1;
+    if (ns->parent[i] >= 0 && parent < 0) continue; /* its parent was left out */
+    bool lateral = (ns->flags[i] & SYLVA__NODE_LATERAL) != 0;
+    int stem = first_stem + ns->stem[i];
+    double p[3] = {ns->x[i], ns->y[i], ns->z[i]};
+    int32_t slot = sylva__add_node(w, parent, lateral, p, stem, ns->birth[i] + shift);
+    if (slot == SYLVA_ENOMEM) {
+      rc = SYLVA_ENOMEM;
+      break;
+    }
+    if (slot < 0) {
+      if (lateral) w->nodes.flags[parent] |= SYLVA__NODE_SCAR; /* its bud is spent */
+      continue;
+    }
+    map[i] = slot;
+    w->nodes.radius[slot] = ns->radius[i];
+    w->nodes.flags[slot] |= ns->flags[i] & SYLVA__NODE_SCAR;
+    if (parent < 0) w->stems[stem].root_slot = slot;
+    rc = sylva__shade_node(w, slot, +1);
+    if (!rc) w->mark.shaded = (size_t)slot + 1;
+  }
+  for (int k = 0; k < n->stem_count && !rc; k++) {
+    w->stems[first_stem + k].finished = n->stems[k].finished;
+    w->stems[first_stem + k].born = shift;
+  }
+  sylva__free(map);
+  return rc;
+}
+
 int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root) {
   if (bad_root) *bad_root = -1;
   if (w->status) return w->status;
@@ -331,6 +472,8 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   if (sylva__find_plant(w, def->label) >= 0) return SYLVA_EINVAL;
   if (w->stem_count + def->root_count > SYLVA_MAX_STEMS) return SYLVA_ETOOBIG;
   const sylva_species_def *sp = &w->species[def->species].def;
+  if (def->age < 0 || def->age > SYLVA_MAX_AGE || (def->age > 0 && !sp->years)) return SYLVA_EINVAL;
+  int seasons = sp->years ? sp->nursery + def->age : 0;
   /* Check every trunk before changing anything: the voxels of earlier roots of the
    * same plant count as taken by another stem. */
   size_t per = (size_t)sp->initial_nodes + 1;
@@ -369,8 +512,30 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       reserve_plant_index(w, (size_t)w->plant_count + 1))
     return SYLVA_ENOMEM;
   int pid = w->plant_count;
+  sylva_world *nursery = NULL;
+  if (seasons > 0) {
+    int rc = grow_in_nursery(w, def, seasons, &nursery);
+    if (rc) return rc;
+  }
   set_mark(w);
-  for (int r = 0; r < def->root_count; r++) {
+  for (int r = 0; r < def->root_count && nursery; r++) {
+    sylva__stem *st = &w->stems[w->stem_count++];
+    memset(st, 0, sizeof *st);
+    st->plant = pid;
+    st->index = r;
+    st->species = def->species;
+    st->root_slot = -1;
+    memcpy(st->root, def->roots[r], sizeof st->root);
+  }
+  if (nursery) {
+    int rc = transplant(w, nursery, w->mark.stem_count, seasons);
+    sylva_world_destroy(nursery);
+    if (rc) {
+      take_back(w);
+      return rc;
+    }
+  }
+  for (int r = 0; r < def->root_count && seasons == 0; r++) {
     int s = w->stem_count++;
     sylva__stem *st = &w->stems[s];
     memset(st, 0, sizeof *st);
@@ -590,7 +755,7 @@ static void stop_phase(sylva_world *w, int T) {
   for (int s = 0; s < w->stem_count; s++) {
     const sylva__stem *st = &w->stems[s];
     if (!st->finished &&
-        sylva_equation_stops(&w->species[st->species].def.growth, sylva__stem_local(st, T)))
+        sylva__species_stops(&w->species[st->species], sylva__stem_local(st, T)))
       w->finishing.data[w->finishing.len++] = s;
   }
 }
@@ -715,7 +880,7 @@ static bool in_range(int i, int n) { return i >= 0 && i < n; }
 
 int sylva_world_species_count(const sylva_world *w) { return w->species_count; }
 const sylva_species_def *sylva_world_species(const sylva_world *w, int species) {
-  return in_range(species, w->species_count) ? &w->species[species].def : NULL;
+  return in_range(species, w->species_count) ? &w->species[species].given : NULL;
 }
 const char *sylva_world_species_label(const sylva_world *w, int species) {
   return in_range(species, w->species_count) ? w->species[species].label : NULL;

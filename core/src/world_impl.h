@@ -10,7 +10,12 @@
 #include "sylva/world.h"
 
 typedef struct sylva__species {
-  sylva_species_def def;
+  sylva_species_def def;   /* as the phases use it: for a species with ref_rho, its
+                              counts scaled to its rho (docs/model.md, "Species in years") */
+  sylva_species_def given; /* as it was added: what queries and snapshots give back */
+  double shade_scale;      /* weight of one node's shade: ref_rho / rho nodes cast what
+                              one node of ref_rho would (1 without ref_rho) */
+  int bud_every;           /* a node carries a lateral bud when its depth is a multiple */
   char label[SYLVA_LABEL_MAX];
   int t95;             /* first local iteration with X(T) >= 0.95 limit */
   double *age_pow;     /* age^sigma by age, grown on demand */
@@ -33,6 +38,7 @@ typedef struct sylva__stem {
   bool finished;
   sylva_stem_stats stats;
   double ext[5]; /* scratch of the stats pass: min x, max x, min y, max y, max z */
+  double shed_below; /* scratch of shedding: the stem's threshold of E this iteration */
 } sylva__stem;
 
 /** A node that sprouts this iteration. */
@@ -174,6 +180,16 @@ int sylva__vec_reserve(void **data, size_t *cap, size_t n, size_t elem);
 /** Local iteration of a stem at world iteration T (1 for its first). */
 static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
   return world_iteration - s->born;
+}
+
+/** c(T) of a stem's species at local iteration T (docs/model.md, "Cap" and "Species
+ *  in years"). */
+int sylva__species_cap(const sylva__species *sp, int local);
+/** Does a stem of this species stop growing at local iteration T ("Stop")? */
+bool sylva__species_stops(const sylva__species *sp, int local);
+/** Does the node at this depth carry a lateral bud? */
+static inline bool sylva__has_bud(const sylva__species *sp, int32_t depth) {
+  return depth % sp->bud_every == 0;
 }
 
 /** Does a node born at world iteration birth bear leaves at iteration T? It does

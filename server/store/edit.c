@@ -86,7 +86,7 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
       sylva_world_destroy(copy);
       return SYLVA_EINVAL;
     }
-    sylva_plant_def def = {species, p->id, (const double(*)[3])p->roots, p->root_count};
+    sylva_plant_def def = {species, p->id, (const double(*)[3])p->roots, p->root_count, 0};
     int bad = -1;
     rc = sylva_world_add_plant(copy, &def, &bad);
     if (rc < 0) {

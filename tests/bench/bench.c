@@ -191,7 +191,7 @@ static sylva_world *generated_stand(int rows, double spacing) {
     double root[1][3] = {{(i % rows - (rows - 1) / 2.0) * spacing, (i / rows - (rows - 1) / 2.0) * spacing, 0}};
     char label[16];
     snprintf(label, sizeof label, "t%d", i);
-    sylva_plant_def p = {s, label, (const double(*)[3])root, 1};
+    sylva_plant_def p = {s, label, (const double(*)[3])root, 1, 0};
     if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
   }
   return w;
@@ -211,7 +211,7 @@ static sylva_world *single(const char *preset) {
   sp.tropism[2] = 1.0; /* upright, as the ready scenarios */
   int s = sylva_world_add_species(w, &sp, preset);
   double root[1][3] = {{0, 0, 0}};
-  sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1};
+  sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1, 0};
   if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
   return w;
 }

@@ -20,7 +20,7 @@ static sylva_world *small_world(void) {
   sp.tropism[2] = 1.0;
   int s = sylva_world_add_species(w, &sp, "x");
   double roots[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
-  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2};
+  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, 0};
   sylva_world_add_plant(w, &pd, NULL);
   return w;
 }

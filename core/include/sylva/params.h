@@ -45,6 +45,18 @@ typedef struct sylva_species_def {
   double cone_angle;       /**< marker cone half-angle */
   double cone_radius;      /**< marker cone length, internodes */
   int initial_nodes;       /**< internodes of the initial vertical trunk */
+  /* Real species (docs/model.md, "Species in years"). All zero for the IGM presets,
+   * which then grow exactly as before these fields existed. */
+  double ref_rho;          /**< > 0: the counts above (growth equation, initial_nodes,
+                                apical_zone, cone_radius, pyramid_depth) are given for
+                                internodes of this length, m, and scale with ref_rho / rho
+                                so that they act as lengths; lateral buds stand at most
+                                one per ref_rho of axis; 0: counts are taken as given */
+  double acclimation;      /**< 0..1: a branch is shed when its light is below r_s times
+                                the stem's mean light to this power (0: r_s alone) */
+  int years;               /**< 1: one iteration is one growing season; stems report ages */
+  int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
+                                light, before it is planted (years species only) */
 } sylva_species_def;
 
 /** The defaults of scenario.md (the igm-fig11 row with r_s 0.35). */

@@ -27,6 +27,10 @@
  * growth.kind and allocation come first as u32, growth.p[] takes places 1-3 and
  * tropism[] places 14-16.
  *
+ * Places 37 and up (ref_rho, acclimation, years, nursery) are written only in
+ * images with the SCALED flag (a species with a time scale or metric counts), so
+ * images of worlds without such species keep their bytes.
+ *
  * Adding a field: add it to sylva_species_def and here (at the end of its group,
  * with the next place, 37 for the first), raise SYLVA_SPECIES_SNAPSHOT_FIELDS and
  * SYLVA_SNAPSHOT_VERSION, and document its key in docs/scenario.md. */
@@ -67,6 +71,10 @@
   X(r_tip,         double, 0.012, 0,    10,     SYLVA_FIELD_MIN_EXCLUSIVE, species, 22)          \
   X(pipe_exponent, double, 2.5,   2,    3.5,    SYLVA_FIELD_CLOSED,        species, 23)          \
   X(initial_nodes, int,    2,     1,    1000,   SYLVA_FIELD_CLOSED,        species, 34)          \
+  X(years,         int,    0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 39)          \
+  X(nursery,       int,    0,     0,    200,    SYLVA_FIELD_CLOSED,        species, 40)          \
+  X(ref_rho,       double, 0,     0,    100,    SYLVA_FIELD_CLOSED,        species, 37)          \
+  X(acclimation,   double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 38)          \
   X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
   X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
   X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
@@ -75,6 +83,6 @@
 
 /** Places in a snapshot's species record: the list's fields and the hand-written
  *  growth.p[3] and tropism[3]. */
-#define SYLVA_SPECIES_SNAPSHOT_FIELDS 37
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 41
 
 #endif

@@ -26,6 +26,8 @@
 #define SYLVA_LABEL_MAX 64
 /** Most stems a world may hold. */
 #define SYLVA_MAX_STEMS 1000000
+/** Oldest age (years) a plant may be planted at. */
+#define SYLVA_MAX_AGE 500
 /** Most voxels a world's box may span (memory is only spent where something is). */
 #define SYLVA_MAX_VOXELS 68719476736.0 /* 2^36 */
 
@@ -67,6 +69,9 @@ typedef struct sylva_plant_def {
   const char *label;        /**< the plant's id in scenario and exports */
   const double (*roots)[3]; /**< root positions, metres */
   int root_count;
+  /** Age in years at planting (species with years only; 0 otherwise): the stem is
+   *  grown nursery + age seasons in open light before it is placed. */
+  int age;
 } sylva_plant_def;
 
 /** What an obstacle is. */
@@ -112,6 +117,8 @@ typedef struct sylva_radius_change {
 typedef struct sylva_stem_stats {
   int32_t plant, stem;
   double height, dbh, crown_width, crown_base, light;
+  double crown_height; /**< height - crown_base (NaN with crown_base) */
+  int32_t age;         /**< years since planting (species with years), else -1 */
   int64_t nodes, shed;
   int64_t pruned; /**< nodes pruned at this iteration (by schedule or edit) */
   int cap;
