@@ -36,24 +36,37 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
   sylva__skeleton *s = &w->nodes;
   const sylva__species *sp = &w->species[w->stems[stem].species];
   const sylva_species_def *d = &sp->def;
+  /* The axis's nodes that carry a bud (every node, but with ref_rho one per ref_rho
+   * of axis) and its apex; each stands for itself and the bud-less nodes below it
+   * down to the previous one, whose light its free bud collects as its own
+   * (docs/model.md, "Species in years"). */
   w->axis.len = 0;
+  w->work_light.len = 0;
+  double segment = 0.0;
   for (int32_t n = first; n >= 0; n = s->axis_child[n]) {
-    if (SYLVA__VEC_RESERVE(w->axis, w->axis.len + 1)) return SYLVA_ENOMEM;
+    segment += w->light[n];
+    if (s->axis_child[n] >= 0 && s->lateral_child[n] < 0 && !sylva__has_bud(sp, s->depth[n]))
+      continue;
+    if (SYLVA__VEC_RESERVE(w->axis, w->axis.len + 1) ||
+        SYLVA__VEC_RESERVE(w->work_light, w->work_light.len + 1))
+      return SYLVA_ENOMEM;
     w->axis.data[w->axis.len++] = n;
+    w->work_light.data[w->work_light.len++] = segment;
+    segment = 0.0;
   }
   int nb = (int)w->axis.len;
   if (SYLVA__VEC_RESERVE(w->ranked, (size_t)nb)) return SYLVA_ENOMEM;
+  int32_t apex_depth = s->depth[w->axis.data[nb - 1]];
   for (int i = 0; i < nb; i++) {
     int32_t n = w->axis.data[i];
     double lm = s->axis_child[n] >= 0 ? w->q[s->axis_child[n]] : 0.0;
-    double ll = s->lateral_child[n] >= 0 ? w->q[s->lateral_child[n]] : w->light[n];
+    double ll = s->lateral_child[n] >= 0 ? w->q[s->lateral_child[n]] : w->work_light.data[i];
     /* a scar (shed branch) has no bud left to feed */
     double rbh = (s->flags[n] & SYLVA__NODE_SCAR) ? 0.0 : sylva__bh_share(lm, ll, d->lambda);
     /* Apical dominance: a free bud fewer than apical_zone internodes below the
      * axis's apex stays dormant and takes no share (docs/model.md, "Allocation"). */
-    if (s->lateral_child[n] < 0 && i < nb - 1 && nb - 1 - i < d->apical_zone) rbh = 0.0;
-    /* a node between buds (ref_rho: one bud per ref_rho of axis) has none to feed */
-    if (s->lateral_child[n] < 0 && i < nb - 1 && !sylva__has_bud(sp, s->depth[n])) rbh = 0.0;
+    if (s->lateral_child[n] < 0 && i < nb - 1 && apex_depth - s->depth[n] < d->apical_zone)
+      rbh = 0.0;
     w->ranked.data[i] = (sylva__ranked){rbh, 0.0, i};
   }
   /* The trunk's apex continues the main flow: besides its own light it takes the

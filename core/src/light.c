@@ -14,9 +14,9 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
       cur_stem = s->stem[i];
       sp = &w->species[w->stems[cur_stem].species];
     }
-    int age = iteration - s->birth[i];
+    int age = sylva__leaf_age(s, &sp->def, i, iteration);
     double L = 0.0;
-    if (sylva__bears_leaves(&sp->def, s->birth[i], iteration)) {
+    if (age >= 0) {
       int v[3];
       sylva__node_voxel(w, (int32_t)i, v);
       double l = sylva__grid_light(&w->grid, v);

@@ -21,6 +21,66 @@ int sylva__remove_node(sylva_world *w, int32_t i, bool pruned) {
   return SYLVA_OK;
 }
 
+/* Dooms the branch that starts at node i, born before or at `iteration`: a lateral
+ * leaves a scar on its bearing node, an axis's continuation leaves that node its
+ * axis's apex. Returns 0 or SYLVA_ENOMEM (nothing doomed). */
+static int doom_branch(sylva_world *w, size_t i, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  /* a branch born this iteration was never announced as added: it is not reported
+   * as shed either */
+  if (s->birth[i] != iteration) {
+    if (SYLVA__VEC_RESERVE(w->shed, w->shed.len + 1)) return SYLVA_ENOMEM;
+    w->shed.data[w->shed.len++] = s->id[i];
+  }
+  s->flags[i] |= SYLVA__NODE_DOOMED;
+  int32_t p = s->parent[i];
+  if (s->flags[i] & SYLVA__NODE_LATERAL) {
+    s->lateral_child[p] = -1;
+    s->flags[p] |= SYLVA__NODE_SCAR;
+  } else {
+    s->axis_child[p] = -1;
+  }
+  return SYLVA_OK;
+}
+
+/* Lifts the crowns of the species with `lift`: along the stem's main path, from the
+ * root to its highest node, a branch that leaves the path below lift times the
+ * stem's height is doomed unless it reaches the upper half of the crown (a
+ * codominant stem is no low branch), so the leader is never cut whichever axis
+ * carries it. Uses w->remap and w->pipe as scratch. Returns the number doomed, or
+ * SYLVA_ENOMEM. */
+static int64_t lift_crowns(sylva_world *w, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  int64_t doomed = 0;
+  int32_t *next = w->remap; /* on the main path: the path's next node */
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva__stem *st = &w->stems[k];
+    double lift = w->species[st->species].def.lift;
+    if (!(lift > 0.0)) continue;
+    int32_t root = st->root_slot, top = root;
+    for (size_t i = (size_t)root; i < s->count; i++)
+      if (s->stem[i] == k && (s->flags[i] & SYLVA__NODE_ALIVE) && s->z[i] > s->z[top])
+        top = (int32_t)i;
+    double *reach = w->pipe; /* the highest z of each node's subtree */
+    for (size_t i = (size_t)root; i < s->count; i++)
+      if (s->stem[i] == k) reach[i] = s->z[i];
+    for (size_t i = s->count; i-- > (size_t)root + 1;)
+      if (s->stem[i] == k && (s->flags[i] & SYLVA__NODE_ALIVE) && reach[i] > reach[s->parent[i]])
+        reach[s->parent[i]] = reach[i];
+    next[top] = -1;
+    for (int32_t n = top; n != root; n = s->parent[n]) next[s->parent[n]] = n;
+    double below = s->z[root] + lift * (s->z[top] - s->z[root]);
+    double crown_middle = below + 0.5 * (s->z[top] - below);
+    for (int32_t n = root; n != top && s->z[n] < below; n = next[n]) {
+      int32_t off = s->axis_child[n] == next[n] ? s->lateral_child[n] : s->axis_child[n];
+      if (off < 0 || (s->flags[off] & SYLVA__NODE_DOOMED) || reach[off] >= crown_middle) continue;
+      if (doom_branch(w, (size_t)off, iteration)) return SYLVA_ENOMEM;
+      doomed++;
+    }
+  }
+  return doomed;
+}
+
 int sylva__shed(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.shed = 0; /* counted anew at T */
@@ -35,7 +95,7 @@ int sylva__shed(sylva_world *w, int iteration) {
       stem = (size_t)s->stem[i];
       d = &w->species[w->stems[stem].species].def;
     }
-    n[i] = sylva__bears_leaves(d, s->birth[i], iteration + 1) ? 1 : 0;
+    n[i] = sylva__leaf_age(s, d, i, iteration + 1) >= 0 ? 1 : 0;
   }
   for (size_t i = s->count; i-- > 0;)
     if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) n[s->parent[i]] += n[i];
@@ -52,9 +112,11 @@ int sylva__shed(sylva_world *w, int iteration) {
       if (mean < 1.0) st->shed_below = sd->r_s * pow(mean, sd->acclimation);
     }
   }
-  size_t doomed = 0;
+  int64_t lifted = lift_crowns(w, iteration);
+  if (lifted < 0) return (int)lifted;
+  size_t doomed = (size_t)lifted;
   for (size_t i = 0; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE) || (s->flags[i] & SYLVA__NODE_DOOMED)) continue;
     int32_t p = s->parent[i];
     if (p >= 0 && (s->flags[p] & SYLVA__NODE_DOOMED)) {
       s->flags[i] |= SYLVA__NODE_DOOMED;
@@ -64,16 +126,9 @@ int sylva__shed(sylva_world *w, int iteration) {
       /* mean relative light per leaf-bearing node; a branch without leaves is dead */
       double e = n[i] > 0 ? w->q[i] / (d->alpha * (double)n[i]) : 0.0;
       if (e < w->stems[s->stem[i]].shed_below || (n[i] == 0 && d->acclimation > 0.0)) {
-        s->flags[i] |= SYLVA__NODE_DOOMED;
+        int rc = doom_branch(w, i, iteration);
+        if (rc) return rc;
         doomed++;
-        /* a branch born this iteration was never announced as added: it is not
-         * reported as shed either */
-        if (s->birth[i] != iteration) {
-          if (SYLVA__VEC_RESERVE(w->shed, w->shed.len + 1)) return SYLVA_ENOMEM;
-          w->shed.data[w->shed.len++] = s->id[i];
-        }
-        s->lateral_child[p] = -1;
-        s->flags[p] |= SYLVA__NODE_SCAR;
       }
     }
   }

@@ -155,7 +155,8 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   bool scaled = false;
   for (int i = 0; i < w->species_count; i++) {
     const sylva_species_def *d = &w->species[i].given;
-    scaled = scaled || d->ref_rho != 0.0 || d->acclimation != 0.0 || d->years || d->nursery;
+    scaled = scaled || d->ref_rho != 0.0 || d->acclimation != 0.0 || d->years || d->nursery ||
+             d->shade_weight != 1.0 || d->lift != 0.0;
   }
   int places = scaled ? SYLVA_SPECIES_SNAPSHOT_FIELDS : PLACES_BEFORE_SCALED;
   uint8_t zero[HEADER] = {0};

@@ -84,12 +84,13 @@ void sylva__stats_planted(sylva_world *w, int stem) {
     if (s->stem[n] != stem || !(s->flags[n] & SYLVA__NODE_ALIVE)) continue;
     st->stats.nodes++;
     extend(st, s, n);
-    if (!sylva__bears_leaves(&sp->def, s->birth[n], next)) continue;
+    int age = sylva__leaf_age(s, &sp->def, n, next);
+    if (age < 0) continue;
     int v[3];
     sylva__node_voxel(w, (int32_t)n, v);
     /* as the next iteration will collect it: every node one iteration older */
     st->stats.light += sylva__collected(sp->def.alpha, sylva__grid_light(&w->grid, v),
-                                        sylva__species_age_pow(sp, next - s->birth[n]));
+                                        sylva__species_age_pow(sp, age));
   }
   stats_shape(w, st);
   st->stats.age = stem_age(w, st, w->iteration);

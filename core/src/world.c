@@ -89,6 +89,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->ranked.data);
   sylva__free(w->work.data);
   sylva__free(w->work_r.data);
+  sylva__free(w->work_light.data);
   sylva__free(w->shoot.data);
   sylva__free(w->added.data);
   sylva__free(w->radii.data);
@@ -164,8 +165,11 @@ int sylva__species_cap(const sylva__species *sp, int local) {
 }
 
 bool sylva__species_stops(const sylva__species *sp, int local) {
-  /* judged on the equation as given, in internodes of ref_rho, so that a species
-   * stops in the same year at any rho */
+  /* A tree in years lives on: it grows as long as its equation and its light let it,
+   * however slowly (the rule's one internode a season is 25 cm a year at a
+   * ref_rho of 0.25 m, which a 40-year-old street tree still grows). Other species
+   * are judged on the equation as given. */
+  if (sp->def.years) return false;
   return sylva_equation_stops(&sp->given.growth, local);
 }
 
@@ -203,10 +207,10 @@ const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
     double b = sylva__species_b(sp, t);
     p->depth = sp->def.pyramid_depth;
     for (int q = 1; q <= p->depth; q++) {
-      p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * sp->shade_scale * SYLVA__SHADE_ONE + 0.5);
+      p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * sp->shade_scale * sp->def.shade_weight * SYLVA__SHADE_ONE + 0.5);
       p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
     }
-    p->column = (int64_t)floor(sp->def.shade_column * sp->shade_scale * SYLVA__SHADE_ONE + 0.5);
+    p->column = (int64_t)floor(sp->def.shade_column * sp->shade_scale * sp->def.shade_weight * SYLVA__SHADE_ONE + 0.5);
     sp->shade_cache_t = t;
   }
   return &sp->shade;
@@ -399,7 +403,9 @@ static int grow_in_nursery(const sylva_world *w, const sylva_plant_def *def, int
   sylva_world *n = NULL;
   int rc = sylva_world_create(&nd, &n);
   if (rc) return rc;
-  int sp_id = sylva_world_add_species(n, &sp->given, sp->label);
+  sylva_species_def stock = sp->given;
+  stock.nursery = 0; /* the nursery's own plant starts as a seedling */
+  int sp_id = sylva_world_add_species(n, &stock, sp->label);
   sylva_plant_def pd = *def;
   pd.species = sp_id;
   pd.age = 0;

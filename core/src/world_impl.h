@@ -153,6 +153,7 @@ struct sylva_world {
   SYLVA__VEC(sylva__ranked) ranked; /* ranking of one axis */
   SYLVA__VEC(int32_t) work;      /* pending (slot) stack for axes */
   SYLVA__VEC(double) work_r;     /* resource for pending axes */
+  SYLVA__VEC(double) work_light; /* light of each bud's stretch of one axis */
   SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */
   SYLVA__VEC(sylva__box) stem_box;        /* conflicts: each stem's nodes' box */
   SYLVA__VEC(int32_t) stem_nodes;         /* conflicts: live slots grouped by stem */
@@ -190,6 +191,17 @@ bool sylva__species_stops(const sylva__species *sp, int local);
 /** Does the node at this depth carry a lateral bud? */
 static inline bool sylva__has_bud(const sylva__species *sp, int32_t depth) {
   return depth % sp->bud_every == 0;
+}
+
+/** The age whose light node i's leaves collect at iteration T, or -1 when it bears
+ *  none: its own age for its first leaf_age iterations; for a species in years, an
+ *  axis's tip that has outlived those flushes anew each season, as a short shoot
+ *  does (docs/model.md, "Species in years"). */
+static inline int sylva__leaf_age(const sylva__skeleton *s, const sylva_species_def *d, size_t i,
+                                  int T) {
+  int age = T - s->birth[i];
+  if (age <= d->leaf_age) return age;
+  return d->years && s->axis_child[i] < 0 ? 1 : -1;
 }
 
 /** Does a node born at world iteration birth bear leaves at iteration T? It does

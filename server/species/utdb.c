@@ -1,5 +1,7 @@
 #include "utdb.h"
 
+#include "table.h"
+
 #include <assert.h>
 #include <csv.h>
 #include <errno.h>
@@ -22,7 +24,6 @@ extern const size_t sylva__utdb_ts2_len;
 #define TS2_FILE "TS2_Regional_species_and_counts.csv"
 
 /* A row with more fields than this is not one of the tables (they have 21 and 15). */
-#define MAX_FIELDS 256
 
 struct sylva_utdb {
   sylva_utdb_species *species;
@@ -191,249 +192,10 @@ bool sylva_utdb_complete(const sylva_utdb_species *s) {
          s->curve[SYLVA_UTDB_CROWN_DIA].present && s->curve[SYLVA_UTDB_CROWN_HT].present;
 }
 
-/* ---- Reading a CSV table (libcsv) row by row ---- */
-
-typedef struct table table;
-/* Called with each row; returns 0 or a status (after calling table_fail). */
-typedef int (*table_row_fn)(table *t, const char *const *field, size_t n);
-
-struct table {
-  const char *file;
-  char *err;
-  size_t errlen;
-  int status;      /* the first failure, or SYLVA_OK */
-  size_t line;     /* the physical line being read, from 1 */
-  size_t row_line; /* the line of the row being assembled */
-  bool row_open;
-  size_t rows;     /* rows handed over, the header included */
-  char *text;      /* the row's fields, each NUL-terminated */
-  size_t text_len, text_cap;
-  size_t *start; /* offset of each field in text */
-  const char **field;
-  size_t nfields, fields_cap;
-  table_row_fn on_row;
-  void *ctx;
-};
-
-/* Records the first failure: "FILE:LINE: message" in err. Returns status. */
-static int table_fail(table *t, size_t line, int status, const char *fmt, ...) {
-  if (t->status) return t->status;
-  t->status = status;
-  if (t->err && t->errlen) {
-    int k = line ? snprintf(t->err, t->errlen, "%s:%zu: ", t->file, line)
-                 : snprintf(t->err, t->errlen, "%s: ", t->file);
-    if (k >= 0 && (size_t)k < t->errlen) {
-      va_list ap;
-      va_start(ap, fmt);
-      vsnprintf(t->err + k, t->errlen - (size_t)k, fmt, ap);
-      va_end(ap);
-    }
-  }
-  return status;
-}
-
-static int table_nomem(table *t) {
-  return table_fail(t, 0, SYLVA_ENOMEM, "out of memory");
-}
-
-static bool is_blank(char ch) { return ch == ' ' || ch == '\t'; }
-
-/* libcsv: a field has ended. */
-static void table_on_field(void *s, size_t len, void *data) {
-  table *t = data;
-  if (t->status) return;
-  if (!t->row_open) {
-    t->row_open = true;
-    t->row_line = t->line;
-  }
-  const char *p = s ? s : "";
-  /* Surrounding blanks are never part of a value here (the header's 'Predicts
-   * component ', names with a trailing space), quoted or not. */
-  while (len && is_blank(p[0])) p++, len--;
-  while (len && is_blank(p[len - 1])) len--;
-  if (memchr(p, '\0', len)) {
-    table_fail(t, t->line, SYLVA_EINVAL, "column %zu: a NUL byte", t->nfields + 1);
-    return;
-  }
-  if (t->nfields == MAX_FIELDS) {
-    table_fail(t, t->line, SYLVA_EINVAL, "more than %d fields", MAX_FIELDS);
-    return;
-  }
-  if (t->nfields == t->fields_cap) {
-    size_t cap = t->fields_cap ? 2 * t->fields_cap : 32;
-    size_t *start = realloc(t->start, cap * sizeof *start);
-    if (!start) {
-      table_nomem(t);
-      return;
-    }
-    t->start = start;
-    const char **field = realloc(t->field, cap * sizeof *field);
-    if (!field) {
-      table_nomem(t);
-      return;
-    }
-    t->field = field;
-    t->fields_cap = cap;
-  }
-  if (len + 1 > t->text_cap - t->text_len) {
-    if (len + 1 > SIZE_MAX / 2 - t->text_len) {
-      table_nomem(t);
-      return;
-    }
-    size_t cap = t->text_cap ? t->text_cap : 1024;
-    while (cap - t->text_len < len + 1) cap *= 2;
-    char *text = realloc(t->text, cap);
-    if (!text) {
-      table_nomem(t);
-      return;
-    }
-    t->text = text;
-    t->text_cap = cap;
-  }
-  if (len) memcpy(t->text + t->text_len, p, len);
-  t->text[t->text_len + len] = '\0';
-  t->start[t->nfields++] = t->text_len;
-  t->text_len += len + 1;
-}
-
-/* libcsv: a row has ended. */
-static void table_on_row(int term, void *data) {
-  (void)term;
-  table *t = data;
-  if (!t->status && t->row_open) {
-    for (size_t i = 0; i < t->nfields; i++) t->field[i] = t->text + t->start[i];
-    t->on_row(t, t->field, t->nfields);
-    t->rows++;
-  }
-  t->row_open = false;
-  t->nfields = 0;
-  t->text_len = 0;
-}
-
-static int table_csv_error(table *t, struct csv_parser *p) {
-  int e = csv_error(p);
-  if (e == CSV_ENOMEM || e == CSV_ETOOBIG) return table_nomem(t);
-  return table_fail(t, t->line, SYLVA_EINVAL,
-                    "malformed quoting (a quote inside an unquoted field, text after a "
-                    "closing quote, or a quoted field never closed)");
-}
-
-/* Reads data as CSV, handing each row to on_row. Returns the status. */
-static int table_read(table *t, const char *data, size_t len) {
-  struct csv_parser p;
-  if (csv_init(&p, CSV_STRICT | CSV_STRICT_FINI) != 0) return table_nomem(t);
-  size_t pos = 0;
-  if (len >= 3 && memcmp(data, "\xEF\xBB\xBF", 3) == 0) pos = 3; /* a UTF-8 byte order mark */
-  t->line = 1;
-  /* Fed a line at a time so that every row and error knows its line. */
-  while (pos < len && !t->status) {
-    const char *nl = memchr(data + pos, '\n', len - pos);
-    size_t chunk = nl ? (size_t)(nl - (data + pos)) + 1 : len - pos;
-    if (csv_parse(&p, data + pos, chunk, table_on_field, table_on_row, t) != chunk) {
-      table_csv_error(t, &p);
-      break;
-    }
-    pos += chunk;
-    if (nl) t->line++;
-  }
-  if (!t->status && csv_fini(&p, table_on_field, table_on_row, t) != 0) table_csv_error(t, &p);
-  csv_free(&p);
-  if (!t->status && t->rows == 0) table_fail(t, 0, SYLVA_EINVAL, "empty: no header row");
-  return t->status;
-}
-
-static void table_release(table *t) {
-  free(t->text);
-  free(t->start);
-  free(t->field);
-}
-
-/* ---- Columns ---- */
-
-/* The columns a table needs, found by name in its header. */
-#define MAX_COLUMNS 24
-typedef struct columns {
-  const char *const *names;
-  int count;
-  size_t index[MAX_COLUMNS]; /* field index of each name */
-  size_t header_fields;
-} columns;
-
-static int columns_header(table *t, columns *cols, const char *const *field, size_t n) {
-  cols->header_fields = n;
-  for (int k = 0; k < cols->count; k++) {
-    size_t i = 0;
-    while (i < n && strcmp(field[i], cols->names[k]) != 0) i++;
-    if (i == n)
-      return table_fail(t, t->row_line, SYLVA_EINVAL, "the header has no column '%s'",
-                        cols->names[k]);
-    cols->index[k] = i;
-  }
-  return SYLVA_OK;
-}
-
-static int columns_check_row(table *t, const columns *cols, size_t n) {
-  if (n != cols->header_fields)
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "%zu fields where the header has %zu", n,
-                      cols->header_fields);
-  return SYLVA_OK;
-}
-
-/* A cell as text, copied into dst (size bytes); an empty one is an error if required. */
-static int cell_text(table *t, const columns *cols, const char *const *field, int k,
-                     bool required, char *dst, size_t size) {
-  const char *s = field[cols->index[k]];
-  size_t len = strlen(s);
-  if (required && len == 0)
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): empty",
-                      cols->index[k] + 1, cols->names[k]);
-  if (len >= size)
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): longer than %zu characters",
-                      cols->index[k] + 1, cols->names[k], size - 1);
-  memcpy(dst, s, len + 1);
-  return SYLVA_OK;
-}
-
-/* A cell as a finite number; an empty one is NAN, or an error if required. */
-static int cell_number(table *t, const columns *cols, const char *const *field, int k,
-                       bool required, double *out) {
-  const char *s = field[cols->index[k]];
-  *out = NAN;
-  if (!*s) {
-    if (!required) return SYLVA_OK;
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): empty",
-                      cols->index[k] + 1, cols->names[k]);
-  }
-  char *end;
-  /* An overflow is not finite and a denormal is still a number: errno adds nothing. */
-  double v = strtod(s, &end);
-  if (end == s || *end || !isfinite(v))
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): '%.40s' is not a number",
-                      cols->index[k] + 1, cols->names[k], s);
-  *out = v;
-  return SYLVA_OK;
-}
-
-/* A cell as a count >= 0; an empty one is 0. */
-static int cell_count(table *t, const columns *cols, const char *const *field, int k,
-                      int *out) {
-  const char *s = field[cols->index[k]];
-  *out = 0;
-  if (!*s) return SYLVA_OK;
-  char *end;
-  errno = 0;
-  long v = strtol(s, &end, 10);
-  if (end == s || *end || errno || v < 0 || v > INT_MAX)
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): '%.40s' is not a count",
-                      cols->index[k] + 1, cols->names[k], s);
-  *out = (int)v;
-  return SYLVA_OK;
-}
-
 /* ---- TS2: species names ---- */
 
 enum { TS2_REGION, TS2_SCIENTIFIC, TS2_COMMON, TS2_CODE, TS2_TYPE, TS2_COLUMNS };
-_Static_assert(TS2_COLUMNS <= MAX_COLUMNS, "columns.index too small for TS2");
+_Static_assert(TS2_COLUMNS <= SYLVA__TABLE_MAX_COLUMNS, "columns.index too small for TS2");
 static const char *const ts2_names[TS2_COLUMNS] = {"Region", "Scientific Name", "Common Name",
                                                    "SpCode", "Tree Type"};
 
@@ -443,35 +205,35 @@ typedef struct ts2_entry {
 } ts2_entry;
 
 typedef struct ts2_list {
-  columns cols;
+  sylva__columns cols;
   ts2_entry *entry;
   size_t count, cap;
 } ts2_list;
 
-static int ts2_row(table *t, const char *const *field, size_t n) {
+static int ts2_row(sylva__table *t, const char *const *field, size_t n) {
   ts2_list *l = t->ctx;
-  if (t->rows == 0) return columns_header(t, &l->cols, field, n);
-  int rc = columns_check_row(t, &l->cols, n);
+  if (t->rows == 0) return sylva__columns_header(t, &l->cols, field, n);
+  int rc = sylva__columns_check_row(t, &l->cols, n);
   if (rc) return rc;
   if (l->count == l->cap) {
     size_t cap = l->cap ? 2 * l->cap : 512;
     ts2_entry *e = realloc(l->entry, cap * sizeof *e);
-    if (!e) return table_nomem(t);
+    if (!e) return sylva__table_nomem(t);
     l->entry = e;
     l->cap = cap;
   }
   ts2_entry *e = &l->entry[l->count];
   e->line = t->row_line;
-  const columns *c = &l->cols;
-  if ((rc = cell_text(t, c, field, TS2_REGION, true, e->region, sizeof e->region)) ||
-      (rc = cell_text(t, c, field, TS2_CODE, true, e->code, sizeof e->code)) ||
-      (rc = cell_text(t, c, field, TS2_SCIENTIFIC, false, e->scientific, sizeof e->scientific)) ||
-      (rc = cell_text(t, c, field, TS2_COMMON, false, e->common, sizeof e->common)) ||
-      (rc = cell_text(t, c, field, TS2_TYPE, false, e->type, sizeof e->type)))
+  const sylva__columns *c = &l->cols;
+  if ((rc = sylva__cell_text(t, c, field, TS2_REGION, true, e->region, sizeof e->region)) ||
+      (rc = sylva__cell_text(t, c, field, TS2_CODE, true, e->code, sizeof e->code)) ||
+      (rc = sylva__cell_text(t, c, field, TS2_SCIENTIFIC, false, e->scientific, sizeof e->scientific)) ||
+      (rc = sylva__cell_text(t, c, field, TS2_COMMON, false, e->common, sizeof e->common)) ||
+      (rc = sylva__cell_text(t, c, field, TS2_TYPE, false, e->type, sizeof e->type)))
     return rc;
   for (size_t i = 0; i < l->count; i++)
     if (strcmp(l->entry[i].region, e->region) == 0 && strcmp(l->entry[i].code, e->code) == 0)
-      return table_fail(t, t->row_line, SYLVA_EINVAL, "species %s %s again (first on line %zu)",
+      return sylva__table_fail(t, t->row_line, SYLVA_EINVAL, "species %s %s again (first on line %zu)",
                         e->region, e->code, l->entry[i].line);
   l->count++;
   return SYLVA_OK;
@@ -506,7 +268,7 @@ enum {
   TS6_DATA_MAX,
   TS6_COLUMNS
 };
-_Static_assert(TS6_COLUMNS <= MAX_COLUMNS, "columns.index too small for TS6");
+_Static_assert(TS6_COLUMNS <= SYLVA__TABLE_MAX_COLUMNS, "columns.index too small for TS6");
 static const char *const ts6_names[TS6_COLUMNS] = {
     "Region", "Scientific Name", "SpCode", "Independent variable", "Predicts component",
     "EqName", "a", "b", "c", "d", "e", "Apps min", "Apps max", "n", "adj R2",
@@ -528,12 +290,12 @@ static const struct {
 };
 
 typedef struct ts6_state {
-  columns cols;
+  sylva__columns cols;
   sylva_utdb *u;
   const ts2_list *names;
 } ts6_state;
 
-static sylva_utdb_species *species_get(table *t, ts6_state *st, const char *region,
+static sylva_utdb_species *species_get(sylva__table *t, ts6_state *st, const char *region,
                                        const char *code, const char *scientific) {
   sylva_utdb *u = st->u;
   /* A species' rows are together in TS6: the last one is nearly always it. */
@@ -542,13 +304,13 @@ static sylva_utdb_species *species_get(table *t, ts6_state *st, const char *regi
       return &u->species[i];
   if (u->count == u->cap) {
     if (u->cap > INT_MAX / 2) {
-      table_nomem(t);
+      sylva__table_nomem(t);
       return NULL;
     }
     int cap = u->cap ? 2 * u->cap : 512;
     sylva_utdb_species *s = realloc(u->species, (size_t)cap * sizeof *s);
     if (!s) {
-      table_nomem(t);
+      sylva__table_nomem(t);
       return NULL;
     }
     u->species = s;
@@ -556,7 +318,7 @@ static sylva_utdb_species *species_get(table *t, ts6_state *st, const char *regi
   }
   sylva_utdb_species *s = &u->species[u->count++];
   memset(s, 0, sizeof *s);
-  /* Both buffers are the same size as TS6's cells, checked by cell_text. */
+  /* Both buffers are the same size as TS6's cells, checked by sylva__cell_text. */
   memcpy(s->region, region, strlen(region) + 1);
   memcpy(s->code, code, strlen(code) + 1);
   const ts2_entry *e = ts2_find(st->names, region, code);
@@ -575,11 +337,11 @@ static sylva_utdb_species *species_get(table *t, ts6_state *st, const char *regi
   return s;
 }
 
-static int ts6_row(table *t, const char *const *field, size_t n) {
+static int ts6_row(sylva__table *t, const char *const *field, size_t n) {
   ts6_state *st = t->ctx;
-  const columns *c = &st->cols;
-  if (t->rows == 0) return columns_header(t, &st->cols, field, n);
-  int rc = columns_check_row(t, c, n);
+  const sylva__columns *c = &st->cols;
+  if (t->rows == 0) return sylva__columns_header(t, &st->cols, field, n);
+  int rc = sylva__columns_check_row(t, c, n);
   if (rc) return rc;
 
   char region[sizeof ((sylva_utdb_species *)0)->region];
@@ -587,12 +349,12 @@ static int ts6_row(table *t, const char *const *field, size_t n) {
   char scientific[sizeof ((sylva_utdb_species *)0)->scientific];
   char from[16], predicts[16];
   sylva_utdb_curve cv = {.present = true};
-  if ((rc = cell_text(t, c, field, TS6_REGION, true, region, sizeof region)) ||
-      (rc = cell_text(t, c, field, TS6_CODE, true, code, sizeof code)) ||
-      (rc = cell_text(t, c, field, TS6_SCIENTIFIC, false, scientific, sizeof scientific)) ||
-      (rc = cell_text(t, c, field, TS6_FROM, true, from, sizeof from)) ||
-      (rc = cell_text(t, c, field, TS6_PREDICTS, true, predicts, sizeof predicts)) ||
-      (rc = cell_text(t, c, field, TS6_FORM, true, cv.form, sizeof cv.form)))
+  if ((rc = sylva__cell_text(t, c, field, TS6_REGION, true, region, sizeof region)) ||
+      (rc = sylva__cell_text(t, c, field, TS6_CODE, true, code, sizeof code)) ||
+      (rc = sylva__cell_text(t, c, field, TS6_SCIENTIFIC, false, scientific, sizeof scientific)) ||
+      (rc = sylva__cell_text(t, c, field, TS6_FROM, true, from, sizeof from)) ||
+      (rc = sylva__cell_text(t, c, field, TS6_PREDICTS, true, predicts, sizeof predicts)) ||
+      (rc = sylva__cell_text(t, c, field, TS6_FORM, true, cv.form, sizeof cv.form)))
     return rc;
 
   int measure = -2;
@@ -600,36 +362,36 @@ static int ts6_row(table *t, const char *const *field, size_t n) {
     if (strcmp(equations[i].from, from) == 0 && strcmp(equations[i].predicts, predicts) == 0)
       measure = equations[i].measure;
   if (measure == -2)
-    return table_fail(t, t->row_line, SYLVA_EINVAL,
+    return sylva__table_fail(t, t->row_line, SYLVA_EINVAL,
                       "columns %zu and %zu: no such equation as '%s' -> '%s'",
                       c->index[TS6_FROM] + 1, c->index[TS6_PREDICTS] + 1, from, predicts);
   const form_def *f = form_find(cv.form);
   if (!f)
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): unknown equation form '%s'",
+    return sylva__table_fail(t, t->row_line, SYLVA_EINVAL, "column %zu (%s): unknown equation form '%s'",
                       c->index[TS6_FORM] + 1, c->names[TS6_FORM], cv.form);
 
   /* The form says which coefficients must be there; the others may be empty (0). */
   int needed = form_coefficients(f);
   double *coef[5] = {&cv.a, &cv.b, &cv.c, &cv.d, &cv.e};
   for (int k = 0; k < 5; k++) {
-    if ((rc = cell_number(t, c, field, TS6_A + k, k < needed, coef[k]))) return rc;
+    if ((rc = sylva__cell_number(t, c, field, TS6_A + k, k < needed, coef[k]))) return rc;
     if (isnan(*coef[k])) *coef[k] = 0.0;
   }
   if (f->family != FAMILY_POLY) {
     if (cv.c < 0.0)
-      return table_fail(t, t->row_line, SYLVA_EINVAL,
+      return sylva__table_fail(t, t->row_line, SYLVA_EINVAL,
                         "column %zu (%s): the MSE of a %s equation is negative (%g)",
                         c->index[TS6_C] + 1, c->names[TS6_C], cv.form, cv.c);
     cv.mse = cv.c;
   } else {
     cv.mse = NAN;
   }
-  if ((rc = cell_number(t, c, field, TS6_APPS_MIN, false, &cv.apps_min)) ||
-      (rc = cell_number(t, c, field, TS6_APPS_MAX, false, &cv.apps_max)) ||
-      (rc = cell_number(t, c, field, TS6_DATA_MIN, false, &cv.data_min)) ||
-      (rc = cell_number(t, c, field, TS6_DATA_MAX, false, &cv.data_max)) ||
-      (rc = cell_number(t, c, field, TS6_R2, false, &cv.r2)) ||
-      (rc = cell_count(t, c, field, TS6_N, &cv.n)))
+  if ((rc = sylva__cell_number(t, c, field, TS6_APPS_MIN, false, &cv.apps_min)) ||
+      (rc = sylva__cell_number(t, c, field, TS6_APPS_MAX, false, &cv.apps_max)) ||
+      (rc = sylva__cell_number(t, c, field, TS6_DATA_MIN, false, &cv.data_min)) ||
+      (rc = sylva__cell_number(t, c, field, TS6_DATA_MAX, false, &cv.data_max)) ||
+      (rc = sylva__cell_number(t, c, field, TS6_R2, false, &cv.r2)) ||
+      (rc = sylva__cell_count(t, c, field, TS6_N, &cv.n)))
     return rc;
   cv.x_min = cv.x_max = NAN;
 
@@ -637,7 +399,7 @@ static int ts6_row(table *t, const char *const *field, size_t n) {
   if (!s) return t->status;
   if (measure < 0) return SYLVA_OK;
   if (s->curve[measure].present)
-    return table_fail(t, t->row_line, SYLVA_EINVAL, "a second '%s' -> '%s' equation for %s %s",
+    return sylva__table_fail(t, t->row_line, SYLVA_EINVAL, "a second '%s' -> '%s' equation for %s %s",
                       from, predicts, region, code);
   s->curve[measure] = cv;
   return SYLVA_OK;
@@ -671,9 +433,9 @@ int sylva_utdb_parse(const char *ts6, size_t ts6_len, const char *ts2, size_t ts
   *out = NULL;
   if (err && errlen) err[0] = '\0';
   ts2_list names = {.cols = {.names = ts2_names, .count = TS2_COLUMNS}};
-  table t2 = {.file = TS2_FILE, .err = err, .errlen = errlen, .on_row = ts2_row, .ctx = &names};
-  int rc = table_read(&t2, ts2 ? ts2 : "", ts2_len);
-  table_release(&t2);
+  sylva__table t2 = {.file = TS2_FILE, .err = err, .errlen = errlen, .on_row = ts2_row, .ctx = &names};
+  int rc = sylva__table_read(&t2, ts2 ? ts2 : "", ts2_len);
+  sylva__table_release(&t2);
   if (rc) {
     free(names.entry);
     return rc;
@@ -685,9 +447,9 @@ int sylva_utdb_parse(const char *ts6, size_t ts6_len, const char *ts2, size_t ts
     return SYLVA_ENOMEM;
   }
   ts6_state st = {.cols = {.names = ts6_names, .count = TS6_COLUMNS}, .u = u, .names = &names};
-  table t6 = {.file = TS6_FILE, .err = err, .errlen = errlen, .on_row = ts6_row, .ctx = &st};
-  rc = table_read(&t6, ts6 ? ts6 : "", ts6_len);
-  table_release(&t6);
+  sylva__table t6 = {.file = TS6_FILE, .err = err, .errlen = errlen, .on_row = ts6_row, .ctx = &st};
+  rc = sylva__table_read(&t6, ts6 ? ts6 : "", ts6_len);
+  sylva__table_release(&t6);
   free(names.entry);
   if (rc) {
     sylva_utdb_free(u);

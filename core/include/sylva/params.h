@@ -54,6 +54,10 @@ typedef struct sylva_species_def {
                                 one per ref_rho of axis; 0: counts are taken as given */
   double acclimation;      /**< 0..1: a branch is shed when its light is below r_s times
                                 the stem's mean light to this power (0: r_s alone) */
+  double shade_weight;     /**< factor on every node's shade (pyramid and column) */
+  double lift;             /**< 0..0.9: after each iteration, the trunk's branches below
+                                this share of the height are cut, as street trees are
+                                lifted (docs/model.md, "Species in years") */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */

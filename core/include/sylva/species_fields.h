@@ -27,7 +27,8 @@
  * growth.kind and allocation come first as u32, growth.p[] takes places 1-3 and
  * tropism[] places 14-16.
  *
- * Places 37 and up (ref_rho, acclimation, years, nursery) are written only in
+ * Places 37 and up (ref_rho, acclimation, years, nursery, shade_weight, lift) are
+ * written only in
  * images with the SCALED flag (a species with a time scale or metric counts), so
  * images of worlds without such species keep their bytes.
  *
@@ -75,6 +76,8 @@
   X(nursery,       int,    0,     0,    200,    SYLVA_FIELD_CLOSED,        species, 40)          \
   X(ref_rho,       double, 0,     0,    100,    SYLVA_FIELD_CLOSED,        species, 37)          \
   X(acclimation,   double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 38)          \
+  X(shade_weight,  double, 1,     0,    1000,   SYLVA_FIELD_MIN_EXCLUSIVE, species, 41)          \
+  X(lift,          double, 0,     0,    0.9,    SYLVA_FIELD_CLOSED,        species, 42)          \
   X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
   X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
   X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
@@ -83,6 +86,6 @@
 
 /** Places in a snapshot's species record: the list's fields and the hand-written
  *  growth.p[3] and tropism[3]. */
-#define SYLVA_SPECIES_SNAPSHOT_FIELDS 41
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 43
 
 #endif

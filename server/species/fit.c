@@ -1,0 +1,731 @@
+/* Calibration of a species in years to measured growth (fit.h; docs/model.md,
+ * "Calibration"). */
+#include "fit.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_fit.h>
+#include <gsl/gsl_multifit_nlinear.h>
+#include <gsl/gsl_multimin.h>
+#include <gsl/gsl_vector.h>
+#include <stdarg.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sylva/world.h"
+#include "table.h"
+
+#define MAX_SEEDS 16
+
+sylva_fit_options sylva_fit_default_options(void) {
+  return (sylva_fit_options){.seeds = 3, .threads = 2, .max_evals = 40, .rho = 0.25};
+}
+
+sylva_species_def sylva_fit_base_species(double rho) {
+  /* The years model's fixed choices, each measured (docs/model.md, "Species in
+   * years"): counts that act as lengths, shedding against the stem's own light,
+   * buds that break the season after they form, and leaves on the last three
+   * seasons' shoots. */
+  sylva_species_def d = sylva_default_species_def();
+  d.rho = rho;
+  d.ref_rho = rho;
+  d.years = 1;
+  d.acclimation = 1.0;
+  d.r_s = 0.5;
+  d.apical_zone = 1;
+  d.leaf_age = 3;
+  d.tau = 5;
+  d.initial_nodes = 2;
+  d.growth.kind = SYLVA_EQ_LOGISTIC;
+  d.growth.p[0] = 2.0;
+  d.growth.p[1] = 60.0;
+  d.growth.p[2] = 0.1;
+  d.gamma = 0.3;
+  d.r_tip = 0.005;
+  d.pipe_exponent = 2.5;
+  return d;
+}
+
+double sylva_fit_error(double grown, double target) {
+  if (!isfinite(grown) || !isfinite(target) || target <= 0.0) return NAN;
+  return grown / target - 1.0;
+}
+
+static double measure_of(const sylva_fit_sizes *s, int m) {
+  switch (m) {
+  case 0: return s->height;
+  case 1: return s->dbh_cm;
+  case 2: return s->crown_dia;
+  default: return s->crown_ht;
+  }
+}
+
+static void fail(char *err, size_t errlen, const char *msg) {
+  if (err && errlen) snprintf(err, errlen, "%s", msg);
+}
+
+/* ---- targets -------------------------------------------------------------------- */
+
+int sylva_fit_targets_utdb(const sylva_utdb_species *s, sylva_fit_targets *out, char *err,
+                           size_t errlen) {
+  if (!sylva_utdb_complete(s)) {
+    if (err && errlen)
+      snprintf(err, errlen, "%s:%s lacks one of the curves of dbh, height, crown diameter "
+               "and crown height", s->region, s->code);
+    return SYLVA_EINVAL;
+  }
+  double lo = isfinite(s->age_min) && s->age_min > 0.0 ? ceil(s->age_min) : 0.0;
+  double hi = isfinite(s->age_max) ? floor(s->age_max) : 60.0;
+  if (hi > SYLVA_FIT_MAX_YEARS) hi = SYLVA_FIT_MAX_YEARS;
+  if (hi < lo + 5.0) {
+    if (err && errlen)
+      snprintf(err, errlen, "%s:%s: its age range (%g to %g years) is too short to fit",
+               s->region, s->code, s->age_min, s->age_max);
+    return SYLVA_EINVAL;
+  }
+  memset(out, 0, sizeof *out);
+  out->first = (int)lo;
+  out->years = (int)hi;
+  for (int a = 0; a <= out->years; a++) {
+    sylva_utdb_sizes z;
+    /* ages below the data's first are held at it: the clamped chain */
+    int rc = sylva_utdb_chain(s, (double)a, true, &z);
+    if (rc) return rc;
+    out->at[a] = (sylva_fit_sizes){z.height_m, z.dbh_cm, z.crown_dia_m, z.crown_ht_m};
+  }
+  return SYLVA_OK;
+}
+
+/* ---- nonlinear least squares (GSL) --------------------------------------------- */
+
+typedef int (*residual_fn)(const gsl_vector *x, void *ctx, gsl_vector *f);
+
+/* Minimises the sum of squared residuals over x (p parameters, n residuals), from x;
+ * returns that sum, or NAN when the fit fails. */
+static double least_squares(residual_fn fn, void *ctx, size_t n, size_t p, double *x) {
+  gsl_multifit_nlinear_fdf fdf = {.f = fn, .df = NULL, .fvv = NULL, .n = n, .p = p, .params = ctx};
+  gsl_multifit_nlinear_parameters params = gsl_multifit_nlinear_default_parameters();
+  gsl_multifit_nlinear_workspace *w =
+      gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &params, n, p);
+  if (!w) return NAN;
+  gsl_vector_view xv = gsl_vector_view_array(x, p);
+  double sse = NAN;
+  int info = 0;
+  if (gsl_multifit_nlinear_init(&xv.vector, &fdf, w) == GSL_SUCCESS) {
+    int rc = gsl_multifit_nlinear_driver(200, 1e-10, 1e-10, 1e-10, NULL, NULL, &info, w);
+    /* too many iterations still leaves the best point found */
+    if (rc == GSL_SUCCESS || rc == GSL_EMAXITER) {
+      const gsl_vector *f = gsl_multifit_nlinear_residual(w);
+      double s = 0.0;
+      for (size_t i = 0; i < n; i++) s += gsl_vector_get(f, i) * gsl_vector_get(f, i);
+      memcpy(x, gsl_multifit_nlinear_position(w)->data, p * sizeof *x);
+      sse = s;
+    }
+  }
+  gsl_multifit_nlinear_free(w);
+  return sse;
+}
+
+/* The logistic with a fixed start: X(t) = m / (1 + (m / x0 - 1) e^(-r t)). */
+static double logistic(double x0, double m, double r, double t) {
+  return m / (1.0 + (m / x0 - 1.0) * exp(-r * t));
+}
+
+/* ---- the user's trees ------------------------------------------------------------- */
+
+static const char *const csv_names[] = {"age", "dbh_cm", "height_m", "crown_diameter_m",
+                                        "crown_height_m"};
+enum { CSV_COLUMNS = 5 };
+
+typedef struct csv_state {
+  sylva__columns cols;
+  sylva_fit_tree *trees;
+  int count, cap;
+} csv_state;
+
+static int csv_row(sylva__table *t, const char *const *field, size_t n) {
+  csv_state *st = t->ctx;
+  if (t->rows == 0) {
+    /* the header exactly: a column named otherwise is a wrong file, not a guess */
+    if (n != CSV_COLUMNS)
+      return sylva__table_fail(t, t->row_line, SYLVA_EINVAL,
+                               "the header must be age,dbh_cm,height_m,crown_diameter_m,"
+                               "crown_height_m (%zu columns found)", n);
+    for (size_t i = 0; i < n; i++)
+      if (strcmp(field[i], csv_names[i]) != 0)
+        return sylva__table_fail(t, t->row_line, SYLVA_EINVAL,
+                                 "column %zu of the header is '%.40s', expected '%s'", i + 1,
+                                 field[i], csv_names[i]);
+    return sylva__columns_header(t, &st->cols, field, n);
+  }
+  int rc = sylva__columns_check_row(t, &st->cols, n);
+  if (rc) return rc;
+  double v[CSV_COLUMNS];
+  for (int k = 0; k < CSV_COLUMNS; k++) {
+    rc = sylva__cell_number(t, &st->cols, field, k, k == 0, &v[k]);
+    if (rc) return rc;
+    if (v[k] < 0.0)
+      return sylva__table_fail(t, t->row_line, SYLVA_EINVAL, "column %d (%s): %g is negative",
+                               k + 1, csv_names[k], v[k]);
+  }
+  if (v[0] > SYLVA_FIT_MAX_YEARS)
+    return sylva__table_fail(t, t->row_line, SYLVA_EINVAL, "column 1 (age): %g is older than %d "
+                             "years", v[0], SYLVA_FIT_MAX_YEARS);
+  if (st->count == st->cap) {
+    int cap = st->cap ? 2 * st->cap : 64;
+    sylva_fit_tree *p = realloc(st->trees, (size_t)cap * sizeof *p);
+    if (!p) return sylva__table_nomem(t);
+    st->trees = p;
+    st->cap = cap;
+  }
+  st->trees[st->count++] = (sylva_fit_tree){v[0], v[1], v[2], v[3], v[4]};
+  return SYLVA_OK;
+}
+
+int sylva_fit_read_csv(const char *text, size_t len, sylva_fit_tree **trees, int *count,
+                       char *err, size_t errlen) {
+  csv_state st = {.cols = {.names = csv_names, .count = CSV_COLUMNS}};
+  sylva__table t = {.file = "data", .err = err, .errlen = errlen, .on_row = csv_row, .ctx = &st};
+  int rc = sylva__table_read(&t, text, len);
+  sylva__table_release(&t);
+  int heights = 0;
+  for (int i = 0; !rc && i < st.count; i++) heights += isfinite(st.trees[i].height);
+  if (!rc && heights == 0) {
+    fail(err, errlen, "data: no tree has a height (height_m is empty in every row)");
+    rc = SYLVA_EINVAL;
+  } else if (!rc && heights < SYLVA_FIT_MIN_TREES) {
+    if (err && errlen)
+      snprintf(err, errlen, "data: %d trees with a height; at least %d are needed to fit a curve",
+               heights, SYLVA_FIT_MIN_TREES);
+    rc = SYLVA_EINVAL;
+  }
+  if (rc) {
+    free(st.trees);
+    return rc;
+  }
+  *trees = st.trees;
+  *count = st.count;
+  return SYLVA_OK;
+}
+
+typedef struct curve_fit {
+  const double *age, *value;
+  size_t n;
+} curve_fit;
+
+/* x = ln s0, ln m, ln r: positive by construction */
+static int curve_residuals(const gsl_vector *x, void *ctx, gsl_vector *f) {
+  const curve_fit *c = ctx;
+  double s0 = exp(gsl_vector_get(x, 0)), m = exp(gsl_vector_get(x, 1)),
+         r = exp(gsl_vector_get(x, 2));
+  for (size_t i = 0; i < c->n; i++)
+    gsl_vector_set(f, i, logistic(s0, m, r, c->age[i]) - c->value[i]);
+  return GSL_SUCCESS;
+}
+
+/* Fits measure k of the trees (dbh, height, crown diameter, crown height). */
+static sylva_fit_curve fit_curve(const sylva_fit_tree *trees, int count, int k, double *age,
+                                 double *value) {
+  sylva_fit_curve out = {0};
+  size_t n = 0;
+  double youngest = INFINITY, young_v = NAN, top = 0.0, sum = 0.0;
+  for (int i = 0; i < count; i++) {
+    const double vals[4] = {trees[i].height, trees[i].dbh_cm, trees[i].crown_dia,
+                            trees[i].crown_ht};
+    double v = vals[k];
+    if (!isfinite(v) || v <= 0.0) continue;
+    age[n] = trees[i].age;
+    value[n] = v;
+    sum += v;
+    if (trees[i].age < youngest) youngest = trees[i].age, young_v = v;
+    if (v > top) top = v;
+    n++;
+  }
+  if (n < SYLVA_FIT_MIN_TREES) return out;
+  curve_fit c = {age, value, n};
+  double x[3] = {log(young_v * 0.8), log(top * 1.2), log(0.1)};
+  double sse = least_squares(curve_residuals, &c, n, 3, x);
+  if (!isfinite(sse)) return out;
+  double mean = sum / (double)n, sst = 0.0;
+  for (size_t i = 0; i < n; i++) sst += (value[i] - mean) * (value[i] - mean);
+  out = (sylva_fit_curve){true, exp(x[0]), exp(x[1]), exp(x[2]), (int)n,
+                          sst > 0.0 ? 1.0 - sse / sst : 0.0};
+  return out;
+}
+
+int sylva_fit_targets_trees(const sylva_fit_tree *trees, int count, sylva_fit_targets *out,
+                            sylva_fit_curve curves[4], char *err, size_t errlen) {
+  double *age = malloc((size_t)(count ? count : 1) * sizeof *age);
+  double *value = malloc((size_t)(count ? count : 1) * sizeof *value);
+  if (!age || !value) {
+    free(age);
+    free(value);
+    fail(err, errlen, "out of memory");
+    return SYLVA_ENOMEM;
+  }
+  for (int k = 0; k < 4; k++) curves[k] = fit_curve(trees, count, k, age, value);
+  free(age);
+  free(value);
+  if (!curves[0].present) {
+    fail(err, errlen, "data: the heights could not be fitted by a growth curve");
+    return SYLVA_EINVAL;
+  }
+  double oldest = 0.0, youngest = INFINITY;
+  for (int i = 0; i < count; i++) {
+    if (trees[i].age > oldest) oldest = trees[i].age;
+    if (trees[i].age < youngest) youngest = trees[i].age;
+  }
+  memset(out, 0, sizeof *out);
+  out->first = (int)ceil(youngest);
+  out->years = (int)floor(oldest);
+  if (out->years < out->first + 5) {
+    fail(err, errlen, "data: the trees' ages span less than 5 years");
+    return SYLVA_EINVAL;
+  }
+  for (int a = 0; a <= out->years; a++) {
+    double v[4];
+    for (int k = 0; k < 4; k++)
+      v[k] = curves[k].present ? logistic(curves[k].s0, curves[k].m, curves[k].r, a) : NAN;
+    out->at[a] = (sylva_fit_sizes){v[0], v[1], v[2], v[3]};
+  }
+  return SYLVA_OK;
+}
+
+/* ---- growing ----------------------------------------------------------------------- */
+
+typedef struct grow_job {
+  const sylva_species_def *def;
+  int years;
+  uint64_t seed;
+  sylva_fit_sizes *at; /* years + 1 */
+  int rc;
+} grow_job;
+
+static sylva_fit_sizes sizes_of(const sylva_stem_stats *s) {
+  return (sylva_fit_sizes){s->height, s->dbh * 100.0, s->crown_width,
+                           isfinite(s->crown_height) ? s->crown_height : 0.0};
+}
+
+static void *grow_one(void *arg) {
+  grow_job *j = arg;
+  const sylva_species_def *d = j->def;
+  sylva_equation eq = d->growth;
+  double reach = sylva_equation_value(&eq, (double)(d->nursery + j->years)) *
+                 (d->ref_rho > 0.0 ? d->ref_rho : d->rho);
+  sylva_world_def wd = sylva_default_world_def();
+  double half = 0.75 * reach + 3.0;
+  wd.min[0] = wd.min[1] = -half;
+  wd.max[0] = wd.max[1] = half;
+  wd.min[2] = 0.0;
+  wd.max[2] = 1.3 * reach + 3.0;
+  wd.voxel = d->rho / 2.0;
+  wd.seed = j->seed;
+  sylva_world *w = NULL;
+  j->rc = sylva_world_create(&wd, &w);
+  if (j->rc) return NULL;
+  double root[1][3] = {{0, 0, 0}};
+  int sp = sylva_world_add_species(w, d, "fit");
+  sylva_plant_def pd = {sp, "tree", (const double(*)[3])root, 1, 0};
+  j->rc = sp < 0 ? sp : sylva_world_add_plant(w, &pd, NULL);
+  if (j->rc >= 0) {
+    j->rc = SYLVA_OK;
+    sylva_stem_stats st;
+    sylva_world_stem_stats(w, 0, &st);
+    j->at[0] = sizes_of(&st);
+    for (int a = 1; a <= j->years && !j->rc; a++) {
+      const sylva_journal *jr;
+      j->rc = sylva_world_step(w, &jr);
+      if (!j->rc) j->at[a] = sizes_of(&jr->stats[0]);
+    }
+  }
+  sylva_world_destroy(w);
+  return NULL;
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* Median of the finite values (NAN when there are none). */
+static double median(double *v, int n) {
+  int k = 0;
+  for (int i = 0; i < n; i++)
+    if (isfinite(v[i])) v[k++] = v[i];
+  if (!k) return NAN;
+  qsort(v, (size_t)k, sizeof *v, cmp_double);
+  return k % 2 ? v[k / 2] : 0.5 * (v[k / 2 - 1] + v[k / 2]);
+}
+
+int sylva_fit_grow(const sylva_species_def *def, int years, int seeds, int threads,
+                   sylva_fit_targets *out) {
+  if (years < 0 || years > SYLVA_FIT_MAX_YEARS || seeds < 1 || seeds > MAX_SEEDS)
+    return SYLVA_EINVAL;
+  if (threads < 1) threads = 1;
+  sylva_fit_sizes *at = calloc((size_t)seeds * (size_t)(years + 1), sizeof *at);
+  if (!at) return SYLVA_ENOMEM;
+  grow_job jobs[MAX_SEEDS];
+  for (int s = 0; s < seeds; s++)
+    jobs[s] = (grow_job){def, years, (uint64_t)(s + 1), at + (size_t)s * (size_t)(years + 1), 0};
+  int rc = SYLVA_OK;
+  /* each tree grows in a world of its own: the threads share nothing but def */
+  for (int s0 = 0; s0 < seeds; s0 += threads) {
+    pthread_t tid[MAX_SEEDS];
+    bool started[MAX_SEEDS] = {false};
+    for (int s = s0; s < seeds && s < s0 + threads; s++)
+      started[s] = pthread_create(&tid[s], NULL, grow_one, &jobs[s]) == 0;
+    for (int s = s0; s < seeds && s < s0 + threads; s++) {
+      if (started[s])
+        pthread_join(tid[s], NULL);
+      else
+        grow_one(&jobs[s]);
+      if (jobs[s].rc && !rc) rc = jobs[s].rc;
+    }
+  }
+  if (!rc) {
+    memset(out, 0, sizeof *out);
+    out->years = years;
+    double v[MAX_SEEDS];
+    for (int a = 0; a <= years; a++) {
+      double m[4];
+      for (int k = 0; k < 4; k++) {
+        for (int s = 0; s < seeds; s++) v[s] = measure_of(&jobs[s].at[a], k);
+        m[k] = median(v, seeds);
+      }
+      out->at[a] = (sylva_fit_sizes){m[0], m[1], m[2], m[3]};
+    }
+  }
+  free(at);
+  return rc;
+}
+
+/* ---- calibration ------------------------------------------------------------------- */
+
+/* The ages a calibration compares: every 5 years within the data, from 5. */
+static int check_ages(const sylva_fit_targets *t, int years, int *ages) {
+  int n = 0;
+  for (int a = 5; a <= years; a += 5)
+    if (a >= t->first) ages[n++] = a;
+  return n;
+}
+
+typedef struct growth_fit {
+  const sylva_fit_targets *t;
+  double scale; /* internodes per metre of target height */
+  int nursery, years;
+} growth_fit;
+
+/* x = ln(X0 - 1), ln Xm, ln r: the path length at t = nursery + age against the
+ * target height (X0 at least one internode above the root) */
+static int growth_residuals(const gsl_vector *x, void *ctx, gsl_vector *f) {
+  const growth_fit *g = ctx;
+  double x0 = 1.0 + exp(gsl_vector_get(x, 0));
+  double m = exp(gsl_vector_get(x, 1)), r = exp(gsl_vector_get(x, 2));
+  for (int a = 0; a <= g->years; a++) {
+    double y = g->t->at[a].height * g->scale;
+    double v = m > x0 ? logistic(x0, m, r, (double)(g->nursery + a)) : 1e9;
+    gsl_vector_set(f, (size_t)a, v - y);
+  }
+  return GSL_SUCCESS;
+}
+
+/* Fits the logistic of the path length (in internodes of rho) to k times the target
+ * heights, with the nursery years: the liner's X0 internodes grow to the height of
+ * age 0 in the nursery. Tries every nursery from NURSERY_MIN to NURSERY_MAX years
+ * (or only *nursery when it is above 0) and keeps the best; returns 0 or
+ * SYLVA_EINVAL. */
+enum { NURSERY_MIN = 2, NURSERY_MAX = 6 };
+static int fit_growth(const sylva_fit_targets *t, int years, double rho, double k, int *nursery,
+                      sylva_equation *out) {
+  double best = INFINITY;
+  int lo = *nursery > 0 ? *nursery : NURSERY_MIN, hi = *nursery > 0 ? *nursery : NURSERY_MAX;
+  for (int n = lo; n <= hi; n++) {
+    growth_fit g = {t, k / rho, n, years};
+    double top = t->at[years].height * g.scale, start = t->at[0].height * g.scale;
+    double x[3] = {log(start * 0.5 > 2.0 ? start * 0.5 - 1.0 : 1.0), log(top * 1.3), log(0.1)};
+    double sse = least_squares(growth_residuals, &g, (size_t)years + 1, 3, x);
+    if (isfinite(sse) && sse < best) {
+      best = sse;
+      *nursery = n;
+      out->kind = SYLVA_EQ_LOGISTIC;
+      out->p[0] = 1.0 + exp(x[0]);
+      out->p[1] = exp(x[1]);
+      out->p[2] = exp(x[2]);
+    }
+  }
+  return isfinite(best) ? SYLVA_OK : SYLVA_EINVAL;
+}
+
+typedef struct search {
+  const sylva_fit_targets *t;
+  const sylva_fit_options *o;
+  sylva_species_def def; /* the species being searched */
+  int years, nursery;
+  int ages[SYLVA_FIT_MAX_YEARS / 5 + 1], nages;
+  int evals, trees;
+  int rc;
+  double best;
+  double k; /* the height's scale, found apart from the search (scale_height) */
+} search;
+
+/* Builds the species for a point of the search: gamma, and the height's scale. */
+static int species_at(search *s, double gamma, double k, sylva_species_def *d) {
+  *d = s->def;
+  d->gamma = gamma;
+  int n = s->nursery;
+  int rc = fit_growth(s->t, s->years, d->rho, k, &n, &d->growth);
+  d->nursery = n;
+  d->initial_nodes = (int)floor(d->growth.p[0] + 0.5);
+  return rc;
+}
+
+/* Mean squared log error of the crown diameter over the check ages. */
+static double search_error(const sylva_fit_targets *t, const sylva_fit_targets *g,
+                           const int *ages, int nages) {
+  double e = 0.0;
+  int n = 0;
+  for (int i = 0; i < nages; i++) {
+    const sylva_fit_sizes *x = &g->at[ages[i]], *y = &t->at[ages[i]];
+    const double pairs[1][2] = {{x->crown_dia, y->crown_dia}};
+    for (int m = 0; m < 1; m++) {
+      if (!isfinite(pairs[m][1]) || pairs[m][1] <= 0.0) continue;
+      double v = pairs[m][0] > 1e-3 ? pairs[m][0] : 1e-3;
+      double l = log(v / pairs[m][1]);
+      e += l * l;
+      n++;
+    }
+  }
+  return n ? e / n : 0.0;
+}
+
+static double search_f(const gsl_vector *x, void *ctx) {
+  search *s = ctx;
+  double gamma = gsl_vector_get(x, 0), k = s->k;
+  /* outside the box the error grows with the distance: the simplex turns back */
+  double penalty = 0.0;
+  if (gamma < 0.0) penalty += gamma * gamma * 10.0, gamma = 0.0;
+  if (gamma > 3.0) penalty += (gamma - 3.0) * (gamma - 3.0) * 10.0, gamma = 3.0;
+  sylva_species_def d;
+  sylva_fit_targets g;
+  int rc = species_at(s, gamma, k, &d);
+  if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
+  s->evals++;
+  s->trees += s->o->seeds;
+  if (rc) {
+    if (!s->rc && rc == SYLVA_ENOMEM) s->rc = rc;
+    return 1e6;
+  }
+  double e = search_error(s->t, &g, s->ages, s->nages) + penalty;
+  if (e < s->best) s->best = e;
+  if (s->o->progress) {
+    char line[160];
+    snprintf(line, sizeof line, "fit: search %d/%d: gamma %.3f: error %.4f (best %.4f)", s->evals,
+             s->o->max_evals, gamma, e, s->best);
+    s->o->progress(s->o->ctx, line);
+  }
+  return e;
+}
+
+/* Tip radius and pipe exponent from grown trees' dbh at r_tip r0 and exponent v0:
+ * a tree's dbh is 2 r_tip N^(1/v) for N tips above breast height, so ln(dbh / 2) is
+ * linear in ln N = v0 ln(dbh0 / (2 r0)). */
+static void fit_pipe(const sylva_fit_targets *t, const sylva_fit_targets *g, const int *ages,
+                     int nages, double r0, double v0, double *r_tip, double *v) {
+  double x[SYLVA_FIT_MAX_YEARS], y[SYLVA_FIT_MAX_YEARS];
+  size_t n = 0;
+  for (int i = 0; i < nages; i++) {
+    double grown = g->at[ages[i]].dbh_cm / 100.0, target = t->at[ages[i]].dbh_cm / 100.0;
+    if (!(grown > 0.0) || !(target > 0.0)) continue;
+    x[n] = v0 * log(grown / (2.0 * r0));
+    y[n] = log(target / 2.0);
+    n++;
+  }
+  *r_tip = r0;
+  *v = v0;
+  if (n == 0) return;
+  double slope = 1.0 / v0;
+  if (n >= 3) {
+    double c0, c1, cov00, cov01, cov11, sumsq;
+    if (gsl_fit_linear(x, 1, y, 1, n, &c0, &c1, &cov00, &cov01, &cov11, &sumsq) == GSL_SUCCESS &&
+        c1 > 0.0)
+      slope = c1;
+  }
+  *v = 1.0 / slope;
+  if (*v < 2.0) *v = 2.0;
+  if (*v > 3.5) *v = 3.5;
+  double mean = 0.0;
+  for (size_t i = 0; i < n; i++) mean += y[i] - x[i] / *v;
+  *r_tip = exp(mean / (double)n);
+}
+
+/* Largest |error| per measure over the decades within the targets. */
+static void decade_errors(const sylva_fit_targets *t, const sylva_fit_targets *g, int years,
+                          double out[4]) {
+  for (int m = 0; m < 4; m++) {
+    out[m] = 0.0;
+    for (int a = 10; a <= years; a += 10) {
+      if (a < t->first) continue;
+      double e = sylva_fit_error(measure_of(&g->at[a], m), measure_of(&t->at[a], m));
+      if (isfinite(e) && fabs(e) > out[m]) out[m] = fabs(e);
+      if (!isfinite(e) && isfinite(measure_of(&t->at[a], m))) out[m] = INFINITY;
+    }
+  }
+}
+
+static void progress(const sylva_fit_options *o, const char *fmt, ...);
+
+/* The height's scale k and the crown's lift. The path grows k times the target
+ * height, as much as the leader's bends and its share of the light take off it; the
+ * lift sets the crown base. Each round grows the trees, multiplies k by the median
+ * over the check ages of target / grown height, and raises the lift by the median
+ * of (grown - target crown height) / target height. */
+static int scale_height(search *s, double gamma, int rounds) {
+  for (int i = 0; i < rounds; i++) {
+    sylva_species_def d;
+    sylva_fit_targets g;
+    int rc = species_at(s, gamma, s->k, &d);
+    if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
+    s->trees += s->o->seeds;
+    if (rc) return rc;
+    double ratio[SYLVA_FIT_MAX_YEARS / 5 + 1], shift[SYLVA_FIT_MAX_YEARS / 5 + 1];
+    int n = 0, m = 0;
+    for (int a = 0; a < s->nages; a++) {
+      const sylva_fit_sizes *grown = &g.at[s->ages[a]], *target = &s->t->at[s->ages[a]];
+      if (grown->height > 0.0 && target->height > 0.0) ratio[n++] = target->height / grown->height;
+      if (target->height > 0.0 && isfinite(target->crown_ht) && isfinite(grown->crown_ht))
+        shift[m++] = (grown->crown_ht - target->crown_ht) / target->height;
+    }
+    double f = n ? median(ratio, n) : 1.0, lift = m ? median(shift, m) : 0.0;
+    s->k *= f;
+    if (s->k < 0.5) s->k = 0.5;
+    if (s->k > 2.5) s->k = 2.5;
+    s->def.lift += lift;
+    if (s->def.lift < 0.0) s->def.lift = 0.0;
+    if (s->def.lift > 0.8) s->def.lift = 0.8;
+    progress(s->o, "fit: height's scale %.3f (grown / target %.3f), lift %.3f", s->k, 1.0 / f,
+             s->def.lift);
+  }
+  return SYLVA_OK;
+}
+
+static void progress(const sylva_fit_options *o, const char *fmt, ...) {
+  if (!o->progress) return;
+  char line[240];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(line, sizeof line, fmt, ap);
+  va_end(ap);
+  o->progress(o->ctx, line);
+}
+
+int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt,
+                        sylva_fit_result *out, char *err, size_t errlen) {
+  sylva_fit_options o = *opt;
+  if (o.seeds < 1 || o.seeds > MAX_SEEDS) o.seeds = 3;
+  if (o.threads < 1) o.threads = 1;
+  if (o.max_evals < 1) o.max_evals = 40;
+  if (!(o.rho > 0.0)) o.rho = 0.25;
+  int years = t->years < 60 ? t->years : 60; /* the decades a planner asks about */
+  if (!(t->at[years].height > 0.0)) {
+    fail(err, errlen, "the targets hold no height");
+    return SYLVA_EINVAL;
+  }
+  search s = {.t = t, .o = &o, .def = sylva_fit_base_species(o.rho), .years = years,
+              .best = INFINITY, .k = 1.0};
+  s.nages = check_ages(t, years, s.ages);
+  /* The crown's lift: street trees are lifted for clearance, so the database's crown
+   * ratio is the managers' as much as the tree's (docs/model.md, "Species in years"). */
+  double ratios[SYLVA_FIT_MAX_YEARS / 5 + 1];
+  int nr = 0;
+  for (int i = 0; i < s.nages; i++) {
+    const sylva_fit_sizes *z = &t->at[s.ages[i]];
+    if (z->height > 0.0 && isfinite(z->crown_ht)) ratios[nr++] = 1.0 - z->crown_ht / z->height;
+  }
+  double lift = nr ? median(ratios, nr) : 0.3;
+  s.def.lift = lift < 0.0 ? 0.0 : lift > 0.8 ? 0.8 : lift;
+  /* the nursery years, once, from the height curve as the data give it */
+  int rc = fit_growth(t, years, o.rho, 1.0, &s.nursery, &s.def.growth);
+  if (rc) {
+    fail(err, errlen, "the height curve could not be fitted by the logistic");
+    return rc;
+  }
+  progress(&o, "fit: nursery %d years; logistic X0 %g, Xm %.2f, r %.4f (internodes of %g m); "
+           "lift %.3f", s.nursery, s.def.growth.p[0], s.def.growth.p[1], s.def.growth.p[2],
+           o.rho, s.def.lift);
+  /* the height's scale, then the crown's spread with the simulation in the loop, then
+   * the height's scale again for that spread */
+  rc = scale_height(&s, s.def.gamma, 2);
+  if (rc) {
+    fail(err, errlen, rc == SYLVA_ENOMEM ? "out of memory" : "growing the species failed");
+    return rc;
+  }
+  gsl_multimin_function fn = {.f = search_f, .n = 1, .params = &s};
+  gsl_multimin_fminimizer *m = gsl_multimin_fminimizer_alloc(gsl_multimin_fminimizer_nmsimplex2, 1);
+  gsl_vector *x = gsl_vector_alloc(1), *step = gsl_vector_alloc(1);
+  if (!m || !x || !step) {
+    gsl_multimin_fminimizer_free(m);
+    gsl_vector_free(x);
+    gsl_vector_free(step);
+    fail(err, errlen, "out of memory");
+    return SYLVA_ENOMEM;
+  }
+  gsl_vector_set(x, 0, s.def.gamma);
+  gsl_vector_set(step, 0, 0.25);
+  gsl_multimin_fminimizer_set(m, &fn, x, step);
+  while (s.evals < o.max_evals && !s.rc) {
+    if (gsl_multimin_fminimizer_iterate(m) != GSL_SUCCESS) break;
+    if (gsl_multimin_test_size(gsl_multimin_fminimizer_size(m), 0.01) == GSL_SUCCESS) break;
+  }
+  double gamma = gsl_vector_get(m->x, 0);
+  gsl_multimin_fminimizer_free(m);
+  gsl_vector_free(x);
+  gsl_vector_free(step);
+  if (s.rc) {
+    fail(err, errlen, "out of memory");
+    return s.rc;
+  }
+  if (gamma < 0.0) gamma = 0.0;
+  if (gamma > 3.0) gamma = 3.0;
+  rc = scale_height(&s, gamma, 2);
+  sylva_species_def d;
+  if (!rc) rc = species_at(&s, gamma, s.k, &d);
+  /* the trunk: tip radius and pipe exponent, then r_tip rescaled (dbh is linear in it) */
+  sylva_fit_targets g;
+  if (!rc) rc = sylva_fit_grow(&d, years, o.seeds, o.threads, &g);
+  if (!rc) {
+    double r_tip, v;
+    fit_pipe(t, &g, s.ages, s.nages, d.r_tip, d.pipe_exponent, &r_tip, &v);
+    d.r_tip = r_tip;
+    d.pipe_exponent = v;
+    rc = sylva_fit_grow(&d, years, o.seeds, o.threads, &g);
+  }
+  if (!rc) {
+    double ratio[SYLVA_FIT_MAX_YEARS / 5 + 1];
+    int n = 0;
+    for (int i = 0; i < s.nages; i++) {
+      double grown = g.at[s.ages[i]].dbh_cm, target = t->at[s.ages[i]].dbh_cm;
+      if (grown > 0.0 && target > 0.0) ratio[n++] = target / grown;
+    }
+    double f = n ? median(ratio, n) : 1.0;
+    d.r_tip *= f;
+    if (d.r_tip > 0.05) d.r_tip = 0.05;
+    rc = sylva_fit_grow(&d, years, o.seeds, o.threads, &g);
+  }
+  s.trees += 3 * o.seeds;
+  if (rc) {
+    fail(err, errlen, rc == SYLVA_ENOMEM ? "out of memory" : "growing the species failed");
+    return rc;
+  }
+  out->def = d;
+  out->grown = g;
+  out->grown.first = t->first;
+  out->evaluations = s.trees;
+  decade_errors(t, &g, years, out->max_error);
+  progress(&o, "fit: gamma %.3f, height x%.3f, r_tip %.4f m, pipe exponent %.2f; largest error "
+           "over the decades: height %.0f%%, dbh %.0f%%, crown diameter %.0f%%, crown height %.0f%%",
+           d.gamma, s.k, d.r_tip, d.pipe_exponent, 100 * out->max_error[0], 100 * out->max_error[1],
+           100 * out->max_error[2], 100 * out->max_error[3]);
+  return SYLVA_OK;
+}
