@@ -15,6 +15,7 @@ import { Timeline } from './timeline.mjs';
 import { LightPanel } from './light.mjs';
 import { ConflictsPanel } from './conflicts.mjs';
 import { countInZones, zonesOf } from './zones.mjs';
+import { yearOf } from './helpers.mjs';
 
 // What the daemon pushes (replies to requests go to their callers).
 const handlers = {
@@ -100,6 +101,8 @@ window.sylva = {
     status: watch.run?.status ?? null,
     live: !watch.history,
     iteration: watch.shown().iteration,
+    startYear: watch.shown().startYear,
+    year: yearOf(watch.shown().iteration, watch.shown().startYear),
     nodes: watch.shown().live,
     liveIteration: watch.live.iteration,
     liveNodes: watch.live.live,

@@ -224,6 +224,25 @@ export function parseStatsCsv(text) {
   return byIteration;
 }
 
+// ---- years -----------------------------------------------------------------------
+
+// The calendar year of an iteration of a run whose iteration 0 is `startYear`, or
+// null for a run without a start year.
+export function yearOf(iteration, startYear) {
+  return startYear == null ? null : startYear + iteration;
+}
+
+// How the page names an iteration: "iteration 7", or with a start year
+// "2034 (iteration 7)".
+export function iterationLabel(iteration, startYear) {
+  return startYear == null ? `iteration ${iteration}` : `${startYear + iteration} (iteration ${iteration})`;
+}
+
+// Whether per-stem stats are a years run's: they carry a crown diameter.
+export function statsInYears(stats) {
+  return (stats || []).some((st) => st.crown_diameter != null);
+}
+
 // ---- light -----------------------------------------------------------------------
 
 // What the light slice is called for a run's sky ('site', 'zenith', or null

@@ -1,14 +1,19 @@
-// Live plots of every stem against iteration: height, DBH, crown width,
-// internodes and the growth cap c(T). One point per iteration and stem, from the
-// run's stored stats (stats.csv, parsed by helpers.mjs) and then from each
-// delta's stats.
+// Live plots of every stem against iteration (or against the calendar year, in a
+// run with a start year): height, DBH, crown width, internodes and the growth cap
+// c(T), and in a run of species in years the crown diameter and crown height too.
+// One point per iteration and stem, from the run's stored stats (stats.csv,
+// parsed by helpers.mjs) and then from each delta's stats.
 import uPlot from 'uplot';
 import { plantColor } from './scene.mjs';
+import { statsInYears } from './helpers.mjs';
 
+// years: only in a run whose stats carry them (species in years).
 export const MEASURES = [
   { key: 'height', title: 'Height (m)' },
   { key: 'dbh', title: 'DBH (m)' },
   { key: 'crown_width', title: 'Crown width (m)' },
+  { key: 'crown_diameter', title: 'Crown diameter (m)', years: true },
+  { key: 'crown_height', title: 'Crown height (m)', years: true },
   { key: 'nodes', title: 'Internodes' },
   { key: 'cap', title: 'Growth cap c(T)' },
 ];
@@ -22,7 +27,9 @@ export class Plots {
   }
 
   reset() {
-    this.iterations = [];        // x values
+    this.iterations = [];        // x values (as iterations)
+    this.startYear = null;       // the calendar year of iteration 0, when the run has one
+    this.years = false;          // the stats carry the measures of species in years
     this.stems = new Map();      // "plant/stem" -> {label, plant, values: {measure: []}}
     this.plantIndex = new Map(); // plant id -> index (colours as in the 3D view)
     for (const c of this.charts) c.destroy();
@@ -35,8 +42,25 @@ export class Plots {
     plantIds.forEach((id, i) => this.plantIndex.set(id, i));
   }
 
+  // The run's start year (null: none): the x axis shows calendar years.
+  setStartYear(startYear) {
+    if (startYear === this.startYear) return;
+    this.startYear = startYear;
+    this.rebuild = true;
+    this.schedule();
+  }
+
+  // The measures charted: those of species in years only in a run that has them.
+  measures() {
+    return MEASURES.filter((m) => !m.years || this.years);
+  }
+
   // Adds (or replaces) the stats of one iteration.
   add(iteration, stats) {
+    if (!this.years && statsInYears(stats)) {
+      this.years = true;
+      this.rebuild = true;
+    }
     let i = this.iterations.indexOf(iteration);
     if (i < 0) {
       // iterations arrive in order; one that is older than the newest goes in its place
@@ -68,12 +92,20 @@ export class Plots {
     this.schedule();
   }
 
-  // What the charts show: per measure, the iterations on the x axis and each
-  // stem's values (null where it has none), for the page's state and the tests.
+  // The x values: iterations, or calendar years with a start year.
+  xs() {
+    return this.startYear == null ? this.iterations : this.iterations.map((it) => this.startYear + it);
+  }
+
+  // What the charts show: per measure, the iterations (and the x axis's name and
+  // values: iterations or years) and each stem's values (null where it has none),
+  // for the page's state and the tests.
   points() {
-    const stems = [...this.stems.keys()];
-    return Object.fromEntries(this.charts.map((c, k) => [MEASURES[k].key, {
-      iterations: Array.from(c.data[0]),
+    const stems = [...this.stems.keys()], measures = this.measures();
+    return Object.fromEntries(this.charts.map((c, k) => [measures[k].key, {
+      iterations: this.iterations.slice(0, c.data[0].length),
+      axis: c.axes[0].label,
+      x: Array.from(c.data[0]),
       stems: Object.fromEntries(stems.map((s, i) => [s, Array.from(c.data[i + 1] || [])])),
     }]));
   }
@@ -88,26 +120,28 @@ export class Plots {
   }
 
   draw() {
-    const stems = [...this.stems.values()];
+    const stems = [...this.stems.values()], measures = this.measures();
     if (this.rebuild || this.charts.length === 0) {
       this.rebuild = false;
       for (const c of this.charts) c.destroy();
       this.container.textContent = '';
       const width = Math.max(200, this.container.clientWidth - 8);
-      this.charts = MEASURES.map((m) => new uPlot({
+      const axis = this.startYear == null ? 'iteration' : 'year';
+      this.charts = measures.map((m) => new uPlot({
         title: m.title, width, height: 150,
         legend: { show: false },
         cursor: { drag: { x: false, y: false } },
         scales: { x: { time: false } },
-        axes: [{ label: 'iteration', size: 36 }, { size: 60 }],
-        series: [{ label: 'iteration' }, ...stems.map((s) => ({
+        axes: [{ label: axis, size: 36 }, { size: 60 }],
+        series: [{ label: axis }, ...stems.map((s) => ({
           label: s.label, stroke: plantColor(this.plantIndex.get(s.plant) ?? 0), width: 1.5, spanGaps: false,
         }))],
       }, [[], ...stems.map(() => [])], this.container));
     }
+    const xs = this.xs();
     this.charts.forEach((c, k) => {
-      const key = MEASURES[k].key;
-      c.setData([this.iterations, ...stems.map((s) => s.values[key])]);
+      const key = measures[k].key;
+      c.setData([xs, ...stems.map((s) => s.values[key])]);
     });
   }
 }

@@ -26,6 +26,7 @@ export class Skeleton {
     this.world = null;
     this.voxel = 0;
     this.stats = [];
+    this.startYear = null;   // the calendar year of iteration 0 (a run with a start year)
     this.idSlot = new Int32Array(1024).fill(-1);
     this.scratch = new Int32Array(0);
     this.allocate(capacity);
@@ -140,6 +141,7 @@ export class Skeleton {
     this.species = msg.species || [];
     this.obstacles = msg.obstacles || [];
     this.sky = msg.sky ?? null; // 'site' or 'zenith' (protocol.md, "snapshot")
+    this.startYear = msg.start_year ?? null;
     this.world = msg.world;
     this.voxel = msg.voxel;
     this.iteration = msg.iteration;

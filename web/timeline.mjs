@@ -1,8 +1,10 @@
 // The timeline: a slider over the stored iterations of the watched run. Moving it
 // shows the chosen one (the daemon restores it from the store: `get`) while the
 // live run goes on in the background; Live, or the slider at the live iteration,
-// returns. Beside it the shown iteration, and over the view its internodes.
+// returns. Beside it the shown iteration (its calendar year first, in a run with a
+// start year), and over the view its internodes.
 import { $ } from './dom.mjs';
+import { iterationLabel } from './helpers.mjs';
 import { Skeleton } from './skeleton.mjs';
 
 const SETTLE_MS = 120;   // the slider's resting time before its iteration is fetched
@@ -60,8 +62,10 @@ export class Timeline {
   // The labels of the shown iteration.
   render() {
     const s = this.watch.shown(), stored = !!this.watch.history;
-    $('timeline-label').textContent = `iteration ${s.iteration} (${stored ? 'stored' : 'live'})`;
+    const label = iterationLabel(s.iteration, s.startYear);
+    $('timeline-label').textContent = `${label} (${stored ? 'stored' : 'live'})`;
+    this.slider.title = label;
     $('live').disabled = !stored;
-    $('view-info').textContent = `iteration ${s.iteration} · ${s.live.toLocaleString('en')} internodes`;
+    $('view-info').textContent = `${label} · ${s.live.toLocaleString('en')} internodes`;
   }
 }

@@ -66,6 +66,7 @@ export class Watch {
     this.live.loadSnapshot(msg);
     this.run.iteration = msg.iteration;
     this.plots.setPlants(this.live.plants.map((p) => p.id));
+    this.plots.setStartYear(this.live.startYear);
     this.plots.truncate(msg.iteration);
     if (msg.iteration > 0) this.plots.add(msg.iteration, msg.stats);
     if (!this.statsLoaded) {

@@ -79,7 +79,10 @@ static void check_stems(const sylva_world *w) {
     for (int k = 0; k < pl->stem_count; k++) {
       const sylva__stem *st = &w->stems[first + k];
       SYLVA_ASSERT(st->plant == p && st->index == k && st->species == pl->species);
-      SYLVA_ASSERT(st->born >= 0 && st->born <= w->iteration);
+      /* a stem grown in the nursery was planted before the world's first iteration */
+      SYLVA_ASSERT(st->born <= w->iteration &&
+                   (st->born >= 0 || (w->species[st->species].def.years &&
+                                      st->born >= w->iteration - SYLVA_MAX_AGE - 200)));
       SYLVA_ASSERT(st->root_slot >= 0 && (size_t)st->root_slot < w->nodes.count);
       SYLVA_ASSERT(w->nodes.stem[st->root_slot] == first + k);
     }

@@ -45,7 +45,7 @@ static int doom_branch(sylva_world *w, size_t i, int iteration) {
 
 /* Lifts the crowns of the species with `lift`: along the stem's main path, from the
  * root to its highest node, a branch that leaves the path below lift times the
- * stem's height is doomed unless it reaches the upper half of the crown (a
+ * stem's height is doomed unless it reaches the top tenth of the height (a
  * codominant stem is no low branch), so the leader is never cut whichever axis
  * carries it. Uses w->remap and w->pipe as scratch. Returns the number doomed, or
  * SYLVA_ENOMEM. */
@@ -70,10 +70,11 @@ static int64_t lift_crowns(sylva_world *w, int iteration) {
     next[top] = -1;
     for (int32_t n = top; n != root; n = s->parent[n]) next[s->parent[n]] = n;
     double below = s->z[root] + lift * (s->z[top] - s->z[root]);
-    double crown_middle = below + 0.5 * (s->z[top] - below);
+    /* a branch that reaches the top tenth of the stem's height competes for the lead */
+    double codominant = s->z[root] + 0.9 * (s->z[top] - s->z[root]);
     for (int32_t n = root; n != top && s->z[n] < below; n = next[n]) {
       int32_t off = s->axis_child[n] == next[n] ? s->lateral_child[n] : s->axis_child[n];
-      if (off < 0 || (s->flags[off] & SYLVA__NODE_DOOMED) || reach[off] >= crown_middle) continue;
+      if (off < 0 || (s->flags[off] & SYLVA__NODE_DOOMED) || reach[off] >= codominant) continue;
       if (doom_branch(w, (size_t)off, iteration)) return SYLVA_ENOMEM;
       doomed++;
     }

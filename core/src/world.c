@@ -437,6 +437,8 @@ static int transplant(sylva_world *w, const sylva_world *n, int first_stem, int 
   if (!map) return SYLVA_ENOMEM;
   int rc = SYLVA_OK;
   int32_t shift = (int32_t)(w->iteration - seasons);
+  /* planted `seasons` ago: each node's shade follows its local birth iteration */
+  for (int k = 0; k < n->stem_count; k++) w->stems[first_stem + k].born = shift;
   for (size_t i = 0; i < ns->count && !rc; i++) {
     map[i] = -1;
     if (!(ns->flags[i] & SYLVA__NODE_ALIVE)) continue;
@@ -461,10 +463,7 @@ static int transplant(sylva_world *w, const sylva_world *n, int first_stem, int 
     rc = sylva__shade_node(w, slot, +1);
     if (!rc) w->mark.shaded = (size_t)slot + 1;
   }
-  for (int k = 0; k < n->stem_count && !rc; k++) {
-    w->stems[first_stem + k].finished = n->stems[k].finished;
-    w->stems[first_stem + k].born = shift;
-  }
+  for (int k = 0; k < n->stem_count && !rc; k++) w->stems[first_stem + k].finished = n->stems[k].finished;
   sylva__free(map);
   return rc;
 }

@@ -63,22 +63,23 @@ static void put_key(sylva__strbuf *b, bool first, const char *key, bool compact)
   sylva__strbuf_puts(b, compact ? "\":" : "\": ");
 }
 
-/* `{"road": {"nodes": 3, "first": 7}, ...}`: the zones one stem entered. */
 /* The label of the obstacle with this id ("" for none). */
 static const char *obstacle_label(const sylva_world *w, int id) {
   sylva_obstacle_def o;
   return sylva_world_obstacle(w, id, &o) == 0 ? o.label : "";
 }
 
+/* `{"road": {"nodes": 3, "first": 7}, ...}`: the zones one stem entered, "first" in
+ * calendar years when the run has a start year. */
 static void put_zones(sylva__strbuf *b, const sylva_world *w, const sylva_conflicts *c,
-                      bool compact) {
+                      int start_year, bool compact) {
   sylva__strbuf_putc(b, '{');
   for (size_t i = 0; i < c->zone_count; i++) {
     if (i) sylva__strbuf_puts(b, compact ? "," : ", ");
     sylva__strbuf_json_string(b, obstacle_label(w, c->zones[i].obstacle));
     sylva__strbuf_printf(b, compact ? ":{\"nodes\":%" PRId64 ",\"first\":%" PRId32 "}"
                                     : ": {\"nodes\": %" PRId64 ", \"first\": %" PRId32 "}",
-                         c->zones[i].nodes, c->zones[i].first);
+                         c->zones[i].nodes, start_year + c->zones[i].first);
   }
   sylva__strbuf_putc(b, '}');
 }
@@ -96,37 +97,62 @@ static void put_clearance(sylva__strbuf *b, const sylva_world *w, const sylva_co
   sylva__strbuf_putc(b, '}');
 }
 
-char *sylva_encode_stem_conflicts(const sylva_world *w, int stem, bool clearance) {
+char *sylva_encode_stem_conflicts(const sylva_world *w, int stem, bool clearance, int start_year) {
   sylva__strbuf b = {0};
   sylva_conflicts c = sylva_world_stem_conflicts(w, stem);
   if (clearance)
     put_clearance(&b, w, &c, true);
   else
-    put_zones(&b, w, &c, true);
+    put_zones(&b, w, &c, start_year, true);
   return sylva__strbuf_finish(&b);
 }
 
+bool sylva_encode_years(const sylva_world *w) {
+  for (int i = 0; i < sylva_world_species_count(w); i++)
+    if (sylva_world_species(w, i)->years) return true;
+  return false;
+}
+
+sylva__stats_form sylva__stats_form_of(const sylva_world *w, int start_year) {
+  return (sylva__stats_form){sylva_world_reports_conflicts(w), sylva_encode_years(w), start_year};
+}
+
 void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_stem_stats *s,
-                           bool compact) {
+                           const sylva__stats_form *form, bool compact) {
   const char *label = sylva_world_plant_label(w, s->plant);
   sylva__strbuf_putc(b, '{');
   put_key(b, true, "plant", compact);
   sylva__strbuf_json_string(b, label ? label : "");
   put_key(b, false, "stem", compact);
   sylva__strbuf_printf(b, "%" PRId32, s->stem);
+  if (form->years) { /* null for a stem of a species without years */
+    put_key(b, false, "age", compact);
+    if (s->age >= 0)
+      sylva__strbuf_printf(b, "%" PRId32, s->age);
+    else
+      sylva__strbuf_puts(b, "null");
+  }
   put_key(b, false, "height", compact);
   sylva__strbuf_fixed(b, s->height, 4);
   put_key(b, false, "dbh", compact);
   sylva__strbuf_fixed(b, s->dbh, 4);
   put_key(b, false, "crown_width", compact);
   sylva__strbuf_fixed(b, s->crown_width, 4);
+  if (form->years) { /* the database's crown diameter is this same mean of extents */
+    put_key(b, false, "crown_diameter", compact);
+    sylva__strbuf_fixed(b, s->crown_width, 4);
+  }
   put_key(b, false, "crown_base", compact);
   sylva__strbuf_fixed(b, s->crown_base, 4);
+  if (form->years) {
+    put_key(b, false, "crown_height", compact);
+    sylva__strbuf_fixed(b, s->crown_height, 4);
+  }
   put_key(b, false, "nodes", compact);
   sylva__strbuf_printf(b, "%" PRId64, s->nodes);
   put_key(b, false, "shed", compact);
   sylva__strbuf_printf(b, "%" PRId64, s->shed);
-  if (sylva_world_reports_conflicts(w)) {
+  if (form->conflicts) {
     put_key(b, false, "pruned", compact);
     sylva__strbuf_printf(b, "%" PRId64, s->pruned);
   }
@@ -136,24 +162,28 @@ void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_s
   sylva__strbuf_printf(b, "%d", s->cap);
   put_key(b, false, "finished", compact);
   sylva__strbuf_puts(b, s->finished ? "true" : "false");
-  if (sylva_world_reports_conflicts(w)) {
+  if (form->conflicts) {
     sylva_conflicts c = sylva_world_stem_conflicts(w, sylva_world_stem_index(w, s->plant, s->stem));
     put_key(b, false, "zones", compact);
-    put_zones(b, w, &c, compact);
+    put_zones(b, w, &c, form->start_year, compact);
     put_key(b, false, "clearance", compact);
     put_clearance(b, w, &c, compact);
   }
   sylva__strbuf_putc(b, '}');
 }
 
-char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms) {
+char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms,
+                              int start_year) {
   sylva__strbuf b = {0};
-  sylva__strbuf_printf(&b, "{\"iteration\": %d, \"elapsed_ms\": ", j->iteration);
+  sylva__stats_form form = sylva__stats_form_of(w, start_year);
+  sylva__strbuf_printf(&b, "{\"iteration\": %d, ", j->iteration);
+  if (start_year) sylva__strbuf_printf(&b, "\"year\": %d, ", start_year + j->iteration);
+  sylva__strbuf_puts(&b, "\"elapsed_ms\": ");
   sylva__strbuf_fixed(&b, elapsed_ms, 1);
   sylva__strbuf_puts(&b, ", \"stems\": [");
   for (size_t i = 0; i < j->stem_count; i++) {
     if (i) sylva__strbuf_puts(&b, ", ");
-    sylva__put_stem_stats(&b, w, &j->stats[i], false);
+    sylva__put_stem_stats(&b, w, &j->stats[i], &form, false);
   }
   sylva__strbuf_puts(&b, "]}");
   return sylva__strbuf_finish(&b);

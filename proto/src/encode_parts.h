@@ -23,9 +23,19 @@ void sylva__put_radius(sylva__strbuf *b, float radius);
 /** "voxel":V,"world":{"min":[..],"max":[..]},"obstacles":[..],"plants":[..] of the
  *  skeleton format (without braces around it). */
 void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w);
+/** Which optional fields the stats of a world carry (cli.md, "Output"). */
+typedef struct sylva__stats_form {
+  bool conflicts; /**< pruned, zones, clearance (sylva_world_reports_conflicts) */
+  bool years;     /**< age, crown_diameter, crown_height (sylva_encode_years) */
+  int start_year; /**< 0, or the calendar year of iteration 0: zones' "first" in years */
+} sylva__stats_form;
+
+/** The form of w's stats. */
+sylva__stats_form sylva__stats_form_of(const sylva_world *w, int start_year);
+
 /** One stem's measures as in the stats line of `sylva run`: {"plant": "t1", "stem": 0,
  *  ...}; compact drops the spaces after ',' and ':'. */
 void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_stem_stats *s,
-                           bool compact);
+                           const sylva__stats_form *form, bool compact);
 
 #endif

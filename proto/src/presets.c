@@ -3,6 +3,7 @@
  * gives takes the defaults of sylva_default_species_def(). */
 #include <string.h>
 
+#include "sylva/library.h"
 #include "sylva/scenario.h"
 #include "sylva/status.h"
 
@@ -47,6 +48,8 @@ int sylva_preset_count(void) { return PRESET_COUNT; }
 const char *sylva_preset_name(int i) { return i >= 0 && i < PRESET_COUNT ? presets[i].name : NULL; }
 
 int sylva_preset_find(const char *name, sylva_species_def *out) {
+  if (strncmp(name, SYLVA_LIBRARY_PREFIX, strlen(SYLVA_LIBRARY_PREFIX)) == 0)
+    return sylva_library_find(name, out);
   for (int i = 0; i < PRESET_COUNT; i++) {
     const preset_row *p = &presets[i];
     if (strcmp(p->name, name) != 0) continue;

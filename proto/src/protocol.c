@@ -121,18 +121,6 @@ static int read_run(sylva__parser *p, const cJSON *obj, int64_t *out) {
   return rc;
 }
 
-/* An integer member in [lo, hi]; *present tells whether it was there (NULL: required). */
-static int read_integer(sylva__parser *p, const cJSON *obj, const char *key, double lo, double hi,
-                        bool *present, double *out) {
-  const cJSON *item = member(obj, key);
-  if (present) *present = item != NULL;
-  if (!item) return present ? 0 : sylva__fail_at_key(p, key, "required");
-  size_t old = sylva__ptr_push(p, key);
-  int rc = sylva__want_integer(p, item, lo, hi, out);
-  sylva__ptr_pop(p, old);
-  return rc;
-}
-
 /* A run name: 1 to SYLVA_MSG_NAME_MAX bytes without control characters (C0, DEL, C1). */
 static int read_name(sylva__parser *p, const cJSON *item, char **out) {
   size_t old = sylva__ptr_push(p, "name");
@@ -329,7 +317,7 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
   }
   case SYLVA_MSG_SUBSCRIBE:
     rc = read_run(p, root, &m->run);
-    if (!rc) rc = read_integer(p, root, "since", 0, SYLVA_MSG_ID_MAX, &present, &v);
+    if (!rc) rc = sylva__read_integer(p, root, "since", 0, SYLVA_MSG_ID_MAX, &present, &v);
     if (!rc && present) {
       m->has_since = true;
       m->since = (int64_t)v;
@@ -361,7 +349,7 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
     m->count = 1;
     if (member(root, "count") && m->action != SYLVA_CONTROL_STEP)
       return sylva__fail_at_key(p, "count", "only allowed with \"action\": \"step\"");
-    rc = read_integer(p, root, "count", 1, SYLVA_MSG_MAX_STEP, &present, &v);
+    rc = sylva__read_integer(p, root, "count", 1, SYLVA_MSG_MAX_STEP, &present, &v);
     if (!rc && present) m->count = (int)v;
     return rc;
   }
@@ -370,7 +358,7 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
     return rc ? rc : parse_edit(p, root, m);
   case SYLVA_MSG_FORK:
     rc = read_run(p, root, &m->run);
-    if (!rc) rc = read_integer(p, root, "iteration", 0, INT_MAX, NULL, &v);
+    if (!rc) rc = sylva__read_integer(p, root, "iteration", 0, INT_MAX, NULL, &v);
     if (!rc) m->iteration = (int)v;
     if (!rc) {
       if ((item = member(root, "name"))) rc = read_name(p, item, &m->name);
@@ -379,7 +367,7 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
     return rc;
   case SYLVA_MSG_GET:
     rc = read_run(p, root, &m->run);
-    if (!rc) rc = read_integer(p, root, "iteration", 0, INT_MAX, NULL, &v);
+    if (!rc) rc = sylva__read_integer(p, root, "iteration", 0, INT_MAX, NULL, &v);
     if (!rc) m->iteration = (int)v;
     return rc;
   case SYLVA_MSG_LIGHT: {
@@ -512,11 +500,18 @@ char *sylva_msg_created(int64_t run, const char *name, const char *ref) {
   return sylva__strbuf_finish(&b);
 }
 
-char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, const char *ref) {
+/* ,"start_year":Y for a run whose scenario gives one. */
+static void put_start_year(sylva__strbuf *b, int start_year) {
+  if (start_year) sylva__strbuf_printf(b, ",\"start_year\":%d", start_year);
+}
+
+char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, int start_year,
+                       const char *ref) {
   sylva__strbuf b = {0};
   sylva__strbuf_printf(&b, "{\"type\":\"status\",\"run\":%" PRId64 ",\"status\":", run);
   put_string(&b, sylva_run_status_name(status));
   sylva__strbuf_printf(&b, ",\"iteration\":%d", iteration);
+  put_start_year(&b, start_year);
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }
@@ -549,8 +544,10 @@ char *sylva_runs_json(const sylva_run_summary *runs, size_t n) {
   return sylva__strbuf_finish(&b);
 }
 
-char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const char *ref) {
+char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
+                         const char *ref) {
   sylva__strbuf b = {0};
+  sylva__stats_form form = sylva__stats_form_of(w, start_year);
   sylva__strbuf_printf(&b, "{\"type\":\"snapshot\",\"run\":%" PRId64 ",\"seq\":%" PRId64
                            ",\"iteration\":%d,",
                        run, seq, sylva_world_iteration(w));
@@ -561,7 +558,7 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const c
     sylva_stem_stats st;
     sylva_world_stem_stats(w, s, &st);
     if (s) sylva__strbuf_putc(&b, ',');
-    sylva__put_stem_stats(&b, w, &st, true);
+    sylva__put_stem_stats(&b, w, &st, &form, true);
   }
   sylva__strbuf_puts(&b, "],\"species\":[");
   int species = sylva_world_species_count(w);
@@ -571,12 +568,15 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const c
   }
   /* the sky that lights the run (scenario.md, "Light") */
   sylva__strbuf_puts(&b, sylva_world_get_def(w)->sky_count ? "],\"sky\":\"site\"" : "],\"sky\":\"zenith\"");
+  put_start_year(&b, start_year);
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }
 
-char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j) {
+char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j,
+                      int start_year) {
   sylva__strbuf b = {0};
+  sylva__stats_form form = sylva__stats_form_of(w, start_year);
   if (!sylva__strbuf_reserve(&b, j->added_count * 64 + j->radii_count * 24 + j->shed_count * 12 +
                                      j->stem_count * 200 + 256))
     return sylva__strbuf_finish(&b);
@@ -602,7 +602,7 @@ char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylv
   sylva__strbuf_puts(&b, "],\"stats\":[");
   for (size_t i = 0; i < j->stem_count; i++) {
     if (i) sylva__strbuf_putc(&b, ',');
-    sylva__put_stem_stats(&b, w, &j->stats[i], true);
+    sylva__put_stem_stats(&b, w, &j->stats[i], &form, true);
   }
   sylva__strbuf_puts(&b, "]}");
   return sylva__strbuf_finish(&b);

@@ -268,6 +268,17 @@ static const cJSON *member(const cJSON *obj, const char *key) {
   return cJSON_GetObjectItemCaseSensitive(obj, key);
 }
 
+int sylva__read_integer(sylva__parser *p, const cJSON *obj, const char *key, double lo,
+                        double hi, bool *present, double *out) {
+  const cJSON *item = member(obj, key);
+  if (present) *present = item != NULL;
+  if (!item) return present ? 0 : sylva__fail_at_key(p, key, "required");
+  size_t old = sylva__ptr_push(p, key);
+  int rc = sylva__want_integer(p, item, lo, hi, out);
+  sylva__ptr_pop(p, old);
+  return rc;
+}
+
 /* ---- species ---- */
 
 #define UNBOUNDED HUGE_VAL
@@ -278,7 +289,13 @@ typedef struct species_field {
   size_t offset;
   bool integer; /* an int field; else a double */
   range r;
+  bool scaled;  /* a field of real species (place 37 and up in species_fields.h):
+                   written in the canonical form only when not at its default */
+  double dflt;  /* its default */
 } species_field;
+
+/* The first snapshot place of the fields of real species (species_fields.h). */
+#define FIRST_SCALED_PLACE 37
 
 /* The scalar fields of a species, in sylva/species_fields.h's order: top-level keys
  * of a species object, and keys of its "markers" object. IN(group, wanted, ...)
@@ -290,16 +307,18 @@ typedef struct species_field {
 #define IN(group, wanted, ...) IN_##group##_##wanted(__VA_ARGS__)
 #define IS_INT_double false
 #define IS_INT_int true
-#define FIELD(name, type, lo, hi, bounds)                                  \
+#define FIELD(name, type, def, lo, hi, bounds, snap)                       \
   {#name,                                                                  \
    offsetof(sylva_species_def, name),                                      \
    IS_INT_##type,                                                          \
    {lo, hi, ((bounds) & SYLVA_FIELD_MIN_EXCLUSIVE) != 0,                   \
-    ((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE) != 0}},
+    ((bounds) & SYLVA_FIELD_MAX_EXCLUSIVE) != 0},                          \
+   (snap) >= FIRST_SCALED_PLACE,                                           \
+   def},
 #define SPECIES_FIELD(name, type, def, lo, hi, bounds, group, snap) \
-  IN(group, species, FIELD(name, type, lo, hi, bounds))
+  IN(group, species, FIELD(name, type, def, lo, hi, bounds, snap))
 #define MARKER_FIELD(name, type, def, lo, hi, bounds, group, snap) \
-  IN(group, markers, FIELD(name, type, lo, hi, bounds))
+  IN(group, markers, FIELD(name, type, def, lo, hi, bounds, snap))
 #define SPECIES_KEY(name, type, def, lo, hi, bounds, group, snap) IN(group, species, #name, )
 
 static const species_field species_fields[] = {SYLVA_SPECIES_FIELDS(SPECIES_FIELD)};
@@ -560,11 +579,11 @@ static int cmp_id_ref_name(const void *key, const void *elem) {
 int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *by_name,
                        int species_count, int *stem_count, sylva_scenario_plant *pl,
                        const char **species_name) {
-  static const char *const keys[] = {"id", "species", "roots"};
+  static const char *const keys[] = {"id", "species", "roots", "age"};
   int rc = sylva__want_object(p, obj);
-  if (!rc) rc = sylva__check_keys(p, obj, keys, 3);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 4);
   if (rc) return rc;
-  for (int i = 0; i < 3; i++)
+  for (int i = 0; i < 3; i++) /* age is optional */
     if (!member(obj, keys[i])) return sylva__fail_at_key(p, keys[i], "required");
   size_t old = sylva__ptr_push(p, "id");
   rc = sylva__want_label(p, member(obj, "id"), pl->id);
@@ -618,7 +637,11 @@ int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *
   if (rc) return rc;
   pl->root_count = count;
   *stem_count += count;
-  return 0;
+  double age = 0; /* when absent */
+  bool given;
+  rc = sylva__read_integer(p, obj, "age", 0, SYLVA_MAX_AGE, &given, &age);
+  pl->age = (int)age;
+  return rc;
 }
 
 int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obstacle *o) {
@@ -742,8 +765,18 @@ static void scenario_free_parts(sylva_scenario *s) {
 
 void sylva_scenario_free(sylva_scenario *s) { scenario_free_parts(s); }
 
-static const char *const top_keys[] = {"format",  "name",    "seed",   "iterations", "world",
-                                       "species", "plants",  "obstacles", "management", "light"};
+/* A plant older than its planting needs a species that counts in years. */
+static int check_age(sylva__parser *p, const sylva_scenario_plant *pl,
+                     const sylva_scenario_species *sp) {
+  char q[80];
+  if (pl->age == 0 || sp->def.years) return 0;
+  return sylva__fail_at_key(p, "age", "species %s has no time scale (years)",
+                            sylva__quote(q, sp->name));
+}
+
+static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
+                                       "start_year", "world", "species", "plants",
+                                       "obstacles", "management", "light"};
 
 static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_scenario *s) {
   int rc = sylva__want_object(p, root);
@@ -776,22 +809,21 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
   if (!(s->name = strdup(name))) return sylva__fail_nomem(p);
 
   double v = 0;
-  s->seed = 1;
-  if ((item = member(root, "seed"))) {
-    old = sylva__ptr_push(p, "seed");
-    rc = sylva__want_integer(p, item, 0, SYLVA_SCENARIO_SEED_MAX, &v);
-    sylva__ptr_pop(p, old);
-    if (rc) return rc;
-    s->seed = (uint64_t)v;
-  }
-  s->iterations = 40;
-  if ((item = member(root, "iterations"))) {
-    old = sylva__ptr_push(p, "iterations");
-    rc = sylva__want_integer(p, item, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &v);
-    sylva__ptr_pop(p, old);
-    if (rc) return rc;
-    s->iterations = (int)v;
-  }
+  /* each keeps its default when not given */
+  bool given;
+  v = 1;
+  if ((rc = sylva__read_integer(p, root, "seed", 0, SYLVA_SCENARIO_SEED_MAX, &given, &v)))
+    return rc;
+  s->seed = (uint64_t)v;
+  v = 40;
+  if ((rc = sylva__read_integer(p, root, "iterations", 1, SYLVA_SCENARIO_MAX_ITERATIONS, &given,
+                                &v)))
+    return rc;
+  s->iterations = (int)v;
+  v = 0; /* none */
+  if ((rc = sylva__read_integer(p, root, "start_year", 1, SYLVA_SCENARIO_MAX_YEAR, &given, &v)))
+    return rc;
+  s->start_year = (int)v;
 
   /* species, before the plants that name them */
   if ((item = member(root, "species"))) {
@@ -881,6 +913,7 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
       s->plant_count = i + 1; /* so that a partial plant is freed */
       rc =
           sylva__parse_plant(p, pl, by_name, s->species_count, &s->stem_count, &s->plants[i], NULL);
+      if (!rc) rc = check_age(p, &s->plants[i], &s->species[s->plants[i].species]);
       sylva__ptr_pop(p, o2);
     }
     free(by_name);
@@ -1030,17 +1063,20 @@ static void put_species(sylva__strbuf *b, const sylva_species_def *d) {
   for (size_t i = 0; i < sizeof species_fields / sizeof species_fields[0]; i++) {
     const species_field *f = &species_fields[i];
     if (strcmp(f->key, "rho") == 0) continue;
-    sylva__strbuf_printf(b, ", \"%s\": ", f->key);
     const char *at = (const char *)d + f->offset;
-    if (f->integer) {
-      int iv;
+    int iv = 0;
+    double dv = 0;
+    if (f->integer)
       memcpy(&iv, at, sizeof iv);
-      sylva__strbuf_printf(b, "%d", iv);
-    } else {
-      double dv;
+    else
       memcpy(&dv, at, sizeof dv);
+    /* at their defaults, the IGM species keep the canonical bytes they had */
+    if (f->scaled && (f->integer ? iv == f->dflt : dv == f->dflt)) continue;
+    sylva__strbuf_printf(b, ", \"%s\": ", f->key);
+    if (f->integer)
+      sylva__strbuf_printf(b, "%d", iv);
+    else
       sylva__strbuf_shortest(b, dv);
-    }
   }
   sylva__strbuf_puts(b, ", \"tropism\": ");
   put_vec3(b, d->tropism);
@@ -1056,8 +1092,11 @@ char *sylva_scenario_json(const sylva_scenario *s) {
   sylva__strbuf b = {0};
   sylva__strbuf_puts(&b, "{\n  \"format\": \"" SYLVA_SCENARIO_FORMAT "\",\n  \"name\": ");
   sylva__strbuf_json_string(&b, s->name);
-  sylva__strbuf_printf(&b, ",\n  \"seed\": %llu,\n  \"iterations\": %d,\n  \"world\": {\"min\": ",
+  sylva__strbuf_printf(&b, ",\n  \"seed\": %llu,\n  \"iterations\": %d,",
                        (unsigned long long)s->seed, s->iterations);
+  if (s->start_year) /* given only: scenarios without it stay as they were */
+    sylva__strbuf_printf(&b, "\n  \"start_year\": %d,", s->start_year);
+  sylva__strbuf_puts(&b, "\n  \"world\": {\"min\": ");
   put_vec3(&b, s->world_min);
   sylva__strbuf_puts(&b, ", \"max\": ");
   put_vec3(&b, s->world_max);
@@ -1082,7 +1121,9 @@ char *sylva_scenario_json(const sylva_scenario *s) {
       if (r) sylva__strbuf_puts(&b, ", ");
       put_vec3(&b, pl->roots[r]);
     }
-    sylva__strbuf_puts(&b, "]}");
+    sylva__strbuf_puts(&b, "]");
+    if (pl->age) sylva__strbuf_printf(&b, ", \"age\": %d", pl->age);
+    sylva__strbuf_putc(&b, '}');
   }
   sylva__strbuf_puts(&b, s->plant_count ? "\n  ],\n  \"obstacles\": [" : "],\n  \"obstacles\": [");
   for (int i = 0; i < s->obstacle_count; i++) {
@@ -1171,6 +1212,7 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
         .label = pl->id,
         .roots = (const double(*)[3])pl->roots,
         .root_count = pl->root_count,
+        .age = pl->age,
     };
     int bad_root = -1;
     rc = sylva_world_add_plant(w, &pd, &bad_root);
@@ -1205,4 +1247,15 @@ fail:
   free(species_ids);
   sylva_world_destroy(w);
   return rc;
+}
+
+char *sylva_species_json(const sylva_species_def *def) {
+  sylva__strbuf b = {0};
+  put_species(&b, def);
+  return sylva__strbuf_finish(&b);
+}
+
+int sylva__species_from_json(const cJSON *obj, sylva_species_def *out) {
+  sylva__parser p = {0};
+  return parse_species(&p, obj, out);
 }

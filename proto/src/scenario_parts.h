@@ -57,6 +57,10 @@ const char *sylva__num(char buf[SYLVA_FMT_BUFSIZE], double v);
 /** Every member of obj must be one of known[] and appear once; an unknown key is
  *  named (with a suggestion when it looks like a typo). */
 int sylva__check_keys(sylva__parser *p, const cJSON *obj, const char *const *known, size_t count);
+/** A species object (as a scenario's species) into *out, with the defaults for what
+ *  it leaves out; SYLVA_EINVAL when it is not a valid species. */
+int sylva__species_from_json(const cJSON *obj, sylva_species_def *out);
+
 /** The value must be an object. */
 int sylva__want_object(sylva__parser *p, const cJSON *item);
 /** A finite number. */
@@ -69,6 +73,10 @@ int sylva__want_label(sylva__parser *p, const cJSON *item, char out[SYLVA_LABEL_
 int sylva__want_integer(sylva__parser *p, const cJSON *item, double lo, double hi, double *out);
 /** [x, y, z] of finite numbers. */
 int sylva__want_vec3(sylva__parser *p, const cJSON *item, double out[3]);
+/** The integral member `key` of obj, in [lo, hi], into *out. *present tells whether
+ *  it was there (*out then keeps its value); with present NULL it is required. */
+int sylva__read_integer(sylva__parser *p, const cJSON *obj, const char *key, double lo,
+                        double hi, bool *present, double *out);
 
 /** The `light` member (scenario_light.c). */
 int sylva__parse_light(sylva__parser *p, const cJSON *item, sylva_scenario_light *out);

@@ -34,7 +34,9 @@ static void export_usage(FILE *f) {
         "            from the model, one object per stem (OBJ), obstacles on request\n"
         "  csv       the stats of every stored iteration up to T, one row per stem:\n"
         "            iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,\n"
-        "            light,cap,finished (empty where a measure is null)\n"
+        "            light,cap,finished,pruned,zones,clearance, and in a run in years\n"
+        "            or from a start year age,year,crown_diameter,crown_height (empty\n"
+        "            where a measure is null or the run has none)\n"
         "An iteration between two snapshots is regrown from the earlier one.\n"
         "\n"
         "Options:\n",

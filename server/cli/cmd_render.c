@@ -147,6 +147,7 @@ static int render_stored(render_args *a) {
   sylva_world *w = NULL;
   if (rc == CLI_EXIT_OK) rc = cli_store_world_at(st, &r, at, &w);
   a->ro.name = r.name;
+  a->ro.start_year = r.start_year;
   if (rc == CLI_EXIT_OK) rc = render_to(&o, w, &a->ro);
   rc = cli_outfile_close(&o, rc);
   if (w) sylva_world_destroy(w);
@@ -171,6 +172,7 @@ static int render_scenario(render_args *a) {
                   .progress = isatty(STDERR_FILENO), .silent = true};
   if (rc == CLI_EXIT_OK) rc = grow_run(&job);
   a->ro.name = s->name;
+  a->ro.start_year = s->start_year;
   if (rc == CLI_EXIT_OK) rc = render_to(&o, w, &a->ro);
   rc = cli_outfile_close(&o, rc);
   if (w) sylva_world_destroy(w);

@@ -63,7 +63,7 @@ int cmd_resume(int argc, char **argv) {
   if (rc) return rc;
   grow_job job = {.label = r.name, .limit = iterations ? (int)iterations : r.iterations,
                   .progress = !quiet && isatty(STDERR_FILENO), .st = st, .run = r.id,
-                  .snapshot_every = r.snapshot_every};
+                  .snapshot_every = r.snapshot_every, .start_year = r.start_year};
   rc = cli_store_world_at(st, &r, r.last_iteration, &job.w);
   if (rc == CLI_EXIT_OK && store_set_status(st, r.id, SYLVA_RUN_RUNNING, NULL, job.limit)) {
     fprintf(stderr, "sylva: %s\n", store_error(st));

@@ -121,7 +121,7 @@ int cmd_run(int argc, char **argv) {
   rc = cli_input_world(path, s, &w);
   grow_job job = {.label = path, .w = w, .limit = limit,
                   .progress = !quiet && isatty(STDERR_FILENO),
-                  .snapshot_every = (int)snapshot_every};
+                  .snapshot_every = (int)snapshot_every, .start_year = s->start_year};
   if (rc == CLI_EXIT_OK && db_path) rc = cli_store_new_run(db_path, name ? name : s->name, s,
                                                             limit, &job);
   if (rc == CLI_EXIT_OK) rc = grow_run(&job);

@@ -18,7 +18,7 @@ static void validate_usage(FILE *f) {
         "least one plant, and that each root lies inside the world and outside the\n"
         "obstacles. Prints\n"
         "  ok: NAME: P plants, S stems, O obstacles[ (Z zones)][, M pruning schedules]\n"
-        "      [, site sky at latitude L], voxel V m, NXxNYxNZ voxels\n"
+        "      [, site sky at latitude L][, start year Y], voxel V m, NXxNYxNZ voxels\n"
         "or the error, named by its JSON pointer, on stderr (exit status 2).\n"
         "\n"
         "Options:\n",
@@ -63,6 +63,7 @@ int cmd_validate(int argc, char **argv) {
   if (zones) printf(" (%d zones)", zones);
   if (s->management_count) printf(", %d pruning schedules", s->management_count);
   if (s->light.site) printf(", site sky at latitude %g", s->light.sky.latitude);
+  if (s->start_year) printf(", start year %d", s->start_year);
   printf(", voxel %s m, %dx%dx%d voxels\n", voxel, dims[0], dims[1], dims[2]);
   sylva_world_destroy(w);
   sylva_scenario_free(s);

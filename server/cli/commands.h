@@ -22,6 +22,14 @@ int cmd_export(int argc, char **argv);
  *  and top views into a PNG, SVG or PDF file. */
 int cmd_render(int argc, char **argv);
 
+/** `sylva fit (DATA.csv | --utdb REGION:CODE) -o SPECIES.json`: calibrate a species in
+ *  years to measured growth. */
+int cmd_fit(int argc, char **argv);
+
+/** `sylva species [--region R] | --utdb REGION:CODE`: the species library, or one
+ *  species of the Urban Tree Database. */
+int cmd_species(int argc, char **argv);
+
 /** `sylva serve [options]`: the daemon. */
 int cmd_serve(int argc, char **argv);
 

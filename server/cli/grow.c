@@ -77,7 +77,7 @@ int grow_run(grow_job *job) {
       }
     }
     if (!job->silent) {
-      char *line = sylva_encode_stats_line(w, j, elapsed);
+      char *line = sylva_encode_stats_line(w, j, elapsed, job->start_year);
       bool nomem = !line, ok = line && grow_put_line(line);
       free(line);
       if (!ok) {

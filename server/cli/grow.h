@@ -20,6 +20,7 @@ typedef struct grow_job {
   store *st;          /**< NULL: not stored */
   int64_t run;        /**< the stored run */
   int snapshot_every; /**< iterations between full snapshots when stored */
+  int start_year;     /**< the scenario's start_year (0: none): the lines' calendar */
   const char *reason; /**< out: "finished" or "limit" when it ended well */
 } grow_job;
 

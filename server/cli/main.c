@@ -27,6 +27,9 @@ static void usage(FILE *f) {
         "                          front, side and top views of a stored iteration or\n"
         "                          of a scenario grown to its end\n"
         "  serve                   the daemon: grows runs, streams them over WebSockets\n"
+        "  fit (DATA.csv | --utdb REGION:CODE) -o SPECIES.json\n"
+        "                          calibrate a species in years to measured growth\n"
+        "  species [--region R]    the species library (Urban Tree Database species)\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -58,6 +61,8 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "export") == 0) return cmd_export(argc - 1, argv + 1);
   if (strcmp(cmd, "render") == 0) return cmd_render(argc - 1, argv + 1);
   if (strcmp(cmd, "serve") == 0) return cmd_serve(argc - 1, argv + 1);
+  if (strcmp(cmd, "fit") == 0) return cmd_fit(argc - 1, argv + 1);
+  if (strcmp(cmd, "species") == 0) return cmd_species(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else

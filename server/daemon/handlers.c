@@ -24,7 +24,7 @@ static void handle_control(client *c, run *r, const sylva_msg *m) {
   if (refused)
     reply_error(c, "bad_request", refused, m->ref);
   else
-    client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
+    client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, r->start_year, m->ref));
 }
 
 /* A parsed message (rc and err: how parsing went); frees nothing. */

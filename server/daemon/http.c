@@ -113,6 +113,24 @@ static void label_value(FILE *f, const char *s) {
   }
 }
 
+/* One age gauge: sylva_plant_age{run="NAME",plant="ID"} AGE. */
+typedef struct age_metrics {
+  server *d;
+  FILE *f;
+} age_metrics;
+
+static int age_metric(int64_t id, const char *plant, int age, void *ctx) {
+  age_metrics *m = ctx;
+  const run *r = run_find(m->d, id);
+  if (!r) return 0; /* a run the daemon no longer holds */
+  fputs("sylva_plant_age{run=\"", m->f);
+  label_value(m->f, r->name);
+  fputs("\",plant=\"", m->f);
+  label_value(m->f, plant);
+  fprintf(m->f, "\"} %d\n", age);
+  return 0;
+}
+
 static char *metrics_text(server *d) {
   int64_t runs = 0, running = 0;
   for (run *r = d->runs; r; r = r->next) {
@@ -157,6 +175,23 @@ static char *metrics_text(server *d) {
         fprintf(f, "\"} %lld\n", (long long)(m ? r->conflicts.entered : r->conflicts.zone_nodes));
       }
   }
+  /* the calendar of runs with a start year, and the ages of plants of years species
+   * as of their runs' last stored iteration */
+  fputs("# HELP sylva_run_year The calendar year of the last finished iteration, by run.\n"
+        "# TYPE sylva_run_year gauge\n", f);
+  for (run *r = d->runs; r; r = r->next)
+    if (r->start_year) {
+      fputs("sylva_run_year{run=\"", f);
+      label_value(f, r->name);
+      fprintf(f, "\"} %d\n", r->start_year + r->iteration);
+    }
+  fputs("# HELP sylva_plant_age Age in years of each plant of a species with years (its age "
+        "at planting and the seasons since), by run and plant.\n# TYPE sylva_plant_age gauge\n", f);
+  /* one indexed query of the store for every run (in memory or not): the stored
+   * stats of each run's last iteration are its current ones */
+  age_metrics ages = {d, f};
+  if (store_each_age(d->st, age_metric, &ages))
+    server_log(NULL, "metrics: %s", store_error(d->st));
   if (fclose(f) != 0) {
     free(text);
     return NULL;

@@ -168,7 +168,7 @@ static void persist_status(run *r, const char *reason) {
 }
 
 void run_broadcast_status(run *r) {
-  char *text = sylva_msg_status(r->id, r->status, r->iteration, NULL);
+  char *text = sylva_msg_status(r->id, r->status, r->iteration, r->start_year, NULL);
   msgbuf *m = text ? msgbuf_new(text, strlen(text)) : NULL;
   free(text);
   if (!m) return;
@@ -251,7 +251,7 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
     res->status = SYLVA_EINVAL;
     return false;
   }
-  res->text = sylva_msg_delta(r->id, seq, r->w, j);
+  res->text = sylva_msg_delta(r->id, seq, r->w, j, r->start_year);
   res->iteration = sylva_world_iteration(r->w);
   res->stems = sylva_world_stem_count(r->w);
   res->obstacles = sylva_world_obstacle_count(r->w);
@@ -307,6 +307,7 @@ static int edit_from_msg(const sylva_msg *m, edit *e) {
       return SYLVA_ENOMEM;
     memcpy(ep->roots, p->roots, roots);
     ep->root_count = p->root_count;
+    ep->age = p->age;
   }
   return SYLVA_OK;
 }
@@ -342,7 +343,9 @@ static void task_work(pool_task *t) {
   case RUN_TASK_LIGHT:
     r->task_text = sylva_msg_light_slice(r->id, r->w, r->lights->z, r->lights->ref);
     break;
-  case RUN_TASK_SNAPSHOT: r->task_text = sylva_msg_snapshot(r->id, r->seq, r->w, NULL); break;
+  case RUN_TASK_SNAPSHOT:
+    r->task_text = sylva_msg_snapshot(r->id, r->seq, r->w, r->start_year, NULL);
+    break;
   case RUN_TASK_NONE: break;
   }
 }
@@ -487,7 +490,8 @@ static void done_edit(run *r) {
       subscription *s = client_subscription(o, r->id);
       if (s) s->need_snapshot = true;
     }
-    if (c) client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, m->ref));
+    if (c)
+      client_send_text(c, sylva_msg_status(r->id, r->status, r->iteration, r->start_year, m->ref));
   }
   sylva_msg_free(&e->msg);
   free(e);
@@ -705,7 +709,7 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
 }
 
 static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
-                    sylva_run_status status, int limit, int snapshot_every) {
+                    sylva_run_status status, int limit, int snapshot_every, int start_year) {
   run *r = calloc(1, sizeof *r);
   if (!r || !(r->name = strdup(name))) {
     free(r);
@@ -721,6 +725,7 @@ static run *run_new(server *d, int64_t id, const char *name, sylva_world *w,
   r->w = w;
   r->limit = limit;
   r->snapshot_every = snapshot_every;
+  r->start_year = start_year;
   r->status = status;
   if (w) run_note(r);
   r->estimate = w ? runs_estimate(w, r->stems) : 0;
@@ -775,7 +780,8 @@ int runs_load(server *d) {
   }
   for (size_t i = 0; i < n; i++) {
     store_run *sr = &stored[i];
-    run *r = run_new(d, sr->id, sr->name, NULL, sr->status, sr->iterations, sr->snapshot_every);
+    run *r = run_new(d, sr->id, sr->name, NULL, sr->status, sr->iterations, sr->snapshot_every,
+                     sr->start_year);
     if (!r) {
       store_runs_free(stored, n);
       return SERVER_ENOMEM;
@@ -954,6 +960,7 @@ typedef struct job {
   uint64_t client;   /**< who asked (0: the daemon itself, --run) */
   int64_t run;
   int iteration, limit, snapshot_every;
+  int start_year;    /**< a get's or fork's run's (a create's is its scenario's) */
   bool start;        /**< a create: running at once */
   sylva_scenario *scenario; /**< a create's (owned) */
   char *name, *ref, *text;
@@ -1024,7 +1031,7 @@ static void job_work(uv_work_t *req) {
   }
   free(scenario);
   if (!failed && !fork) {
-    j->text = sylva_msg_snapshot(j->run, 0, j->w, j->ref);
+    j->text = sylva_msg_snapshot(j->run, 0, j->w, j->start_year, j->ref);
     if (!j->text) {
       j->code = "internal";
       snprintf(j->err, sizeof j->err, "out of memory");
@@ -1046,7 +1053,7 @@ static void job_done(uv_work_t *req, int status) {
   } else if (j->kind == JOB_CREATE) {
     sylva_run_status status = j->start ? SYLVA_RUN_RUNNING : SYLVA_RUN_PAUSED;
     run *nr = run_new(d, j->new_id, j->name, j->w, status, j->scenario->iterations,
-                      STORE_SNAPSHOT_EVERY);
+                      STORE_SNAPSHOT_EVERY, j->scenario->start_year);
     if (nr) {
       j->w = NULL; /* the run owns it */
       server_log(nr->name, "created (%s)", sylva_run_status_name(nr->status));
@@ -1056,7 +1063,8 @@ static void job_done(uv_work_t *req, int status) {
       client_send_text(c, sylva_msg_error("internal", "out of memory", j->ref));
     }
   } else if (j->kind == JOB_FORK) {
-    run *nr = run_new(j->d, j->new_id, j->name, j->w, SYLVA_RUN_PAUSED, j->limit, j->snapshot_every);
+    run *nr = run_new(j->d, j->new_id, j->name, j->w, SYLVA_RUN_PAUSED, j->limit, j->snapshot_every,
+                      j->start_year);
     if (nr) {
       nr->seq = j->iteration; /* a fork starts with no edits of its own */
       j->w = NULL; /* the run owns it */
@@ -1106,6 +1114,7 @@ static void start_job(run *r, client *c, int iteration, const char *name, const 
   j->kind = name ? JOB_FORK : JOB_GET;
   j->limit = r->limit;
   j->snapshot_every = r->snapshot_every;
+  j->start_year = r->start_year;
   j->work.data = j;
   if (uv_queue_work(&r->d->loop, &j->work, job_work, job_done) != 0) {
     client_send_text(c, sylva_msg_error("internal", "cannot queue the work", ref));

@@ -66,6 +66,7 @@ struct run {
   uint64_t used;    /**< loop time (ms) a client or a task last needed it: the least
                          recently used idle run is unloaded first */
   int limit;        /**< iteration limit */
+  int start_year;   /**< the scenario's calendar year of iteration 0; 0: none */
   int snapshot_every;
   int steps;        /**< iterations still wanted while paused (control step) */
   int64_t seq;      /**< sequence number of the last delta or edit */

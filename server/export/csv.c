@@ -1,6 +1,7 @@
 #include "csv.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <string.h>
 
 #include "sylva/encode.h"
@@ -26,8 +27,16 @@ static void csv_number(FILE *f, double v, int decimals) {
   fputs(buf, f);
 }
 
+/* What the rows of one run carry beyond the columns of every run. */
+typedef struct csv_run {
+  FILE *f;
+  int start_year; /* 0: none */
+  bool years;     /* a species counts in years */
+} csv_run;
+
 static int csv_row(const store_stats_row *r, void *ctx) {
-  FILE *f = ctx;
+  const csv_run *c = ctx;
+  FILE *f = c->f;
   fprintf(f, "%d,", r->iteration);
   csv_text(f, r->plant);
   fprintf(f, ",%d,", r->plant_stem);
@@ -47,14 +56,29 @@ static int csv_row(const store_stats_row *r, void *ctx) {
   if (r->zones) csv_text(f, r->zones);
   fputc(',', f);
   if (r->clearance) csv_text(f, r->clearance);
+  /* years: empty where the run's lines lack the field or have null */
+  if (c->years || c->start_year) {
+    fputc(',', f);
+    if (r->age >= 0) fprintf(f, "%d", r->age);
+    fputc(',', f);
+    if (c->start_year) fprintf(f, "%d", c->start_year + r->iteration);
+    fputc(',', f);
+    if (c->years) csv_number(f, r->crown_width, 4);
+    fputc(',', f);
+    if (c->years) csv_number(f, r->crown_height, 4);
+  }
   fputc('\n', f);
   return ferror(f) ? SERVER_EWRITE : SERVER_OK;
 }
 
 int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
+  csv_run c = {f, 0, false};
+  if (store_run_calendar(st, run, &c.start_year, &c.years)) return SERVER_EFAIL;
   fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished,"
-        "pruned,zones,clearance\n",
+        "pruned,zones,clearance",
         f);
+  /* only in runs with years or a start year: the others keep the columns they had */
+  fputs(c.years || c.start_year ? ",age,year,crown_diameter,crown_height\n" : "\n", f);
   if (ferror(f)) return SERVER_EWRITE;
-  return store_each_stats(st, run, to, csv_row, f);
+  return store_each_stats(st, run, to, csv_row, &c);
 }

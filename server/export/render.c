@@ -9,6 +9,7 @@
 #include <cairo-svg.h>
 #include <cairo.h>
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -349,6 +350,34 @@ static void utf8_clean(const char *text, char *out, size_t cap) {
   out[n] = '\0';
 }
 
+/* The title line: the name, the iteration (after its calendar year when the run has
+ * a start year), the live nodes and the ages of the first RENDER_TITLE_AGES plants
+ * of species with years ("young 8, old 11", then an ellipsis). */
+static void title_text(const sylva_world *w, const render_options *o, char *out, size_t cap) {
+  char name[256];
+  utf8_clean(o->name ? o->name : "sylva", name, sizeof name);
+  int it = sylva_world_iteration(w);
+  int n = o->start_year ? snprintf(out, cap, "%s \xe2\x80\x94 %d (iteration %d)", name,
+                                   o->start_year + it, it)
+                        : snprintf(out, cap, "%s \xe2\x80\x94 iteration %d", name, it);
+  n += snprintf(out + n, cap - (size_t)n, " \xe2\x80\x94 %zu nodes", sylva_world_node_count(w));
+  const char *sep = " \xe2\x80\x94 ages ";
+  int listed = 0;
+  for (int p = 0; p < sylva_world_plant_count(w); p++) {
+    sylva_stem_stats st;
+    if (sylva_world_stem_stats(w, sylva_world_stem_index(w, p, 0), &st) != 0 || st.age < 0)
+      continue;
+    if (listed++ == RENDER_TITLE_AGES) {
+      snprintf(out + n, cap - (size_t)n, ", \xe2\x80\xa6");
+      break;
+    }
+    char label[SYLVA_LABEL_MAX];
+    utf8_clean(sylva_world_plant_label(w, p), label, sizeof label);
+    n += snprintf(out + n, cap - (size_t)n, "%s%s %" PRId32, sep, label, st.age);
+    sep = ", ";
+  }
+}
+
 static void draw(cairo_t *cr, const sylva_world *w, const render_options *o, const layout *l,
                  const segment *segs, size_t count) {
   cairo_set_source_rgb(cr, 1, 1, 1);
@@ -357,10 +386,8 @@ static void draw(cairo_t *cr, const sylva_world *w, const render_options *o, con
     panel p = {.l = l, .v = &views[l->view[k]], .k = k};
     draw_panel(cr, w, segs, count, &p);
   }
-  char name[256], title[512];
-  utf8_clean(o->name ? o->name : "sylva", name, sizeof name);
-  snprintf(title, sizeof title, "%s \xe2\x80\x94 iteration %d \xe2\x80\x94 %zu nodes", name,
-           sylva_world_iteration(w), sylva_world_node_count(w));
+  char title[1024];
+  title_text(w, o, title, sizeof title);
   cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
   set_font(cr, 15, true);
   put_text(cr, title, RENDER_MARGIN_LEFT, RENDER_TITLE_HEIGHT / 2, 0, 0.5);

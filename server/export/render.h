@@ -25,7 +25,9 @@
  * and the left (every multiple of a 1, 2 or 5 x 10^k metre step, the smallest
  * step that leaves at least RENDER_TICK_SPACING between ticks) and the axis names
  * ("x (m)", "z (m)", ...). Above everything, a title line: the name, the
- * iteration and the number of live nodes.
+ * iteration (after its calendar year with a start year), the number of live nodes
+ * and, in a world with years, the age of each plant of a species with years (the
+ * first RENDER_TITLE_AGES).
  *
  * The mapping from metres to the picture (pixels for PNG; points for SVG and PDF,
  * one point per pixel), with n panels, panel k spanning [u0_k, u1_k] x
@@ -67,6 +69,7 @@ typedef enum render_view { RENDER_FRONT, RENDER_SIDE, RENDER_TOP, RENDER_ALL } r
 #define RENDER_PANEL_TITLE_HEIGHT 26.0 /**< each panel's title, above it */
 #define RENDER_TICK_SPACING 50.0       /**< least distance between two ticks */
 #define RENDER_MIN_LINE 0.5            /**< thinnest internode */
+#define RENDER_TITLE_AGES 8            /**< plants whose ages the title lists */
 
 /** Widths a picture may have (and the greatest height); the least leaves room
  *  for the margins of three views. */
@@ -100,6 +103,7 @@ typedef struct render_options {
   render_view view;
   int width;        /**< RENDER_MIN_WIDTH..RENDER_MAX_SIZE; 0: RENDER_PANEL_WIDTH per panel */
   const char *name; /**< the run's or scenario's name, for the title */
+  int start_year;   /**< the scenario's start_year (0: none): the title's calendar year */
 } render_options;
 
 /** Draws w as o asks and writes the picture to f (flushed, not closed). Returns

@@ -36,7 +36,7 @@ sylva_species_def sylva_fit_base_species(double rho) {
   d.r_s = 0.5;
   d.apical_zone = 1;
   d.leaf_age = 3;
-  d.tau = 5;
+  d.tau = 0;
   d.initial_nodes = 2;
   d.growth.kind = SYLVA_EQ_LOGISTIC;
   d.growth.p[0] = 2.0;
@@ -415,14 +415,29 @@ typedef struct growth_fit {
   const sylva_fit_targets *t;
   double scale; /* internodes per metre of target height */
   int nursery, years;
+  double per_metre; /* internodes per metre of path */
+  double top;       /* the tallest target, internodes */
 } growth_fit;
 
-/* x = ln(X0 - 1), ln Xm, ln r: the path length at t = nursery + age against the
- * target height (X0 at least one internode above the root) */
+/* The liner's height X0 from its parameter: a whip of LINER_MIN to LINER_MAX metres. */
+#define LINER_MIN 0.5
+#define LINER_MAX 4.0
+static double liner(double p, double scale) {
+  return (LINER_MIN + (LINER_MAX - LINER_MIN) / (1.0 + exp(-p))) * scale;
+}
+
+/* The limit Xm from its parameter: from just above the tallest target to five times
+ * it (an unbounded Xm with a tiny r is a straight line that never bends over). */
+static double limit_of(double p, double top) {
+  return top * (1.02 + 3.98 / (1.0 + exp(-p)));
+}
+
+/* x = the liner's parameter, the limit's, ln r: the path length at t = nursery + age
+ * against the target height */
 static int growth_residuals(const gsl_vector *x, void *ctx, gsl_vector *f) {
   const growth_fit *g = ctx;
-  double x0 = 1.0 + exp(gsl_vector_get(x, 0));
-  double m = exp(gsl_vector_get(x, 1)), r = exp(gsl_vector_get(x, 2));
+  double x0 = liner(gsl_vector_get(x, 0), g->per_metre);
+  double m = limit_of(gsl_vector_get(x, 1), g->top), r = exp(gsl_vector_get(x, 2));
   for (int a = 0; a <= g->years; a++) {
     double y = g->t->at[a].height * g->scale;
     double v = m > x0 ? logistic(x0, m, r, (double)(g->nursery + a)) : 1e9;
@@ -436,22 +451,23 @@ static int growth_residuals(const gsl_vector *x, void *ctx, gsl_vector *f) {
  * age 0 in the nursery. Tries every nursery from NURSERY_MIN to NURSERY_MAX years
  * (or only *nursery when it is above 0) and keeps the best; returns 0 or
  * SYLVA_EINVAL. */
-enum { NURSERY_MIN = 2, NURSERY_MAX = 6 };
+enum { NURSERY_MIN = 2, NURSERY_MAX = 8 };
 static int fit_growth(const sylva_fit_targets *t, int years, double rho, double k, int *nursery,
                       sylva_equation *out) {
   double best = INFINITY;
   int lo = *nursery > 0 ? *nursery : NURSERY_MIN, hi = *nursery > 0 ? *nursery : NURSERY_MAX;
   for (int n = lo; n <= hi; n++) {
-    growth_fit g = {t, k / rho, n, years};
-    double top = t->at[years].height * g.scale, start = t->at[0].height * g.scale;
-    double x[3] = {log(start * 0.5 > 2.0 ? start * 0.5 - 1.0 : 1.0), log(top * 1.3), log(0.1)};
+    growth_fit g = {t, k / rho, n, years, 1.0 / rho, 0.0};
+    for (int a = 0; a <= years; a++)
+      if (t->at[a].height * g.scale > g.top) g.top = t->at[a].height * g.scale;
+    double x[3] = {-1.0, -1.0, log(0.1)};
     double sse = least_squares(growth_residuals, &g, (size_t)years + 1, 3, x);
     if (isfinite(sse) && sse < best) {
       best = sse;
       *nursery = n;
       out->kind = SYLVA_EQ_LOGISTIC;
-      out->p[0] = 1.0 + exp(x[0]);
-      out->p[1] = exp(x[1]);
+      out->p[0] = liner(x[0], g.per_metre);
+      out->p[1] = limit_of(x[1], g.top);
       out->p[2] = exp(x[2]);
     }
   }
@@ -470,10 +486,12 @@ typedef struct search {
   double k; /* the height's scale, found apart from the search (scale_height) */
 } search;
 
-/* Builds the species for a point of the search: gamma, and the height's scale. */
+/* Builds the species for a point of the search: the tropism's weight (below 0: the
+ * tropism points down, for crowns wider than tall), and the height's scale. */
 static int species_at(search *s, double gamma, double k, sylva_species_def *d) {
   *d = s->def;
-  d->gamma = gamma;
+  d->gamma = fabs(gamma);
+  d->tropism[2] = gamma < 0.0 ? -1.0 : 1.0;
   int n = s->nursery;
   int rc = fit_growth(s->t, s->years, d->rho, k, &n, &d->growth);
   d->nursery = n;
@@ -481,34 +499,39 @@ static int species_at(search *s, double gamma, double k, sylva_species_def *d) {
   return rc;
 }
 
-/* Mean squared log error of the crown diameter over the check ages. */
+/* Weighted mean squared log error of the crown diameter over the check ages: the
+ * decades up to 40 years, which planners ask about most, count four times as much
+ * as the other ages. */
 static double search_error(const sylva_fit_targets *t, const sylva_fit_targets *g,
                            const int *ages, int nages) {
-  double e = 0.0;
-  int n = 0;
+  double e = 0.0, n = 0.0;
   for (int i = 0; i < nages; i++) {
-    const sylva_fit_sizes *x = &g->at[ages[i]], *y = &t->at[ages[i]];
-    const double pairs[1][2] = {{x->crown_dia, y->crown_dia}};
-    for (int m = 0; m < 1; m++) {
-      if (!isfinite(pairs[m][1]) || pairs[m][1] <= 0.0) continue;
-      double v = pairs[m][0] > 1e-3 ? pairs[m][0] : 1e-3;
-      double l = log(v / pairs[m][1]);
-      e += l * l;
-      n++;
-    }
+    double want = t->at[ages[i]].crown_dia, got = g->at[ages[i]].crown_dia;
+    if (!isfinite(want) || want <= 0.0) continue;
+    double l = log((got > 1e-3 ? got : 1e-3) / want);
+    double w = ages[i] % 10 == 0 && ages[i] <= 40 ? 4.0 : 1.0;
+    e += w * l * l;
+    n += w;
   }
-  return n ? e / n : 0.0;
+  return n > 0.0 ? e / n : 0.0;
 }
+
+/* The tropism's signed weight searched: from down (-1) to three times up. */
+#define GAMMA_MIN (-1.0)
+#define GAMMA_MAX 3.0
 
 static double search_f(const gsl_vector *x, void *ctx) {
   search *s = ctx;
-  double gamma = gsl_vector_get(x, 0), k = s->k;
+  double gamma = gsl_vector_get(x, 0), mu = gsl_vector_get(x, 1), k = s->k;
   /* outside the box the error grows with the distance: the simplex turns back */
   double penalty = 0.0;
-  if (gamma < 0.0) penalty += gamma * gamma * 10.0, gamma = 0.0;
-  if (gamma > 3.0) penalty += (gamma - 3.0) * (gamma - 3.0) * 10.0, gamma = 3.0;
+  if (gamma < GAMMA_MIN) penalty += (GAMMA_MIN - gamma) * (GAMMA_MIN - gamma) * 10.0, gamma = GAMMA_MIN;
+  if (gamma > GAMMA_MAX) penalty += (gamma - GAMMA_MAX) * (gamma - GAMMA_MAX) * 10.0, gamma = GAMMA_MAX;
+  if (mu < 0.2) penalty += (0.2 - mu) * (0.2 - mu) * 10.0, mu = 0.2;
+  if (mu > 4.0) penalty += (mu - 4.0) * (mu - 4.0) * 10.0, mu = 4.0;
   sylva_species_def d;
   sylva_fit_targets g;
+  s->def.mu = mu;
   int rc = species_at(s, gamma, k, &d);
   if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
   s->evals++;
@@ -521,8 +544,8 @@ static double search_f(const gsl_vector *x, void *ctx) {
   if (e < s->best) s->best = e;
   if (s->o->progress) {
     char line[160];
-    snprintf(line, sizeof line, "fit: search %d/%d: gamma %.3f: error %.4f (best %.4f)", s->evals,
-             s->o->max_evals, gamma, e, s->best);
+    snprintf(line, sizeof line, "fit: search %d/%d: gamma %.3f, mu %.3f: error %.4f (best %.4f)",
+             s->evals, s->o->max_evals, gamma, mu, e, s->best);
     s->o->progress(s->o->ctx, line);
   }
   return e;
@@ -601,9 +624,9 @@ static int scale_height(search *s, double gamma, int rounds) {
     s->k *= f;
     if (s->k < 0.5) s->k = 0.5;
     if (s->k > 2.5) s->k = 2.5;
-    s->def.lift += lift;
+    s->def.lift += 0.7 * lift; /* damped: the crown base follows the lift unevenly */
     if (s->def.lift < 0.0) s->def.lift = 0.0;
-    if (s->def.lift > 0.8) s->def.lift = 0.8;
+    if (s->def.lift > 0.6) s->def.lift = 0.6;
     progress(s->o, "fit: height's scale %.3f (grown / target %.3f), lift %.3f", s->k, 1.0 / f,
              s->def.lift);
   }
@@ -644,7 +667,7 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
     if (z->height > 0.0 && isfinite(z->crown_ht)) ratios[nr++] = 1.0 - z->crown_ht / z->height;
   }
   double lift = nr ? median(ratios, nr) : 0.3;
-  s.def.lift = lift < 0.0 ? 0.0 : lift > 0.8 ? 0.8 : lift;
+  s.def.lift = lift < 0.0 ? 0.0 : lift > 0.6 ? 0.6 : lift;
   /* the nursery years, once, from the height curve as the data give it */
   int rc = fit_growth(t, years, o.rho, 1.0, &s.nursery, &s.def.growth);
   if (rc) {
@@ -661,9 +684,9 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
     fail(err, errlen, rc == SYLVA_ENOMEM ? "out of memory" : "growing the species failed");
     return rc;
   }
-  gsl_multimin_function fn = {.f = search_f, .n = 1, .params = &s};
-  gsl_multimin_fminimizer *m = gsl_multimin_fminimizer_alloc(gsl_multimin_fminimizer_nmsimplex2, 1);
-  gsl_vector *x = gsl_vector_alloc(1), *step = gsl_vector_alloc(1);
+  gsl_multimin_function fn = {.f = search_f, .n = 2, .params = &s};
+  gsl_multimin_fminimizer *m = gsl_multimin_fminimizer_alloc(gsl_multimin_fminimizer_nmsimplex2, 2);
+  gsl_vector *x = gsl_vector_alloc(2), *step = gsl_vector_alloc(2);
   if (!m || !x || !step) {
     gsl_multimin_fminimizer_free(m);
     gsl_vector_free(x);
@@ -672,13 +695,15 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
     return SYLVA_ENOMEM;
   }
   gsl_vector_set(x, 0, s.def.gamma);
+  gsl_vector_set(x, 1, s.def.mu);
   gsl_vector_set(step, 0, 0.25);
+  gsl_vector_set(step, 1, 0.5);
   gsl_multimin_fminimizer_set(m, &fn, x, step);
   while (s.evals < o.max_evals && !s.rc) {
     if (gsl_multimin_fminimizer_iterate(m) != GSL_SUCCESS) break;
     if (gsl_multimin_test_size(gsl_multimin_fminimizer_size(m), 0.01) == GSL_SUCCESS) break;
   }
-  double gamma = gsl_vector_get(m->x, 0);
+  double gamma = gsl_vector_get(m->x, 0), mu = gsl_vector_get(m->x, 1);
   gsl_multimin_fminimizer_free(m);
   gsl_vector_free(x);
   gsl_vector_free(step);
@@ -686,8 +711,9 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
     fail(err, errlen, "out of memory");
     return s.rc;
   }
-  if (gamma < 0.0) gamma = 0.0;
-  if (gamma > 3.0) gamma = 3.0;
+  if (gamma < GAMMA_MIN) gamma = GAMMA_MIN;
+  if (gamma > GAMMA_MAX) gamma = GAMMA_MAX;
+  s.def.mu = mu < 0.2 ? 0.2 : mu > 4.0 ? 4.0 : mu;
   rc = scale_height(&s, gamma, 2);
   sylva_species_def d;
   if (!rc) rc = species_at(&s, gamma, s.k, &d);
@@ -723,9 +749,9 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   out->grown.first = t->first;
   out->evaluations = s.trees;
   decade_errors(t, &g, years, out->max_error);
-  progress(&o, "fit: gamma %.3f, height x%.3f, r_tip %.4f m, pipe exponent %.2f; largest error "
+  progress(&o, "fit: gamma %.3f, mu %.3f, height x%.3f, r_tip %.4f m, pipe exponent %.2f; largest error "
            "over the decades: height %.0f%%, dbh %.0f%%, crown diameter %.0f%%, crown height %.0f%%",
-           d.gamma, s.k, d.r_tip, d.pipe_exponent, 100 * out->max_error[0], 100 * out->max_error[1],
+           d.gamma * d.tropism[2], d.mu, s.k, d.r_tip, d.pipe_exponent, 100 * out->max_error[0], 100 * out->max_error[1],
            100 * out->max_error[2], 100 * out->max_error[3]);
   return SYLVA_OK;
 }

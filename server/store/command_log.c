@@ -32,15 +32,21 @@ static cJSON *encode_plant(const edit_plant *p) {
             cJSON_AddStringToObject(obj, "species", p->species) &&
             (roots = cJSON_AddArrayToObject(obj, "roots"));
   for (int i = 0; ok && i < p->root_count; i++) ok = cJSON_AddItemToArray(roots, vec3(p->roots[i]));
+  if (ok && p->age) ok = cJSON_AddNumberToObject(obj, "age", p->age) != NULL;
   if (ok) return obj;
   cJSON_Delete(obj);
   return NULL;
 }
 
 char *command_log_encode(const edit *e) {
+  /* the oldest format that holds the edit: stores without ages keep their bytes, and
+   * older builds still read them */
+  int format = 2;
+  for (int i = 0; i < e->plant_count; i++)
+    if (e->plants[i].age) format = 3;
   cJSON *root = cJSON_CreateObject();
   cJSON *removals = NULL, *obstacles = NULL, *plants = NULL;
-  bool ok = root && cJSON_AddNumberToObject(root, "format", COMMAND_LOG_FORMAT) &&
+  bool ok = root && cJSON_AddNumberToObject(root, "format", format) &&
             cJSON_AddStringToObject(root, "command", "edit") &&
             (removals = cJSON_AddArrayToObject(root, "remove_obstacles")) &&
             (obstacles = cJSON_AddArrayToObject(root, "add_obstacles")) &&
@@ -159,11 +165,20 @@ static int read_obstacle(reader *r, const cJSON *item, edit_obstacle *o) {
 }
 
 static int read_plant(reader *r, const cJSON *item, edit_plant *p) {
-  static const char *const keys[] = {"id", "species", "roots"};
+  static const char *const keys[] = {"id", "species", "roots", "age"};
   char base[sizeof r->ptr];
   memcpy(base, r->ptr, sizeof base);
   if (!cJSON_IsObject(item)) return bad(r, "expected an object");
-  int rc = check_keys(r, item, keys, 3);
+  int rc = check_keys(r, item, keys, r->format >= 3 ? 4 : 3); /* age: format 3 on */
+  const cJSON *age = cJSON_GetObjectItemCaseSensitive(item, "age");
+  at(r, base, "age", 0);
+  if (!rc && age) {
+    double v = cJSON_IsNumber(age) ? age->valuedouble : -1;
+    if (v != floor(v) || v < 0 || v > SYLVA_MAX_AGE)
+      rc = bad(r, "expected an integer from 0 to %d", SYLVA_MAX_AGE);
+    else
+      p->age = (int)v;
+  }
   at(r, base, "id", 0);
   if (!rc) rc = read_label(r, cJSON_GetObjectItemCaseSensitive(item, "id"), &p->id);
   at(r, base, "species", 0);

@@ -86,7 +86,13 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
       sylva_world_destroy(copy);
       return SYLVA_EINVAL;
     }
-    sylva_plant_def def = {species, p->id, (const double(*)[3])p->roots, p->root_count, 0};
+    if (p->age > 0 && !sylva_world_species(copy, species)->years) {
+      snprintf(err, errlen, "/add_plants/%d/age: species \"%s\" has no time scale (years)", i,
+               p->species);
+      sylva_world_destroy(copy);
+      return SYLVA_EINVAL;
+    }
+    sylva_plant_def def = {species, p->id, (const double(*)[3])p->roots, p->root_count, p->age};
     int bad = -1;
     rc = sylva_world_add_plant(copy, &def, &bad);
     if (rc < 0) {

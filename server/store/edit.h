@@ -10,11 +10,13 @@
 
 #include "sylva/world.h"
 
-/** A plant to add: its label, its species' label and its roots. */
+/** A plant to add: its label, its species' label, its roots and its age. */
 typedef struct edit_plant {
   char *id, *species;
   double (*roots)[3];
   int root_count;
+  int age; /**< years at planting (0 to SYLVA_MAX_AGE); above 0 only for a
+                species with years */
 } edit_plant;
 
 /** An obstacle to add: a solid box or a clearance zone. */

@@ -135,6 +135,11 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "ALTER TABLE stats ADD COLUMN pruned INTEGER;"
     "ALTER TABLE stats ADD COLUMN zones TEXT;"
     "ALTER TABLE stats ADD COLUMN clearance TEXT;",
+    /* 2 -> 3: years (docs/store.md): the scenario's start year, NULL without one;
+     * ages, NULL for species without years */
+    "ALTER TABLE stats ADD COLUMN age INTEGER;"
+    "ALTER TABLE stats ADD COLUMN crown_height REAL;"
+    "ALTER TABLE runs ADD COLUMN start_year INTEGER;",
 };
 
 static int migrate(store *st) {
@@ -272,8 +277,9 @@ static int create_run_unlocked(store *st, const char *name, const char *scenario
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO runs (name, scenario, seed, iterations, snapshot_every,"
-                         " status, reason, created, updated)"
-                         " VALUES (?, ?, ?, ?, ?, 'running', NULL, ?, ?)",
+                         " status, reason, created, updated, start_year)"
+                         " VALUES (?1, ?2, ?3, ?4, ?5, 'running', NULL, ?6, ?7,"
+                         " json_extract(CASE WHEN json_valid(?2) THEN ?2 END, '$.start_year'))",
                          -1, &q, NULL) != SQLITE_OK) {
     rollback(st);
     return fail(st, "creating run \"%s\"", name);
@@ -321,6 +327,12 @@ static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
   snprintf(out, n, "%s", t ? (const char *)t : "");
 }
 
+/* Whether the scenario of run r has a species that counts in years (the canonical
+ * JSON writes "years" only when it is 1). */
+#define SCENARIO_YEARS                                                                      \
+  "CASE WHEN json_valid(r.scenario) THEN EXISTS (SELECT 1 FROM json_each(r.scenario,"       \
+  " '$.species') sp WHERE json_extract(sp.value, '$.years') = 1) ELSE 0 END"
+
 #define RUN_COLUMNS                                                                         \
   "SELECT r.id, r.name, r.scenario, r.seed, r.iterations, r.snapshot_every, r.status,"      \
   " r.reason, r.created, r.updated,"                                                        \
@@ -334,7 +346,8 @@ static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
   "   WHERE s.run = r.id AND s.iteration = (SELECT max(iteration) FROM stats t"             \
   "   WHERE t.run = r.id)),"                                                                \
   " (SELECT count(*) FROM stats s, json_each(s.zones) z WHERE s.run = r.id AND"             \
-  "   s.iteration = (SELECT max(iteration) FROM stats t WHERE t.run = r.id))"               \
+  "   s.iteration = (SELECT max(iteration) FROM stats t WHERE t.run = r.id)),"              \
+  " r.start_year, " SCENARIO_YEARS                                                          \
   " FROM runs r"
 
 static int read_run(sqlite3_stmt *q, store_run *r) {
@@ -358,6 +371,8 @@ static int read_run(sqlite3_stmt *q, store_run *r) {
   r->reports_conflicts = sqlite3_column_int(q, 13) > 0;
   r->zone_nodes = (int64_t)sqlite3_column_double(q, 14);
   r->zone_pairs = sqlite3_column_int64(q, 15);
+  r->start_year = sqlite3_column_int(q, 16);
+  r->years = sqlite3_column_int(q, 17) != 0;
   return r->name && r->scenario ? 0 : SERVER_EFAIL;
 }
 
@@ -439,12 +454,32 @@ static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
     sqlite3_bind_double(q, col, v);
 }
 
+static int run_calendar_unlocked(store *st, int64_t run, int *start_year, bool *years) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "SELECT r.start_year, " SCENARIO_YEARS " FROM runs r WHERE r.id = ?", -1,
+                         &q, NULL) != SQLITE_OK)
+    return fail(st, "reading a run's start year");
+  sqlite3_bind_int64(q, 1, run);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW) {
+    *start_year = sqlite3_column_int(q, 0);
+    if (years) *years = sqlite3_column_int(q, 1) != 0;
+  }
+  sqlite3_finalize(q);
+  return rc == SQLITE_ROW ? SERVER_OK : fail(st, "reading a run's start year");
+}
+
 static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
                                    const sylva_journal *j, bool snapshot) {
   int it = j->iteration;
   char now[32], what[64];
   utc_now(now);
   snprintf(what, sizeof what, "storing iteration %d", it);
+  /* zone entries are dated as the run's lines date them: in years from its start year */
+  int start_year = 0;
+  if (sylva_world_reports_conflicts(w) && run_calendar_unlocked(st, run, &start_year, NULL))
+    return SERVER_EFAIL;
   if (exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
   if (insert_iteration(st, run, w, snapshot)) {
     rollback(st);
@@ -454,8 +489,8 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO stats (run, iteration, stem, plant, plant_stem, height, dbh,"
                          " crown_width, crown_base, nodes, shed, light, cap, finished, pruned,"
-                         " zones, clearance)"
-                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                         " zones, clearance, age, crown_height)"
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     fail(st, "storing iteration %d", it);
     rollback(st);
@@ -480,9 +515,14 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
     sqlite3_bind_int(q, 14, s->finished);
     char *zones = NULL, *clearance = NULL;
     bool ok = true;
+    if (s->age >= 0)
+      sqlite3_bind_int(q, 18, s->age);
+    else
+      sqlite3_bind_null(q, 18);
+    bind_real_or_null(q, 19, s->crown_height);
     if (sylva_world_reports_conflicts(w)) {
-      zones = sylva_encode_stem_conflicts(w, (int)k, false);
-      clearance = sylva_encode_stem_conflicts(w, (int)k, true);
+      zones = sylva_encode_stem_conflicts(w, (int)k, false, start_year);
+      clearance = sylva_encode_stem_conflicts(w, (int)k, true, start_year);
       ok = zones && clearance;
       sqlite3_bind_int64(q, 15, s->pruned);
       sqlite3_bind_text(q, 16, zones, -1, SQLITE_TRANSIENT);
@@ -758,8 +798,8 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
                                int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
   sqlite3_stmt *q;
   if (prepare_run(st, "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
-                      " crown_base, nodes, shed, light, cap, finished, pruned, zones, clearance"
-                      " FROM stats"
+                      " crown_base, nodes, shed, light, cap, finished, pruned, zones, clearance,"
+                      " age, crown_height FROM stats"
                       " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
                   run, to, &q))
     return fail(st, "reading stats");
@@ -782,6 +822,8 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
         .pruned = sqlite3_column_type(q, 13) == SQLITE_NULL ? -1 : sqlite3_column_int64(q, 13),
         .zones = (const char *)sqlite3_column_text(q, 14),
         .clearance = (const char *)sqlite3_column_text(q, 15),
+        .age = sqlite3_column_type(q, 16) == SQLITE_NULL ? -1 : sqlite3_column_int(q, 16),
+        .crown_height = column_real(q, 17),
     };
     if (!r.plant) r.plant = "";
     if (fn(&r, ctx)) {
@@ -792,6 +834,29 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
   }
   sqlite3_finalize(q);
   return rc == SQLITE_DONE ? 0 : fail(st, "reading stats");
+}
+
+static int each_age_unlocked(store *st,
+                             int (*fn)(int64_t run, const char *plant, int age, void *ctx),
+                             void *ctx) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db,
+                         "SELECT r.id, s.plant, s.age FROM runs r JOIN stats s ON s.run = r.id AND"
+                         " s.iteration = (SELECT max(iteration) FROM stats t WHERE t.run = r.id)"
+                         " WHERE s.plant_stem = 0 AND s.age IS NOT NULL ORDER BY r.id, s.stem",
+                         -1, &q, NULL) != SQLITE_OK)
+    return fail(st, "reading ages");
+  int rc;
+  while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
+    const char *plant = (const char *)sqlite3_column_text(q, 1);
+    if (fn(sqlite3_column_int64(q, 0), plant ? plant : "", sqlite3_column_int(q, 2), ctx)) {
+      sqlite3_finalize(q);
+      snprintf(last_error, sizeof last_error, "%s: reading ages: stopped", st->path);
+      return SERVER_EFAIL;
+    }
+  }
+  sqlite3_finalize(q);
+  return rc == SQLITE_DONE ? 0 : fail(st, "reading ages");
 }
 
 /* ---- commands ------------------------------------------------------------------ */
@@ -880,6 +945,15 @@ int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e
 
 int store_run_scenario(store *st, int64_t run, char **json) {
   LOCKED(st, run_scenario_unlocked(st, run, json));
+}
+
+int store_run_calendar(store *st, int64_t run, int *start_year, bool *years) {
+  LOCKED(st, run_calendar_unlocked(st, run, start_year, years));
+}
+
+int store_each_age(store *st, int (*fn)(int64_t run, const char *plant, int age, void *ctx),
+                   void *ctx) {
+  LOCKED(st, each_age_unlocked(st, fn, ctx));
 }
 
 int store_each_stats(store *st, int64_t run, int to,

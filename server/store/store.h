@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 2
+#define STORE_SCHEMA_VERSION 3
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 
@@ -54,6 +54,8 @@ typedef struct store_run {
    * them, the nodes inside its zones, and the stem and zone pairs that ever met */
   bool reports_conflicts;
   int64_t zone_nodes, zone_pairs;
+  int start_year;     /**< the scenario's start_year; 0 when it gives none */
+  bool years;         /**< a species of the scenario counts in years (stats carry ages) */
 } store_run;
 
 /** Opens (create: also creates) a store file and brings its schema up to date
@@ -116,6 +118,10 @@ int store_apply_edit(store *st, int64_t run, const sylva_world *w, const edit *e
 /** The scenario JSON of a run (malloc'd), for forks. */
 int store_run_scenario(store *st, int64_t run, char **json);
 
+/** A run's calendar: the scenario's start_year (0: none) and whether a species of it
+ *  counts in years (store_run's start_year and years). */
+int store_run_calendar(store *st, int64_t run, int *start_year, bool *years);
+
 /** One stored stats row. */
 typedef struct store_stats_row {
   int iteration, stem, plant_stem, cap;
@@ -125,6 +131,10 @@ typedef struct store_stats_row {
   bool finished;
   int64_t pruned;                /**< -1 where the run does not report conflicts */
   const char *zones, *clearance; /**< compact JSON objects, or NULL (as pruned) */
+  int age;                       /**< the stem's age in years (its plant's age at
+                                      planting and the seasons since); -1 where null
+                                      (a species without years) */
+  double crown_height;           /**< NaN where null */
 } store_stats_row;
 
 /** Calls fn for every stats row of a run up to iteration `to`, in iteration then
@@ -132,6 +142,12 @@ typedef struct store_stats_row {
  *  The store stays locked meanwhile: fn must not call it. */
 int store_each_stats(store *st, int64_t run, int to,
                      int (*fn)(const store_stats_row *row, void *ctx), void *ctx);
+
+/** Calls fn for the age of every plant of a years species at the last stored
+ *  iteration of its run (its first stem's `age`), in run then stem order; fn returns
+ *  0 to go on. Plants an edit added show from the next stored iteration. */
+int store_each_age(store *st, int (*fn)(int64_t run, const char *plant, int age, void *ctx),
+                   void *ctx);
 
 /** Appends a command record (command_log.h) applied to a run after iteration
  *  `iteration`. */

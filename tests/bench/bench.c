@@ -12,7 +12,11 @@
  * adds, finds by label, copies (a snapshot saved and loaded, as the daemon's edits
  * do) and removes by id --edits N obstacles (100,000 by default).
  *
- *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles] [--scenarios DIR]
+ * "years" grows library species in years (issue 20): a street of ten trees and a
+ * hectare of 400, each 40 years; "street10" the street alone.
+ *
+ *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles|years|street10]
+ *         [--scenarios DIR]
  *         [--edits N] */
 #include <math.h>
 #include <stdio.h>
@@ -171,22 +175,26 @@ static void street(const char *dir) {
          (double)voxels / 1048576.0);
 }
 
-/* A world of `rows` x `rows` igm-fig17b trees `spacing` metres apart. */
-static sylva_world *generated_stand(int rows, double spacing) {
+/* A world of `rows` x `rows` trees of a preset `spacing` metres apart, `height`
+ * metres high, at the preset's voxel rule (rho / 2). */
+static sylva_world *stand_of(const char *preset, int rows, double spacing, double height) {
+  sylva_species_def sp;
+  if (sylva_preset_find(preset, &sp)) {
+    fprintf(stderr, "bench: no preset %s\n", preset);
+    exit(1);
+  }
   sylva_world_def d = sylva_default_world_def();
   double half = rows * spacing / 2.0 + 3.0;
   d.min[0] = d.min[1] = -half;
   d.max[0] = d.max[1] = half;
-  d.max[2] = 14.0;
-  d.voxel = 0.05;
+  d.max[2] = height;
+  d.voxel = sp.rho / 2.0;
   d.seed = 2024;
   d.clock = now;
   sylva_world *w;
   if (sylva_world_create(&d, &w)) exit(1);
-  sylva_species_def sp;
-  if (sylva_preset_find("igm-fig17b", &sp)) exit(1);
-  sp.tropism[2] = 1.0; /* upright, as the ready scenarios */
-  int s = sylva_world_add_species(w, &sp, "fig17b");
+  sp.tropism[2] = sp.tropism[2] < 0.0 ? sp.tropism[2] : 1.0; /* upright, as the scenarios */
+  int s = sylva_world_add_species(w, &sp, preset);
   for (int i = 0; i < rows * rows; i++) {
     double root[1][3] = {{(i % rows - (rows - 1) / 2.0) * spacing, (i / rows - (rows - 1) / 2.0) * spacing, 0}};
     char label[16];
@@ -214,6 +222,28 @@ static sylva_world *single(const char *preset) {
   sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1, 0};
   if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
   return w;
+}
+
+/* A world of `rows` x `rows` igm-fig17b trees `spacing` metres apart. */
+static sylva_world *generated_stand(int rows, double spacing) {
+  return stand_of("igm-fig17b", rows, spacing, 14.0);
+}
+
+/* Library species in years (issue 20): scenarios/street.json's street of library
+ * trees, and a hectare of 400 trees 5 m apart, each grown 40 years; the time and the
+ * peak memory of each. */
+static void years(const char *dir, bool street_only) {
+  int limit;
+  sylva_world *w = from_file(dir, "street-ten.json", &limit);
+  sylva_world_set_clock(w, now, NULL);
+  summary s = grow("a street of 10 library trees, 40 years (scenarios/street-ten.json)", w, 40, 0);
+  report(&s);
+  sylva_world_destroy(w);
+  if (street_only) return;
+  w = stand_of("utdb:NoEast:TICO", 20, 5.0, 30.0);
+  s = grow("a hectare of 400 library trees (utdb:NoEast:TICO, 5 m apart), 40 years", w, 40, 0);
+  report(&s);
+  sylva_world_destroy(w);
 }
 
 /* Shading one internode at heights from 1 to 20 m: the cost must not grow. */
@@ -419,6 +449,8 @@ int main(int argc, char **argv) {
     sylva_world_destroy(w);
   }
   if (all || strcmp(what, "street") == 0) street(dir);
+  if (all || strcmp(what, "years") == 0 || strcmp(what, "street10") == 0)
+    years(dir, strcmp(what, "street10") == 0);
   if (all || strcmp(what, "store5") == 0) {
     int limit;
     sylva_world *w = from_file(dir, "stand.json", &limit);

@@ -5,7 +5,8 @@
   exit status exactly 2, and stderr contains each substring listed for the file
   in bad/EXPECT.tsv (file<TAB>substring[<TAB>...]);
 - every JSONTestSuite file (none is a scenario): exit status 2;
-- every scenarios/*.json: exit status 0 and "ok: ..." on stdout;
+- every scenarios/*.json: exit status 0 and "ok: ..." on stdout; the test
+  scenario of years (tests/scenario/years.json) too, naming its start year;
 - truncated and byte-flipped copies of the scenarios (a fixed pseudo-random
   sample): exit status 0 or 2.
 Nothing may crash: a signal, an exit status >= 128, or sanitizer text on stderr
@@ -76,12 +77,13 @@ def check_not_scenario(sylva, path):
     return None
 
 
-def check_good(sylva, path):
+def check_good(sylva, path, says=""):
+    """Exit status 0 and "ok: ..." (holding `says`) on stdout."""
     rc, out, err = run_validate(sylva, path)
     crash = crash_text(rc, err)
     if crash:
         return "%s\n    stderr: %s" % (crash, err.strip()[:2000])
-    if rc != 0 or not out.startswith("ok: "):
+    if rc != 0 or not out.startswith("ok: ") or says not in out:
         return "exit status %s, expected 0 and 'ok: ...'\n    stdout: %s\n    stderr: %s" % (
             rc, out.strip(), err.strip())
     return None
@@ -125,6 +127,8 @@ def main():
     suite_jobs(args.suite, jobs, failures)
     tmp = tempfile.TemporaryDirectory(prefix="sylva-fuzz-")
     scenario_jobs(args.scenarios, tmp.name, jobs, failures)
+    years = os.path.join(args.scenarios, os.pardir, "tests", "scenario", "years.json")
+    jobs.append(("tests/scenario/years.json", check_good, (years, ", start year 2027, ")))
     passed = run_jobs(args.sylva, jobs, failures)
     tmp.cleanup()
 

@@ -65,7 +65,8 @@ static void roundtrip(const char *path) {
       int r1 = sylva_world_step(wa, &j1), r2 = sylva_world_step(wb, &j2);
       EXPECT(r1 == 0 && r2 == 0, "%s: step %d: %d %d", path, t + 1, r1, r2);
       if (r1 || r2) break;
-      char *l1 = sylva_encode_stats_line(wa, j1, 0), *l2 = sylva_encode_stats_line(wb, j2, 0);
+      char *l1 = sylva_encode_stats_line(wa, j1, 0, a->start_year),
+           *l2 = sylva_encode_stats_line(wb, j2, 0, b->start_year);
       EXPECT(l1 && l2 && strcmp(l1, l2) == 0, "%s: stats lines differ:\n%s\n%s", path,
              l1 ? l1 : "(null)", l2 ? l2 : "(null)");
       if (l1) {
@@ -246,7 +247,7 @@ static void test_odd_label(void) {
   if (w) {
     const sylva_journal *j;
     EXPECT(sylva_world_step(w, &j) == 0, "step");
-    char *line = sylva_encode_stats_line(w, j, 12.46);
+    char *line = sylva_encode_stats_line(w, j, 12.46, 0);
     EXPECT(line && strstr(line, "{\"iteration\": 1, \"elapsed_ms\": 12.5, \"stems\": [{\"plant\": "
                                 "\"a\\\"b\\\\c\\nd\", \"stem\": 0, \"height\": ") == line,
            "%s", line ? line : "(null)");
@@ -288,6 +289,62 @@ static void test_light(void) {
   sylva_scenario_free(z);
 }
 
+/* Years (tests/scenario/years.json, beside the shipped scenarios): the round trip;
+ * start_year and a plant's age in the canonical form and read back; the IGM
+ * species' canonical form without the keys of real species; the stats line's year,
+ * ages (null for the IGM tree) and crown diameter. */
+static void test_years(void) {
+  char path[4096];
+  snprintf(path, sizeof path, "%s/../tests/scenario/years.json", scenario_dir);
+  roundtrip(path);
+  size_t len;
+  char *text = read_file(path, &len);
+  EXPECT(text != NULL, "%s: cannot read", path);
+  sylva_scenario *s = text ? parse_ok(path, text, len) : NULL;
+  free(text);
+  if (!s) return;
+  EXPECT(s->start_year == 2027, "start_year %d", s->start_year);
+  EXPECT(s->plant_count == 3 && s->plants[0].age == 0 && s->plants[1].age == 3 &&
+             s->plants[2].age == 0,
+         "ages");
+  EXPECT(s->species[0].def.years == 1 && s->species[1].def.years == 0, "years");
+  char *json = sylva_scenario_json(s);
+  EXPECT(json && strstr(json, "\"iterations\": 8,\n  \"start_year\": 2027,\n  \"world\": "),
+         "canonical start_year: %s", json ? json : "(null)");
+  EXPECT(json && strstr(json, "\"roots\": [[1.5, 0, 0]], \"age\": 3}") &&
+             strstr(json, "\"roots\": [[-1.5, 0, 0]]}"),
+         "canonical ages: %s", json ? json : "(null)");
+  /* the years species says so; the other keys of real species are at their
+   * defaults, and the IGM species carries none of them */
+  const char *oak = json ? strstr(json, "\"oak\": {") : NULL;
+  EXPECT(json && strstr(json, "\"years\": 1") && !strstr(json, "\"nursery\"") &&
+             !strstr(json, "\"ref_rho\"") && !strstr(json, "\"acclimation\"") &&
+             !strstr(json, "\"shade_weight\"") && !strstr(json, "\"lift\"") && oak &&
+             !strstr(oak, "\"years\""),
+         "canonical species: %s", json ? json : "(null)");
+  free(json);
+  sylva_world *w = NULL;
+  char err[256] = "";
+  EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
+  if (w) {
+    const sylva_journal *j;
+    EXPECT(sylva_world_step(w, &j) == 0, "step");
+    char *line = sylva_encode_stats_line(w, j, 0, s->start_year);
+    EXPECT(line && strstr(line, "{\"iteration\": 1, \"year\": 2028, \"elapsed_ms\": 0, ") == line &&
+               strstr(line, "\"plant\": \"young\", \"stem\": 0, \"age\": 1, \"height\": ") &&
+               strstr(line, "\"plant\": \"old\", \"stem\": 0, \"age\": 4, \"height\": ") &&
+               strstr(line, "\"plant\": \"igm\", \"stem\": 0, \"age\": null, \"height\": "),
+           "%s", line ? line : "(null)");
+    char width[SYLVA_FMT_BUFSIZE], want[2 * SYLVA_FMT_BUFSIZE + 64];
+    sylva_fmt_fixed(width, sizeof width, j->stats[0].crown_width, 4);
+    snprintf(want, sizeof want, "\"crown_width\": %s, \"crown_diameter\": %s, ", width, width);
+    EXPECT(line && strstr(line, want), "%s in %s", want, line ? line : "(null)");
+    free(line);
+    sylva_world_destroy(w);
+  }
+  sylva_scenario_free(s);
+}
+
 int main(int argc, char **argv) {
   if (argc != 2 && argc != 3) {
     fprintf(stderr, "usage: %s SCENARIO_DIR [TEST]\n", argv[0]);
@@ -298,7 +355,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(defaults), CHECK_TEST(species_resolution), CHECK_TEST(presets),
       CHECK_TEST(parse_errors), CHECK_TEST(no_plants), CHECK_TEST(fmt_fixed),
       CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label), CHECK_TEST(light),
-      CHECK_TEST(shipped_scenarios)};
+      CHECK_TEST(shipped_scenarios), CHECK_TEST(years)};
   CHECK_RUN(argc, argv, 2, tests);
   return check_summary("scenario-roundtrip");
 }

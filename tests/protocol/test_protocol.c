@@ -263,6 +263,7 @@ static void test_valid_edit(void) {
       CHECK_INT(m.add_plants[0].root_count, 2);
       CHECK(m.add_plants[0].roots[1][0] == 1.5);
       CHECK_INT(m.add_plants[1].root_count, 1);
+      CHECK_INT(m.add_plants[0].age, 0);
     }
     CHECK_INT(m.add_obstacle_count, 1);
     if (m.add_obstacle_count == 1) {
@@ -272,6 +273,13 @@ static void test_valid_edit(void) {
     CHECK_INT(m.remove_obstacle_count, 2);
     if (m.remove_obstacle_count == 2) CHECK_STR(m.remove_obstacles[1], "fence");
   }
+  sylva_msg_free(&m);
+  /* a plant's age in years (a species with years: the daemon checks it) */
+  if (PARSE_OK("{\"type\":\"edit\",\"run\":4,\"add_plants\":[{\"id\":\"lime\",\"species\":\"l\","
+               "\"roots\":[[0,0,0]],\"age\":12}]}",
+               &m) &&
+      m.add_plant_count == 1)
+    CHECK_INT(m.add_plants[0].age, 12);
   sylva_msg_free(&m);
   if (PARSE_OK("{\"type\":\"edit\",\"run\":4,\"add_plants\":[],\"add_obstacles\":[],\"remove_"
                "obstacles\":[]}",
@@ -525,6 +533,18 @@ static void test_invalid_edit_plants(void) {
             "{\"id\":\"b\",\"species\":\"o\",\"roots\":[[1,0,0]]},{\"id\":\"a\",\"species\":\"o\","
             "\"roots\":[[2,0,0]]}]}",
             "/add_plants/2/id: duplicate plant id \"a\" (also /add_plants/0/id)");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+            "\"roots\":[[0,0,0]],\"age\":501}]}",
+            "/add_plants/0/age: must be in [0, 500], got 501");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+            "\"roots\":[[0,0,0]],\"age\":-2}]}",
+            "/add_plants/0/age: must be in [0, 500], got -2");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+            "\"roots\":[[0,0,0]],\"age\":2.5}]}",
+            "/add_plants/0/age: must be an integer, got 2.5");
+  PARSE_BAD("{\"type\":\"edit\",\"run\":1,\"add_plants\":[{\"id\":\"a\",\"species\":\"o\","
+            "\"roots\":[[0,0,0]],\"age\":\"3\"}]}",
+            "/add_plants/0/age: expected a number, got a string");
 }
 
 /* edit's add_obstacles: boxes, max above min, unique ids; remove_obstacles: unique ids. */
@@ -870,14 +890,14 @@ static void test_encode_created(void) {
 /* status: runs beyond 2^53, each status by its one name (run_status.h), parsed back. */
 static void test_encode_status(void) {
   check_encoded(
-      sylva_msg_status(9007199254740992LL, SYLVA_RUN_PAUSED, 12, NULL),
+      sylva_msg_status(9007199254740992LL, SYLVA_RUN_PAUSED, 12, 0, NULL),
       "{\"type\":\"status\",\"run\":9007199254740992,\"status\":\"paused\",\"iteration\":12}");
   static const char *const statuses[] = {"paused", "running", "finished", "failed"};
   for (int i = 0; i < 4; i++) {
     sylva_run_status parsed;
     CHECK_INT(sylva_run_status_parse(statuses[i], &parsed), 0);
     CHECK_INT(parsed, i);
-    char *text = sylva_msg_status(2, (sylva_run_status)i, i, "5");
+    char *text = sylva_msg_status(2, (sylva_run_status)i, i, 0, "5");
     cJSON *j = VALID_JSON(text);
     if (j) {
       CHECK_STR(str_of(j, "status"), statuses[i]);
@@ -887,6 +907,10 @@ static void test_encode_status(void) {
     cJSON_Delete(j);
     free(text);
   }
+  /* a run with a start year says it */
+  check_encoded(sylva_msg_status(2, SYLVA_RUN_RUNNING, 5, 2027, "\"s\""),
+                "{\"type\":\"status\",\"run\":2,\"status\":\"running\",\"iteration\":5,"
+                "\"start_year\":2027,\"ref\":\"s\"}");
   sylva_run_status none;
   CHECK_INT(sylva_run_status_parse("stopped", &none), -1);
   CHECK_STR(sylva_run_status_name((sylva_run_status)99), "unknown");
@@ -1120,17 +1144,25 @@ static void check_snapshot_matches_skeleton(const char *snapshot, const sylva_wo
   free(skeleton);
 }
 
-/* The world of the snapshot tests: a wall, a tree and a two-root shrub of one
- * species, and a species no plant uses yet (still offered; its label needs escaping). */
-static sylva_world *snapshot_world(void) {
+/* A default world with one upright species, "oak" (species 0); *sp is its def. */
+static sylva_world *oak_world(sylva_species_def *sp) {
   sylva_world_def def = sylva_default_world_def();
   sylva_world *w = NULL;
   CHECK_INT(sylva_world_create(&def, &w), 0);
   if (!w) return NULL;
-  sylva_species_def sp = sylva_default_species_def();
-  sp.tropism[0] = 0, sp.tropism[1] = 0, sp.tropism[2] = 1;
-  int species = sylva_world_add_species(w, &sp, "oak");
-  CHECK(species >= 0);
+  *sp = sylva_default_species_def();
+  sp->tropism[0] = 0, sp->tropism[1] = 0, sp->tropism[2] = 1;
+  CHECK_INT(sylva_world_add_species(w, sp, "oak"), 0);
+  return w;
+}
+
+/* The world of the snapshot tests: a wall, a tree and a two-root shrub of one
+ * species, and a species no plant uses yet (still offered; its label needs escaping). */
+static sylva_world *snapshot_world(void) {
+  sylva_species_def sp;
+  sylva_world *w = oak_world(&sp);
+  if (!w) return NULL;
+  int species = 0;
   CHECK_INT(sylva_world_add_species(w, &sp, "big \"leaf\""), species + 1);
   sylva_obstacle_def wall = {.label = "wall", .min = {1.0, -5, 0}, .max = {1.2, 5, 4}};
   CHECK(sylva_world_add_obstacle(w, &wall) >= 0);
@@ -1162,7 +1194,7 @@ static void compare_with_skeleton(model *m, const sylva_world *w, int iteration)
 static void test_snapshot(void) {
   sylva_world *w = snapshot_world();
   if (!w) return;
-  char *snap = sylva_msg_snapshot(4, 10, w, "\"sub\"");
+  char *snap = sylva_msg_snapshot(4, 10, w, 0, "\"sub\"");
   cJSON *sj = VALID_JSON(snap);
   model m = {0};
   if (sj) {
@@ -1200,7 +1232,7 @@ typedef struct delta_totals {
  * to the model. */
 static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, int it,
                         delta_totals *t) {
-  char *delta = sylva_msg_delta(4, 10 + it, w, j);
+  char *delta = sylva_msg_delta(4, 10 + it, w, j, 0);
   cJSON *dj = VALID_JSON(delta);
   if (dj) {
     CHECK_STR(str_of(dj, "type"), "delta");
@@ -1211,7 +1243,7 @@ static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, 
     t->added += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "added"));
     t->radii += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "radii"));
     t->shed += model_apply(m, dj);
-    char *line = sylva_encode_stats_line(w, j, 0);
+    char *line = sylva_encode_stats_line(w, j, 0, 0);
     cJSON *lj = line ? cJSON_Parse(line) : NULL;
     CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"),
                               cJSON_GetObjectItemCaseSensitive(dj, "stats"), true));
@@ -1226,7 +1258,7 @@ static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, 
 static void test_deltas(void) {
   sylva_world *w = snapshot_world();
   if (!w) return;
-  char *snap = sylva_msg_snapshot(4, 10, w, "\"sub\"");
+  char *snap = sylva_msg_snapshot(4, 10, w, 0, "\"sub\"");
   cJSON *sj = VALID_JSON(snap);
   model m = {0};
   model_load(&m, sj);
@@ -1249,12 +1281,82 @@ static void test_deltas(void) {
   sylva_world_destroy(w);
 }
 
+/* A world in years: a lime of a species with years planted at 5, an IGM oak, and a
+ * zone over them from 1 m up. */
+static sylva_world *years_world(void) {
+  sylva_species_def sp;
+  sylva_world *w = oak_world(&sp);
+  if (!w) return NULL;
+  int oak = 0;
+  sp.years = 1;
+  int lime = sylva_world_add_species(w, &sp, "lime");
+  sylva_obstacle_def zone = {"crowns", {-5, -5, 1}, {5, 5, 5}, SYLVA_OBSTACLE_ZONE};
+  CHECK(sylva_world_add_obstacle(w, &zone) >= 0);
+  const double a[][3] = {{-1, 0, 0}}, b[][3] = {{1, 0, 0}};
+  sylva_plant_def pa = {lime, "lime", a, 1, 5}, pb = {oak, "oak", b, 1, 0};
+  CHECK_INT(sylva_world_add_plant(w, &pa, NULL), 0);
+  CHECK_INT(sylva_world_add_plant(w, &pb, NULL), 1);
+  return w;
+}
+
+/* The messages of a run in years with a start year: the snapshot names the start
+ * year and its stats carry ages (null for the IGM oak), crown diameter and crown
+ * height; each delta's stats are the stats line's, zones dated in calendar years. */
+static void test_years_messages(void) {
+  sylva_world *w = years_world();
+  if (!w) return;
+  CHECK(sylva_encode_years(w));
+  char *snap = sylva_msg_snapshot(4, 10, w, 2027, NULL);
+  CHECK(snap && strstr(snap, ",\"sky\":\"zenith\",\"start_year\":2027}"));
+  CHECK(snap && strstr(snap, "{\"plant\":\"lime\",\"stem\":0,\"age\":5,\"height\":"));
+  CHECK(snap && strstr(snap, "{\"plant\":\"oak\",\"stem\":0,\"age\":null,\"height\":"));
+  CHECK(snap && strstr(snap, ",\"crown_diameter\":") && strstr(snap, ",\"crown_height\":"));
+  free(snap);
+  int entered = 0;
+  for (int it = 1; it <= 12; it++) {
+    const sylva_journal *j = NULL;
+    CHECK_INT(sylva_world_step(w, &j), 0);
+    if (!j) break;
+    char *delta = sylva_msg_delta(4, 10 + it, w, j, 2027);
+    char *line = sylva_encode_stats_line(w, j, 0, 2027);
+    cJSON *dj = VALID_JSON(delta), *lj = line ? cJSON_Parse(line) : NULL;
+    CHECK(lj && num_of(lj, "year") == 2027 + it);
+    const cJSON *stats = cJSON_GetObjectItemCaseSensitive(dj, "stats");
+    CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"), stats, true));
+    CHECK_INT(num_of(cJSON_GetArrayItem(stats, 0), "age"), 5 + it);
+    CHECK(cJSON_IsNull(cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(stats, 1), "age")));
+    sylva_conflicts c = sylva_world_stem_conflicts(w, 0);
+    if (c.zone_count) {
+      entered++;
+      const cJSON *z = cJSON_GetObjectItemCaseSensitive(
+          cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(stats, 0), "zones"), "crowns");
+      CHECK_INT(num_of(z, "first"), 2027 + c.zones[0].first);
+      char *stored = sylva_encode_stem_conflicts(w, 0, false, 2027);
+      char want[96];
+      snprintf(want, sizeof want, "{\"crowns\":{\"nodes\":%lld,\"first\":%d}}",
+               (long long)c.zones[0].nodes, 2027 + (int)c.zones[0].first);
+      CHECK_STR(stored, want);
+      free(stored);
+    }
+    cJSON_Delete(dj);
+    cJSON_Delete(lj);
+    free(delta);
+    free(line);
+  }
+  CHECK(entered > 0);
+  sylva_world_destroy(w);
+  /* a world without years carries none of it */
+  sylva_world *plain = snapshot_world();
+  CHECK(plain && !sylva_encode_years(plain));
+  sylva_world_destroy(plain);
+}
+
 /* A snapshot after 15 iterations holds the skeleton too. */
 static void test_later_snapshot(void) {
   sylva_world *w = snapshot_world();
   if (!w) return;
   grow(w, 15);
-  char *snap = sylva_msg_snapshot(4, 25, w, NULL);
+  char *snap = sylva_msg_snapshot(4, 25, w, 0, NULL);
   cJSON *sj = VALID_JSON(snap);
   check_snapshot_matches_skeleton(snap, w);
   if (sj) {
@@ -1484,7 +1586,8 @@ int main(int argc, char **argv) {
       CHECK_TEST(depth), CHECK_TEST(encode_welcome), CHECK_TEST(encode_error),
       CHECK_TEST(encode_parse_error), CHECK_TEST(encode_created), CHECK_TEST(encode_status),
       CHECK_TEST(encode_runs), CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
-      CHECK_TEST(deltas), CHECK_TEST(later_snapshot), CHECK_TEST(light_slice_board),
+      CHECK_TEST(deltas), CHECK_TEST(later_snapshot), CHECK_TEST(years_messages),
+      CHECK_TEST(light_slice_board),
       CHECK_TEST(light_slice_top), CHECK_TEST(light_slice_layers), CHECK_TEST(light_slice_padding)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("protocol");

@@ -7,7 +7,9 @@ meson runs `python3 test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR PART`, 
             tree-coloured pixels on the open side of the wall, none inside it;
   errors    bad views, extensions, runs, iterations and paths: exit 2 (1 for a
             failed write), a message naming the problem, no output file;
-  scenario  the scenario form, grown to its end, equals the stored run's picture.
+  scenario  the scenario form, grown to its end, equals the stored run's picture;
+  years     the title line (read back with `pdftotext`): a run in years from a
+            start year names the calendar year and its plants' ages, others not.
 The layout constants and the palette are read from server/export/render.h and
 server/export/render.c, so the pixel test maps metres to pixels as the renderer does.
 """
@@ -356,15 +358,46 @@ def part_scenario(env, c):
         c.check(kind.startswith("SVG"), "seeded.svg is an SVG", kind)
 
 
+def title_of(env, c, *args):
+    """The first line of the text of a rendered PDF (its title line)."""
+    out = env.path("title.pdf")
+    rc, _, err = env.render(*args, "-o", out)
+    if not c.check(rc == 0 and clean_stderr(err), "render %s" % " ".join(map(str, args)), err):
+        return ""
+    p = subprocess.run(["pdftotext", "-layout", out, "-"], capture_output=True)
+    return p.stdout.decode().strip().splitlines()[0].strip() if p.returncode == 0 else ""
+
+
+def part_years(env, c):
+    """A run of tests/scenario/years.json (from 2027; two trees of a species with
+    years, planted at 0 and 3, and an IGM tree) drawn at iteration 3 names 2030 and
+    the ages of the two trees; the scenario form grown to its end (8) names 2035;
+    a run without years or a start year keeps its title."""
+    years = os.path.join(env.scenarios, os.pardir, "scenario", "years.json")
+    db = env.path("years.db")
+    rc, _, err = env.sylva("run", years, "--db", db, "--name", "y", "--quiet-progress")
+    if not c.check(rc == 0, "sylva run --db stores the run in years", err):
+        return
+    title = title_of(env, c, "--db", db, "--name", "y", "--iteration", 3)
+    c.check(re.fullmatch(r"y \u2014 2030 \(iteration 3\) \u2014 \d+ nodes "
+                         r"\u2014 ages young 3, old 6", title), "the stored run's title", title)
+    title = title_of(env, c, years)
+    c.check(re.fullmatch(r"Trees in years \u2014 2035 \(iteration 8\) \u2014 \d+ nodes "
+                         r"\u2014 ages young 8, old 11", title), "the scenario's title", title)
+    title = title_of(env, c, env.scenario(SCENARIO))
+    c.check(re.fullmatch(r"\S.* \u2014 iteration 4 \u2014 \d+ nodes", title),
+            "a title without years", title)
+
+
 PARTS = {"formats": part_formats, "pixels": part_pixels, "errors": part_errors,
-         "scenario": part_scenario}
+         "scenario": part_scenario, "years": part_years}
 
 
 def main():
     if len(sys.argv) != 5 or sys.argv[4] not in PARTS:
         sys.exit("usage: test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR "
                  + "|".join(PARTS))
-    for tool in ("file", "rsvg-convert", "pdfinfo"):
+    for tool in ("file", "rsvg-convert", "pdfinfo", "pdftotext"):
         if not shutil.which(tool):
             sys.exit("test_render.py: %s is missing (scripts/bootstrap installs it)" % tool)
     env = RenderEnv(sys.argv)

@@ -245,7 +245,7 @@ static char *run_output(sylva_scenario *s, uint64_t seed, int limit, int32_t ord
     CHECK_INT(sylva_world_step(w, &j), 0);
     if (orders)
       for (size_t k = 0; k < j->stem_count && k < 8; k++) orders[j->iteration][k] = j->order[k];
-    char *line = sylva_encode_stats_line(w, j, 0.0);
+    char *line = sylva_encode_stats_line(w, j, 0.0, 0);
     char *sk = j->iteration == limit ? sylva_encode_skeleton(w) : NULL;
     size_t need = len + strlen(line) + (sk ? strlen(sk) : 0) + 2;
     if (need > cap) {
@@ -453,7 +453,8 @@ static void test_street_zones(void) {
     bad += street_conflicts(a, first, true);
     for (size_t i = 0; i < ja->conflicts.zone_count; i++) inside += ja->conflicts.zones[i].nodes;
     if (ja->iteration == 1) {
-      char *la = sylva_encode_stats_line(a, ja, 0.0), *lb = sylva_encode_stats_line(b, jb, 0.0);
+      char *la = sylva_encode_stats_line(a, ja, 0.0, 0);
+      char *lb = sylva_encode_stats_line(b, jb, 0.0, 0);
       CHECK(strstr(la, "\"zones\"") && strstr(la, "\"clearance\"") && strstr(la, "\"pruned\""));
       CHECK(!strstr(lb, "\"zones\"") && !strstr(lb, "\"clearance\"") && !strstr(lb, "\"pruned\""));
       free(la);

@@ -170,6 +170,13 @@ export function scenario(name, overrides = {}) {
   return { ...s, ...overrides };
 }
 
+// The test scenario of years (tests/scenario/years.json): two trees of a species
+// with years (aged 0 and 3 at planting), an IGM tree, a lane zone, from 2027.
+export const YEARS_FILE = join(ROOT, 'tests', 'scenario', 'years.json');
+export function yearsScenario(overrides = {}) {
+  return { ...JSON.parse(readFileSync(YEARS_FILE, 'utf8')), ...overrides };
+}
+
 // A skeleton held by a client: snapshot, then deltas.
 export class Model {
   constructor(snapshot) {

@@ -4,8 +4,9 @@ import assert from 'node:assert/strict';
 import { existsSync, readdirSync, readFileSync, mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { spawnSync } from 'node:child_process';
 import { startDaemon, stopDaemon, connect, Client, scenario, Model, exportSkeleton, plantsJSON,
-  cleanup, rawGet, ROOT } from './harness.mjs';
+  exportBytes, cleanup, rawGet, ROOT, SYLVA, YEARS_FILE, yearsScenario } from './harness.mjs';
 
 test('HTTP: /healthz, /metrics, /api/runs, and 404', async () => {
   const d = await startDaemon();
@@ -409,6 +410,173 @@ test('zones and pruning: stats carry pruned, zones and clearance as stored; prun
     } finally {
       await stopDaemon(d2);
     }
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+// The lines of `sylva run FILE --db DB` (its stats lines parsed), the reference of
+// the daemon's stats.
+function cliRun(file, db) {
+  const r = spawnSync(SYLVA, ['run', file, '--db', db, '--quiet-progress'], { encoding: 'utf8' });
+  assert.equal(r.status, 0, r.stderr);
+  return r.stdout.trim().split('\n').map((l) => JSON.parse(l)).filter((l) => l.stems);
+}
+
+const metricValue = (text, name, labels) => {
+  const esc = labels.replace(/[\\"{}]/g, (c) => `\\${c}`);
+  const m = text.match(new RegExp(`^${name}\\{${esc}\\} (\\S+)$`, 'm'));
+  return m ? Number(m[1]) : null;
+};
+
+// Runs fn(d, restart) on a daemon; restart() stops it cleanly and resolves with a
+// new daemon on the same store. Both are stopped (the second with exit 0) and the
+// store removed at the end.
+async function withRestart(fn) {
+  const d = await startDaemon();
+  let d2;
+  try {
+    await fn(d, async () => {
+      assert.equal((await stopDaemon(d)).code, 0);
+      d2 = await startDaemon({ dir: d.dir });
+      return d2;
+    });
+  } finally {
+    if (d2) assert.equal((await stopDaemon(d2)).code, 0);
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+}
+
+// The years scenario (12 iterations) created paused and subscribed, then grown
+// `steps` iterations: {run, snap (the first snapshot), status (the step's
+// reply), deltas}.
+async function growYears(c, steps) {
+  c.send({ type: 'create', id: 'c', name: 'years', start: false, scenario: yearsScenario({ iterations: 12 }) });
+  const run = (await c.type('created')).run;
+  c.send({ type: 'subscribe', run });
+  const snap = await c.type('snapshot');
+  c.send({ type: 'control', id: 's', run, action: 'step', count: steps });
+  const status = await c.next((m) => m.type === 'status' && m.ref === 's');
+  const deltas = [];
+  for (let i = 1; i <= steps; i++) deltas.push(await c.type('delta', 60000));
+  return { run, snap, status, deltas };
+}
+
+test('years: start year, ages and crown measures in snapshots, deltas, status, stats.csv and /metrics; as stored after a restart; aged plants by edit', () => withRestart(async (d, restart) => {
+  const c = await connect(d.url);
+  const { run, snap, status, deltas } = await growYears(c, 8);
+  assert.equal(snap.start_year, 2027);
+  assert.deepEqual(snap.stats.map((st) => [st.plant, st.age]), [['young', 0], ['old', 3], ['igm', null]]);
+  for (const st of snap.stats) assert.equal(st.crown_diameter, st.crown_width);
+  assert.equal(status.start_year, 2027);
+  // the stats are the CLI's lines', iteration by iteration: ages, crowns, zones in years
+  const lines = cliRun(YEARS_FILE, join(d.dir, 'cli.db'));
+  assert.equal(lines.length, 8);
+  deltas.forEach((delta, k) => {
+    assert.equal(lines[k].year, 2027 + delta.iteration);
+    assert.deepEqual(delta.stats, lines[k].stems, `iteration ${delta.iteration}`);
+    assert.deepEqual(delta.stats.map((st) => st.age), [delta.iteration, 3 + delta.iteration, null]);
+  });
+  const last = deltas.at(-1).stats;
+  assert.ok(last.some((st) => st.crown_height > 0), 'a crown has a height');
+  const lane = last[1].zones.lane;
+  assert.ok(lane && lane.first > 2027 && lane.first <= 2035, `the old tree entered the lane: ${JSON.stringify(last[1].zones)}`);
+  // stats.csv: the CLI's stored run exports the same bytes
+  const csv = await (await fetch(`${d.http}/api/runs/years/stats.csv`)).text();
+  assert.match(csv.split('\n')[0], /,pruned,zones,clearance,age,year,crown_diameter,crown_height$/);
+  assert.equal(csv, exportBytes(join(d.dir, 'cli.db'), 'Trees in years', 'csv').toString());
+  // /metrics: the run's year and each aged plant's age
+  let metrics = await (await fetch(`${d.http}/metrics`)).text();
+  assert.equal(metricValue(metrics, 'sylva_run_year', 'run="years"'), 2035);
+  assert.equal(metricValue(metrics, 'sylva_plant_age', 'run="years",plant="young"'), 8);
+  assert.equal(metricValue(metrics, 'sylva_plant_age', 'run="years",plant="old"'), 11);
+  assert.equal(metricValue(metrics, 'sylva_plant_age', 'run="years",plant="igm"'), null);
+  // history and forks keep the run's start year
+  c.send({ type: 'get', id: 'g', run, iteration: 4 });
+  const old = await c.next((m) => m.type === 'snapshot' && m.ref === 'g');
+  assert.equal(old.start_year, 2027);
+  assert.deepEqual(old.stats.map((st) => st.age), [4, 7, null]);
+  c.send({ type: 'fork', id: 'f', run, iteration: 5, name: 'years fork' });
+  const fork = (await c.next((m) => m.type === 'created' && m.ref === 'f')).run;
+  c.send({ type: 'subscribe', run: fork });
+  const forked = await c.next((m) => m.type === 'snapshot' && m.run === fork);
+  assert.equal(forked.start_year, 2027);
+  assert.equal(forked.iteration, 5);
+  metrics = await (await fetch(`${d.http}/metrics`)).text();
+  assert.equal(metricValue(metrics, 'sylva_run_year', 'run="years fork"'), 2032);
+  c.close();
+  // restarted: the metrics from the store, without loading the runs; the run's
+  // snapshot still names its start year
+  const d2 = await restart();
+  const m2 = await (await fetch(`${d2.http}/metrics`)).text();
+  assert.equal(metricValue(m2, 'sylva_run_year', 'run="years"'), 2035);
+  assert.equal(metricValue(m2, 'sylva_plant_age', 'run="years",plant="old"'), 11);
+  assert.equal(metricValue(m2, 'sylva_run_year', 'run="years fork"'), 2032);
+  const c2 = await connect(d2.url);
+  c2.send({ type: 'subscribe', run });
+  const again = await c2.type('snapshot');
+  assert.equal(again.start_year, 2027);
+  assert.deepEqual(again.stats, last);
+  // an aged plant by edit; an age for the IGM species is refused and changes nothing
+  c2.send({ type: 'edit', id: 'e1', run, add_plants: [{ id: 'late', species: 'linden', roots: [[0, -2, 0]], age: 2 }] });
+  const edited = await c2.type('snapshot');
+  assert.equal((await c2.next((m) => m.type === 'status' && m.ref === 'e1')).start_year, 2027);
+  assert.deepEqual(edited.plants.map((p) => p.id), ['young', 'old', 'igm', 'late']);
+  assert.equal(edited.stats[3].age, 2);
+  c2.send({ type: 'edit', id: 'e2', run, add_plants: [{ id: 'bad', species: 'oak', roots: [[0, 2, 0]], age: 2 }] });
+  const err = await c2.next((m) => m.type === 'error' && m.ref === 'e2');
+  assert.equal(err.code, 'bad_request');
+  assert.equal(err.message, '/add_plants/0/age: species "oak" has no time scale (years)');
+  c2.send({ type: 'control', run, action: 'step' });
+  const after = await c2.type('delta', 60000);
+  assert.deepEqual(after.stats.map((st) => st.age), [9, 12, null, 3]);
+  metrics = await (await fetch(`${d2.http}/metrics`)).text();
+  assert.equal(metricValue(metrics, 'sylva_run_year', 'run="years"'), 2036);
+  assert.equal(metricValue(metrics, 'sylva_plant_age', 'run="years",plant="late"'), 3);
+  c2.close();
+}));
+
+test('years: a run given an aged plant by edit loads again after a restart, as it grew', () => withRestart(async (d, restart) => {
+  const c = await connect(d.url);
+  const { run } = await growYears(c, 8);
+  c.send({ type: 'edit', id: 'e1', run, add_plants: [{ id: 'late', species: 'linden', roots: [[0, -2, 0]], age: 2 }] });
+  await c.next((m) => m.type === 'status' && m.ref === 'e1');
+  c.send({ type: 'control', run, action: 'step' });
+  const grown = await c.type('delta', 60000);
+  c.close();
+  const d2 = await restart();
+  const c2 = await connect(d2.url);
+  c2.send({ type: 'subscribe', run });
+  const again = await c2.type('snapshot', 20000).catch((e) => {
+    throw new Error(`${e.message}; daemon log: ${d2.stderr().slice(-1500)}`);
+  });
+  assert.deepEqual(again.stats, grown.stats);
+  c2.close();
+}));
+
+test('years: a run without a start year or years carries none of their fields', async () => {
+  const d = await startDaemon();
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'create', id: 'c', name: 'plain', start: false, scenario: scenario('wall.json', { iterations: 2 }) });
+    const run = (await c.type('created')).run;
+    c.send({ type: 'subscribe', run });
+    const snap = await c.type('snapshot');
+    assert.equal('start_year' in snap, false);
+    c.send({ type: 'control', id: 's', run, action: 'step', count: 2 });
+    const status = await c.next((m) => m.type === 'status' && m.ref === 's');
+    assert.equal('start_year' in status, false);
+    const delta = await c.type('delta', 60000);
+    for (const key of ['age', 'crown_diameter', 'crown_height']) assert.equal(key in delta.stats[0], false, key);
+    await c.type('delta', 60000);
+    const csv = await (await fetch(`${d.http}/api/runs/plain/stats.csv`)).text();
+    assert.match(csv.split('\n')[0], /,pruned,zones,clearance$/);
+    const metrics = await (await fetch(`${d.http}/metrics`)).text();
+    assert.doesNotMatch(metrics, /^sylva_run_year\{/m);
+    assert.doesNotMatch(metrics, /^sylva_plant_age\{/m);
+    c.close();
   } finally {
     await stopDaemon(d);
     cleanup(d.dir);

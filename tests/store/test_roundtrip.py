@@ -13,6 +13,9 @@
   exactly the uninterrupted lines 6..10 and the done line, the same final
   skeleton and the same CSV; resume of a run at its limit prints only the
   done line;
+- a run in years from a start year (tests/scenario/years.json): the same round
+  trip, resumed lines and CSV byte for byte; the CSV's age, year, crown_diameter
+  and crown_height columns as on the lines; runs.start_year the scenario's;
 - bad cases: a taken run name, an unknown run, a missing file, a file that is
   not SQLite, an SQLite file of another program, a store of a newer schema:
   exit 2, a message naming the file and the problem, and the file (and its
@@ -59,6 +62,7 @@ def main():
         site_sky(env, c)
         street_pruned(env, c)
         street_exports(env, c)
+        years(env, c)
     finally:
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t0))
@@ -202,6 +206,41 @@ def street_exports(env, c):
     c.check(lines_seen > 0 and not problems,
             "street.json: every iteration's zone lines and clearances equal a count over its "
             "exported skeleton (%d zone lines)" % lines_seen, "\n".join(problems[:10]))
+
+
+YEARS_COLUMNS = ["age", "year", "crown_diameter", "crown_height"]
+
+
+def years(env, c):
+    """A run in years from 2027 (tests/scenario/years.json: two trees of a species
+    with years, one planted at 3, an IGM tree, a lane zone): stored, regrown and
+    resumed iterations equal a run without a store, the resumed CSV is the
+    uninterrupted one; every line has its year, and the CSV's years columns equal
+    the lines' ages, years, crown diameters and heights (empty where a line has
+    null); the store keeps the start year with the run."""
+    scenario = os.path.join(env.scenarios, os.pardir, "tests", "scenario", "years.json")
+    db, db_b, final = env.path("years.db"), env.path("years-b.db"), env.path("years-final.json")
+    lines = run_with_store(env, c, scenario, db, final)
+    export_iterations(env, c, scenario, db)
+    stop_at_5(env, c, scenario, db_b, lines)
+    resume_to_10(env, c, db, db_b, final, lines)
+    objs = [json.loads(x) for x in lines[:-1]]
+    c.check(all(o["year"] == 2027 + o["iteration"] for o in objs), "years: every line's year")
+    c.check(all([s["age"] for s in o["stems"]] == [o["iteration"], 3 + o["iteration"], None]
+                for o in objs), "years: the lines' ages (null for the IGM tree)")
+    rc, data, err = env.export(db, "rt", fmt="csv")
+    if not c.check(rc == 0 and data is not None, "years: export --format csv", err):
+        return
+    records = list(csv.reader(io.StringIO(data.decode())))
+    c.check(records[0] == HEADER.split(",") + YEARS_COLUMNS, "years: the CSV header", records[0])
+    text = lambda v: "" if v is None else str(v)  # noqa: E731
+    want = [[text(s["age"]), str(o["year"]), text(s["crown_diameter"]), text(s["crown_height"])]
+            for o in objs for s in o["stems"]]
+    # the lines print lengths with at most 4 decimals, as the CSV does
+    got = [r[15:] for r in records[1:]]
+    c.check(got == want, "years: the CSV's years columns equal the lines'",
+            "\n".join("%r != %r" % (g, w) for g, w in zip(got, want) if g != w)[:2000])
+    c.check(query(db, "SELECT start_year FROM runs") == [(2027,)], "years: runs.start_year")
 
 
 def export_iterations(env, c, scenario, db):

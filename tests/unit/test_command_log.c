@@ -1,8 +1,9 @@
 /* The command log's own record format (server/store/command_log.h,
  * docs/store.md): a record written by today's format replays, in memory and
  * through a real store file; encoding is byte-stable; records of format 0 (the
- * protocol-1 edit messages of older stores) still replay; bad and newer records
- * are refused with the place named. */
+ * protocol-1 edit messages of older stores) still replay; plants with an age
+ * need format 3, which only such edits are written in; bad and newer records are
+ * refused with the place named. */
 #include <sqlite3.h>
 #include <stdlib.h>
 #include <string.h>
@@ -151,12 +152,90 @@ static void test_format0_replays(void) {
   edit_free(&e);
 }
 
+/* An edit that plants an aged tree, as this build writes it (format 3: the oldest
+ * format with ages; keep it byte for byte). */
+static const char aged[] =
+    "{\"format\":3,\"command\":\"edit\",\"remove_obstacles\":[],\"add_obstacles\":[],"
+    "\"add_plants\":[{\"id\":\"lime\",\"species\":\"y\",\"roots\":[[-1,0.1,0]],\"age\":4}]}";
+
+/* site() with a species "y" that counts in years, grown 4 iterations. */
+static sylva_world *site_in_years(void) {
+  sylva_world *w = site();
+  sylva_species_def sp = sylva_default_species_def();
+  sp.years = 1;
+  CHECK_INT(sylva_world_add_species(w, &sp, "y"), 1);
+  for (int i = 0; i < 4; i++) sylva_world_step(w, NULL);
+  return w;
+}
+
+/* Decodes a record and applies it to site_in_years(); the status of the apply
+ * (its message in err), *hash the edited world's. */
+static int apply_record(const char *record, uint64_t *hash, char *err, size_t errlen) {
+  sylva_world *w = site_in_years(), *edited = NULL;
+  edit e;
+  int rc = command_log_decode(record, &e, err, errlen);
+  CHECK_INT(rc, SERVER_OK);
+  if (!rc) rc = edit_apply(w, &e, &edited, err, errlen);
+  *hash = edited ? sylva_world_hash(edited) : 0;
+  edit_free(&e);
+  sylva_world_destroy(edited);
+  sylva_world_destroy(w);
+  return rc;
+}
+
+/* A plant's age: written in format 3, read back byte for byte, replayed as the
+ * core's own call plants it; refused for a species without years, and in format 2. */
+static void test_aged_plant(void) {
+  edit e;
+  char err[256] = "";
+  CHECK_INT(command_log_decode(aged, &e, err, sizeof err), SERVER_OK);
+  CHECK(e.plant_count == 1 && e.plants[0].age == 4);
+  char *again = command_log_encode(&e);
+  CHECK(again && strcmp(again, aged) == 0);
+  if (again && strcmp(again, aged)) fprintf(stderr, "  encoded: %s\n", again);
+  free(again);
+  edit_free(&e);
+
+  sylva_world *w = site_in_years();
+  double root[1][3] = {{-1, 0.1, 0}};
+  sylva_plant_def lime = {1, "lime", (const double(*)[3])root, 1, 4};
+  CHECK(sylva_world_add_plant(w, &lime, NULL) >= 0);
+  uint64_t h = 0;
+  CHECK_INT(apply_record(aged, &h, err, sizeof err), SYLVA_OK);
+  CHECK(h == sylva_world_hash(w));
+  sylva_world_destroy(w);
+
+  static const char igm[] =
+      "{\"format\":3,\"command\":\"edit\",\"add_plants\":[{\"id\":\"oak2\",\"species\":\"x\","
+      "\"roots\":[[-1,0.1,0]],\"age\":4}]}";
+  CHECK_INT(apply_record(igm, &h, err, sizeof err), SYLVA_EINVAL);
+  CHECK(strcmp(err, "/add_plants/0/age: species \"x\" has no time scale (years)") == 0);
+  static const char *const bad[][2] = {
+      {"{\"format\":2,\"command\":\"edit\",\"add_plants\":[{\"id\":\"a\",\"species\":\"y\","
+       "\"roots\":[[0,0,0]],\"age\":4}]}",
+       "/add_plants/0/age: unknown key"},
+      {"{\"format\":3,\"command\":\"edit\",\"add_plants\":[{\"id\":\"a\",\"species\":\"y\","
+       "\"roots\":[[0,0,0]],\"age\":501}]}",
+       "/add_plants/0/age: expected an integer from 0 to 500"},
+      {"{\"format\":3,\"command\":\"edit\",\"add_plants\":[{\"id\":\"a\",\"species\":\"y\","
+       "\"roots\":[[0,0,0]],\"age\":2.5}]}",
+       "/add_plants/0/age: expected an integer from 0 to 500"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    CHECK_INT(command_log_decode(bad[i][0], &e, err, sizeof err), SERVER_EINPUT);
+    CHECK(strcmp(err, bad[i][1]) == 0);
+    if (strcmp(err, bad[i][1])) fprintf(stderr, "  case %zu: got \"%s\"\n", i, err);
+    edit_free(&e);
+  }
+}
+
 /* Bad records name the place and the problem; nothing is half-read. */
 static void test_bad_records(void) {
   static const struct {
     const char *record, *message;
   } cases[] = {
-      {"{\"format\":3,\"command\":\"edit\"}", "/format: format 3 is newer than this sylva reads (up to 2)"},
+      {"{\"format\":4,\"command\":\"edit\"}",
+       "/format: format 4 is newer than this sylva reads (up to 3)"},
       {"{\"format\":1.5,\"command\":\"edit\"}", "/format: expected an integer >= 1"},
       {"{\"format\":1,\"command\":\"prune\"}", "/command: expected \"edit\""},
       {"{\"format\":1,\"command\":\"edit\",\"colour\":1}", "/colour: unknown key"},
@@ -238,7 +317,7 @@ static void test_store_replays_log(void) {
 int main(int argc, char **argv) {
   static const check_test tests[] = {CHECK_TEST(today_replays), CHECK_TEST(encoding_is_stable),
                                      CHECK_TEST(format0_replays), CHECK_TEST(bad_records),
-                                     CHECK_TEST(store_replays_log)};
+                                     CHECK_TEST(store_replays_log), CHECK_TEST(aged_plant)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("command log");
 }

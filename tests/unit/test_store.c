@@ -1,5 +1,6 @@
 /* The store module on a real SQLite file: schema marks, runs, iterations with and
- * without snapshots, stats rows, the command log, restoring with fallback, and
+ * without snapshots, stats rows (with the ages and start year of a run in years),
+ * the command log, restoring with fallback, migrations of older schemas, and
  * refusal of foreign and newer files. */
 #include <math.h>
 #include <sqlite3.h>
@@ -11,17 +12,28 @@
 #include "store.h"
 #include "sylva/sylva.h"
 
-static sylva_world *small_world(void) {
+/* A shrub of two stems; with years, of a species that counts in years, planted at
+ * the age of 2 beside a tree of an IGM species (no years). */
+static sylva_world *world_of(bool years) {
   sylva_world_def wd = sylva_default_world_def();
   wd.min[0] = wd.min[1] = -2, wd.max[0] = wd.max[1] = 2, wd.max[2] = 5;
   sylva_world *w;
   if (sylva_world_create(&wd, &w)) return NULL;
   sylva_species_def sp = sylva_default_species_def();
   sp.tropism[2] = 1.0;
+  sp.years = years;
   int s = sylva_world_add_species(w, &sp, "x");
   double roots[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
-  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, 0};
+  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, years ? 2 : 0};
   sylva_world_add_plant(w, &pd, NULL);
+  if (years) {
+    sylva_species_def igm = sylva_default_species_def();
+    igm.tropism[2] = 1.0;
+    double root[1][3] = {{-1, -1, 0}};
+    sylva_plant_def tree = {sylva_world_add_species(w, &igm, "igm"), "tree",
+                            (const double(*)[3])root, 1, 0};
+    sylva_world_add_plant(w, &tree, NULL);
+  }
   return w;
 }
 
@@ -60,8 +72,9 @@ static const char *tmp_file(const tmp *t, const char *name, char *buf, size_t si
 }
 
 /* A store, runs.db in a temporary directory, holding the run "r1" of
- * small_world(): 7 of 12 iterations, a snapshot every 3; hashes[t] is the world's
- * hash after iteration t. */
+ * world_of(false) (with fixture_open_as, of world_of(years) and a scenario from 2027
+ * whose species x counts in years): 7 of 12 iterations, a snapshot every 3;
+ * hashes[t] is the world's hash after iteration t. */
 typedef struct fixture {
   tmp t;
   char path[256];
@@ -71,13 +84,15 @@ typedef struct fixture {
   uint64_t hashes[8];
 } fixture;
 
-static void fixture_open(fixture *f) {
+static void fixture_open_as(fixture *f, bool years) {
   memset(f, 0, sizeof *f);
   tmp_open(&f->t);
   tmp_file(&f->t, "runs.db", f->path, sizeof f->path);
   CHECK_INT(store_open(f->path, true, &f->st), 0);
-  f->w = small_world();
-  CHECK_INT(store_create_run(f->st, "r1", "{}", 7, 12, 3, f->w, &f->run), 0);
+  f->w = world_of(years);
+  const char *scenario =
+      years ? "{\"start_year\": 2027, \"species\": {\"x\": {\"years\": 1}, \"igm\": {}}}" : "{}";
+  CHECK_INT(store_create_run(f->st, "r1", scenario, 7, 12, 3, f->w, &f->run), 0);
   f->hashes[0] = sylva_world_hash(f->w);
   for (int t = 1; t <= 7; t++) {
     const sylva_journal *j;
@@ -86,6 +101,8 @@ static void fixture_open(fixture *f) {
     CHECK_INT(store_save_iteration(f->st, f->run, f->w, j, t % 3 == 0), 0);
   }
 }
+
+static void fixture_open(fixture *f) { fixture_open_as(f, false); }
 
 static void fixture_close(fixture *f) {
   store_close(f->st);
@@ -255,6 +272,11 @@ static int first_row(const store_stats_row *r, void *ctx) {
   return 0;
 }
 
+/* The columns schema 3 added, dropped: a store of schema 2 again. */
+#define BACK_TO_SCHEMA_2                                                                  \
+  "ALTER TABLE stats DROP COLUMN age; ALTER TABLE stats DROP COLUMN crown_height;"        \
+  " ALTER TABLE runs DROP COLUMN start_year; PRAGMA user_version = 2;"
+
 /* A store of schema 1 (before conflicts) is migrated in place: its rows stay, and
  * read as not reporting conflicts (pruned -1, zones and clearance NULL). */
 static void test_schema1_migrates(void) {
@@ -263,8 +285,9 @@ static void test_schema1_migrates(void) {
   const char *path = f.path;
   store_close(f.st);
   f.st = NULL;
-  /* back to schema 1: the columns of migration 1 gone */
-  exec_sql(path, "ALTER TABLE stats DROP COLUMN clearance; ALTER TABLE stats DROP COLUMN zones;"
+  /* back to schema 1: the columns of migrations 2 and 1 gone */
+  exec_sql(path, BACK_TO_SCHEMA_2
+                 "ALTER TABLE stats DROP COLUMN clearance; ALTER TABLE stats DROP COLUMN zones;"
                  " ALTER TABLE stats DROP COLUMN pruned; PRAGMA user_version = 1");
   CHECK_INT(store_open(path, false, &f.st), 0);
   store_stats_row r = {.iteration = -1};
@@ -277,13 +300,139 @@ static void test_schema1_migrates(void) {
   fixture_close(&f);
 }
 
+/* The schema version of a store file. */
+static int user_version(const char *path) {
+  sqlite3 *db;
+  sqlite3_stmt *q;
+  int v = -1;
+  sqlite3_open(path, &db);
+  if (sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &q, NULL) == SQLITE_OK) {
+    if (sqlite3_step(q) == SQLITE_ROW) v = sqlite3_column_int(q, 0);
+    sqlite3_finalize(q);
+  }
+  sqlite3_close(db);
+  return v;
+}
+
+/* A store of schema 2 (before years) is migrated in place: its rows stay and read
+ * without ages (age -1, crown height NaN), its runs without a start year, and the
+ * run grows on into the new columns. */
+static void test_schema2_migrates(void) {
+  fixture f;
+  fixture_open(&f);
+  store_close(f.st);
+  f.st = NULL;
+  exec_sql(f.path, BACK_TO_SCHEMA_2);
+  CHECK_INT(user_version(f.path), 2);
+  CHECK_INT(store_open(f.path, false, &f.st), 0);
+  CHECK_INT(user_version(f.path), STORE_SCHEMA_VERSION);
+  store_stats_row r = {.iteration = -1};
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 7, first_row, &r), 0);
+  CHECK_INT(r.iteration, 1);
+  CHECK(r.age == -1 && isnan(r.crown_height));
+  int rows = 0;
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 7, count_rows, &rows), 0);
+  CHECK_INT(rows, 7 * 2);
+  store_run sr;
+  bool found = false;
+  if (f.st) CHECK_INT(store_find_run(f.st, "r1", &sr, &found), 0);
+  CHECK(found);
+  if (found) {
+    CHECK(sr.start_year == 0 && !sr.years);
+    store_run_free(&sr);
+  }
+  const sylva_journal *j;
+  CHECK_INT(sylva_world_step(f.w, &j), 0);
+  if (f.st) CHECK_INT(store_save_iteration(f.st, f.run, f.w, j, true), 0);
+  rows = 0;
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 8, count_rows, &rows), 0);
+  CHECK_INT(rows, 8 * 2);
+  fixture_close(&f);
+}
+
+/* The stats of a run in years as stored, for test_years_round_trip. */
+typedef struct years_rows {
+  int count, bad;
+  int age[8][3];
+  double crown_height[8][3];
+} years_rows;
+
+static int years_row(const store_stats_row *r, void *ctx) {
+  years_rows *y = ctx;
+  y->count++;
+  if (r->iteration > 7 || r->stem > 2) {
+    y->bad++;
+    return 0;
+  }
+  y->age[r->iteration][r->stem] = r->age;
+  y->crown_height[r->iteration][r->stem] = r->crown_height;
+  return 0;
+}
+
+static int age_row(int64_t run, const char *plant, int age, void *ctx) {
+  char *out = ctx;
+  size_t n = strlen(out);
+  snprintf(out + n, 256 - n, "%lld %s %d;", (long long)run, plant, age);
+  return 0;
+}
+
+/* A run in years: its start year and years read back from its scenario; every
+ * stem's age (its plant's age at planting and the iterations since; null for the
+ * IGM tree) and crown height exactly as the regrown world measures them; the
+ * plants' ages at the last stored iteration; a run without either reads as such. */
+static void test_years_round_trip(void) {
+  fixture f;
+  fixture_open_as(&f, true);
+  store_run r;
+  bool found = false;
+  CHECK_INT(store_find_run(f.st, "r1", &r, &found), 0);
+  CHECK(found);
+  if (found) {
+    CHECK_INT(r.start_year, 2027);
+    CHECK(r.years);
+    store_run_free(&r);
+  }
+  int start_year = 0;
+  bool years = false;
+  CHECK_INT(store_run_calendar(f.st, f.run, &start_year, &years), 0);
+  CHECK(start_year == 2027 && years);
+  years_rows y = {0};
+  CHECK_INT(store_each_stats(f.st, f.run, 7, years_row, &y), 0);
+  CHECK_INT(y.count, 7 * 3);
+  CHECK_INT(y.bad, 0);
+  for (int it = 1; it <= 7; it++) {
+    for (int k = 0; k < 2; k++) CHECK_INT(y.age[it][k], 2 + it); /* the shrub's two stems */
+    CHECK_INT(y.age[it][2], -1);                                 /* the IGM tree */
+    sylva_world *w = NULL;
+    CHECK_INT(store_world_at(f.st, f.run, it, NULL, &w), 0);
+    for (int k = 0; w && k < 3; k++) {
+      sylva_stem_stats st;
+      CHECK_INT(sylva_world_stem_stats(w, k, &st), 0);
+      CHECK_INT(y.age[it][k], st.age);
+      CHECK(isnan(st.crown_height) ? isnan(y.crown_height[it][k])
+                                   : y.crown_height[it][k] == st.crown_height);
+    }
+    sylva_world_destroy(w);
+  }
+  char ages[256] = "", want[256];
+  CHECK_INT(store_each_age(f.st, age_row, ages), 0);
+  snprintf(want, sizeof want, "%lld shrub 9;", (long long)f.run);
+  CHECK(strcmp(ages, want) == 0);
+  if (strcmp(ages, want) != 0) fprintf(stderr, "ages: %s (want %s)\n", ages, want);
+  int64_t plain = 0;
+  CHECK_INT(store_create_run(f.st, "plain", "{}", 7, 12, 3, f.w, &plain), 0);
+  CHECK_INT(store_run_calendar(f.st, plain, &start_year, &years), 0);
+  CHECK(start_year == 0 && !years);
+  fixture_close(&f);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(open_needs_create), CHECK_TEST(run_name_taken), CHECK_TEST(find_run),
       CHECK_TEST(load_world), CHECK_TEST(iteration_hash), CHECK_TEST(stats_rows),
       CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
       CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused),
-      CHECK_TEST(schema1_migrates)};
+      CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(years_round_trip)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");
 }

@@ -5,6 +5,7 @@ import {
   round, wsAddress, connectionLabel, runSummary, runCells, runHash, runFromHash, mostRecentRun, initialRun,
   controlsDisabled, stepCount, exportHref, freeId, parsePoint, obstacleBox, obstacleFromFields, plantAt,
   parseScenario, createErrorPlace, parseStatsCsv, csvCells, zoneFromFields, skyLabel,
+  yearOf, iterationLabel, statsInYears,
 } from '../../web/helpers.mjs';
 import {
   isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, clearanceRows, stemLabel,
@@ -196,6 +197,30 @@ test('stats.csv rows with zones entered, clearances and pruned counts', () => {
   ]);
   // the conflicts rows of the parsed stats
   assert.deepEqual(conflictRows(parseStatsCsv(csv).get(7)), [{ plant: 'tree', stem: 0, zone: 'road', first: 7, nodes: 2 }]);
+});
+
+test('years: an iteration\'s calendar year and label; stats of a run in years', () => {
+  assert.equal(yearOf(8, 2027), 2035);
+  assert.equal(yearOf(8, null), null);
+  assert.equal(yearOf(8, undefined), null);
+  assert.equal(iterationLabel(8, 2027), '2035 (iteration 8)');
+  assert.equal(iterationLabel(8, null), 'iteration 8');
+  // stats.csv of a run in years with a start year: ages (empty for an IGM stem),
+  // the year, the crown's diameter and height (empty while it has no base)
+  const csv = 'iteration,plant,stem,height,crown_width,crown_base,age,year,crown_diameter,crown_height\n' +
+    '3,lime,0,2.5,1.2,0.8,5,2030,1.2,1.7\n3,oak,0,0.5,0.1,,,2030,0.1,\n';
+  const rows = parseStatsCsv(csv).get(3);
+  assert.deepEqual(rows, [
+    { iteration: 3, plant: 'lime', stem: 0, height: 2.5, crown_width: 1.2, crown_base: 0.8, age: 5, year: 2030,
+      crown_diameter: 1.2, crown_height: 1.7 },
+    { iteration: 3, plant: 'oak', stem: 0, height: 0.5, crown_width: 0.1, crown_base: null, age: null, year: 2030,
+      crown_diameter: 0.1, crown_height: null },
+  ]);
+  assert.equal(statsInYears(rows), true);
+  // a run with a start year alone: its CSV has the columns, empty but the year
+  assert.equal(statsInYears([{ plant: 'oak', age: null, year: 2030, crown_diameter: null }]), false);
+  assert.equal(statsInYears([{ plant: 'oak', crown_width: 1 }]), false);
+  assert.equal(statsInYears(undefined), false);
 });
 
 test('a zone from the edit fields: two corners, from one height up to another', () => {

@@ -78,7 +78,10 @@ test('the wall scenario grows in the page: internodes, pixels, plots, memory', a
       assert.equal(count, want, `internodes held after iteration ${it}`);
     }
     const plots = await page.evaluate(() => window.sylva.plots());
+    // a run without years or a start year: the five plots, against the iteration
+    assert.deepEqual(Object.keys(plots), ['height', 'dbh', 'crown_width', 'nodes', 'cap']);
     for (const key of ['height', 'dbh', 'crown_width', 'nodes', 'cap']) {
+      assert.equal(plots[key].axis, 'iteration', key);
       assert.deepEqual(plots[key].iterations, its, `${key}: one point per iteration`);
       const want = rows.map((r) => (r[key] === '' ? null : Number(r[key])));
       assert.deepEqual(plots[key].stems['tree/0'], want, `${key} of tree/0`);

@@ -1,11 +1,12 @@
 // Urban sites in the viewer, in headless Chromium against a real daemon: clearance
 // zones drawn, the internodes inside them highlighted, the conflicts table against
 // the daemon's stats, a row's click moving the timeline, pruning a zone from the
-// edit bar, adding a zone, and the light slice named by the run's sky.
+// edit bar, adding a zone, the light slice named by the run's sky, and a run in
+// years: its calendar years on the timeline, the plots and the conflicts table.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, cleanup } from '../server/harness.mjs';
+import { ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, yearsScenario, cleanup } from '../server/harness.mjs';
 import { launch, openViewer, state, until, httpGet, countPixels } from './browser.mjs';
 import { parseStatsCsv } from '../../web/helpers.mjs';
 
@@ -231,6 +232,57 @@ test('the light slice is named by the run\'s sky: site light for a site\'s sky',
     await page.reload();
     await until(page, (x) => x.connection === 'open' && x.name === 'site sky' && x.sky === 'site', 'after a reload');
     assert.equal(await page.textContent('#light-sky'), 'site light (sun and sky)');
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('a run in years: the calendar year on the timeline and the plots, crown diameter and height plotted, conflicts dated in years', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    const run = await createRun(d, yearsScenario(), 'years');
+    let s = await watchRun(page, run);
+    assert.equal(s.startYear, 2027);
+    assert.equal(s.year, 2027);
+    assert.equal(await page.textContent('#timeline-label'), '2027 (iteration 0) (live)');
+    await page.fill('#step-count', '8');
+    await page.click('#step');
+    s = await until(page, (x) => x.iteration === 8, 'eight iterations', 120000 * SLOW);
+    assert.equal(s.year, 2035);
+    assert.equal(await page.textContent('#timeline-label'), '2035 (iteration 8) (live)');
+    assert.match(await page.textContent('#view-info'), /^2035 \(iteration 8\) · /);
+
+    // the plots: years on the x axis, and the crown's diameter and height
+    await page.waitForFunction(() => window.sylva.plots().height?.iterations.length === 8);
+    const plots = await page.evaluate(() => window.sylva.plots());
+    assert.deepEqual(Object.keys(plots),
+      ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height', 'nodes', 'cap']);
+    const its = [1, 2, 3, 4, 5, 6, 7, 8];
+    for (const key of Object.keys(plots)) {
+      assert.equal(plots[key].axis, 'year', key);
+      assert.deepEqual(plots[key].iterations, its, key);
+      assert.deepEqual(plots[key].x, its.map((t) => 2027 + t), key);
+    }
+    const snap = await serverSnapshot(d, run);
+    assert.deepEqual(plots.crown_diameter.stems['old/0'].at(-1), snap.stats[1].crown_diameter);
+    assert.deepEqual(plots.crown_height.stems['old/0'].at(-1), snap.stats[1].crown_height);
+
+    // the conflicts table: the year the old tree first grew into the lane; its row
+    // shows that year from the store
+    const first = snap.stats[1].zones.lane.first;
+    assert.ok(first > 2027 && first <= 2035, `first ${first}`);
+    assert.equal(await page.textContent('#conflicts-first'), 'first year');
+    await page.waitForFunction(() => document.querySelectorAll('#conflicts tbody tr').length === 1);
+    assert.deepEqual(await page.$$eval('#conflicts tbody td', (tds) => tds.map((td) => td.textContent)).then((c) => c.slice(0, 3)),
+      ['old', 'lane', String(first)]);
+    await page.click('#conflicts tbody tr[data-zone="lane"]');
+    s = await until(page, (x) => !x.live && x.iteration === first - 2027, `the year ${first} from the store`);
+    assert.equal(s.year, first);
+    assert.equal(await page.textContent('#timeline-label'), `${first} (iteration ${first - 2027}) (stored)`);
+    assert.ok(await page.locator('#conflicts tbody tr.selected[data-zone="lane"]').count() === 1);
     assert.deepEqual(errors, []);
   } finally {
     await stopDaemon(d);

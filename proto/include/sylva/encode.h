@@ -21,17 +21,26 @@ int sylva_fmt_fixed(char *buf, size_t n, double v, int decimals);
  *  Returns the length like snprintf. */
 int sylva_fmt_shortest(char *buf, size_t n, double v);
 
+/** Whether the stats of w carry the measures of real species (cli.md): `age`,
+ *  `crown_diameter` and `crown_height`, because some species of w counts in years. */
+bool sylva_encode_years(const sylva_world *w);
+
 /** One line of `sylva run` (cli.md), without the newline:
  *  {"iteration": 7, "elapsed_ms": 12.5, "stems": [{"plant": "t1", "stem": 0, ...}]}
  *  Stems in global stem order (j->stats); NaN measures print null; lengths with 4
- *  decimals, light with 3, elapsed_ms with 1, all trimmed. Returns a malloc'd
- *  string, NULL when out of memory. */
-char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms);
+ *  decimals, light with 3, elapsed_ms with 1, all trimmed. In a world that reports
+ *  conflicts each stem has pruned, zones and clearance; in one with years
+ *  (sylva_encode_years) age, crown_diameter and crown_height. start_year (0: none)
+ *  adds "year" (start_year + iteration) after "iteration" and dates the zones'
+ *  "first" in calendar years. Returns a malloc'd string, NULL when out of memory. */
+char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, double elapsed_ms,
+                              int start_year);
 
-/** One global stem's zones (`{"road":{"nodes":3,"first":7}}`) or, with clearance,
- *  its clearances (`{"wall":1.25}`), as in the stats lines but compact. malloc'd;
- *  NULL when out of memory. */
-char *sylva_encode_stem_conflicts(const sylva_world *w, int stem, bool clearance);
+/** One global stem's zones (`{"road":{"nodes":3,"first":7}}`, "first" in calendar
+ *  years with a start_year, else in iterations) or, with clearance, its clearances
+ *  (`{"wall":1.25}`), as in the stats lines but compact. malloc'd; NULL when out of
+ *  memory. */
+char *sylva_encode_stem_conflicts(const sylva_world *w, int stem, bool clearance, int start_year);
 
 /** The last line of `sylva run`, without the newline:
  *  {"done": true, "iterations": 24, "reason": "finished"}. malloc'd; NULL when out

@@ -150,9 +150,11 @@ char *sylva_msg_error(const char *code, const char *message, const char *ref);
 /** {"type":"created","run":3,"name":"...","ref":...} */
 char *sylva_msg_created(int64_t run, const char *name, const char *ref);
 
-/** {"type":"status","run":3,"status":"running","iteration":7,"ref":...}; the
- *  status by its name (sylva/run_status.h). */
-char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, const char *ref);
+/** {"type":"status","run":3,"status":"running","iteration":7,"start_year":2027,
+ *  "ref":...}; the status by its name (sylva/run_status.h); start_year only when
+ *  not 0 (a run whose scenario gives one). */
+char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, int start_year,
+                       const char *ref);
 
 /** One run of a "runs" list. */
 typedef struct sylva_run_summary {
@@ -173,12 +175,14 @@ char *sylva_msg_runs(const sylva_run_summary *runs, size_t n, const char *ref);
 char *sylva_runs_json(const sylva_run_summary *runs, size_t n);
 
 /** {"type":"snapshot","run":..,"seq":..,"iteration":..,"voxel":..,"world":{"min":[..],
- *  "max":[..]},"obstacles":[..],"plants":[..],"stats":[..],"species":[..],"ref":..}:
- *  world, obstacles and plants byte for byte as in sylva_encode_skeleton(); stats
- *  per global stem as in the stats line (compact), the stems' current measures;
- *  species: the labels of the world's species in id order (what an edit's
- *  add_plants may name). */
-char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const char *ref);
+ *  "max":[..]},"obstacles":[..],"plants":[..],"stats":[..],"species":[..],"sky":..,
+ *  "start_year":..,"ref":..}: world, obstacles and plants byte for byte as in
+ *  sylva_encode_skeleton(); stats per global stem as in the stats line (compact), the
+ *  stems' current measures; species: the labels of the world's species in id order
+ *  (what an edit's add_plants may name); start_year (the run's, 0: none) only when
+ *  given. */
+char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
+                         const char *ref);
 
 /** {"type":"delta","run":..,"seq":..,"iteration":..,"added":[[id,parent,plant,stem,x,
  *  y,z,radius],..],"radii":[[id,radius],..],"shed":[id,..],"stats":[..]} of the step
@@ -186,8 +190,9 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, const c
  *  stem: the stem's index within the plant). A client that applies a snapshot and
  *  then each delta (adds the nodes with birth = "iteration", sets the radii, then
  *  removes every shed node with its whole subtree) holds the skeleton of that
- *  iteration. */
-char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j);
+ *  iteration. start_year (0: none) dates the stats' zone entries in calendar years. */
+char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j,
+                      int start_year);
 
 /** {"type":"light_slice","run":..,"iteration":..,"z":..,"origin":[x,y],"voxel":..,
  *  "nx":..,"ny":..,"values":"<base64>","ref":..}: the light of the horizontal voxel

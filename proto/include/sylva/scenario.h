@@ -34,6 +34,8 @@
 #define SYLVA_SCENARIO_SEED_MAX 9007199254740992.0
 /** Most iterations of a run. */
 #define SYLVA_SCENARIO_MAX_ITERATIONS 100000
+/** Latest `start_year` (the earliest is 1). */
+#define SYLVA_SCENARIO_MAX_YEAR 9999
 
 /** A species of the scenario: its name (the key in "species") and parameters. */
 typedef struct sylva_scenario_species {
@@ -47,6 +49,8 @@ typedef struct sylva_scenario_plant {
   int species;        /**< index into sylva_scenario.species */
   double (*roots)[3]; /**< root_count positions */
   int root_count;
+  int age;            /**< years at planting, 0 to SYLVA_MAX_AGE (above 0 only
+                           for a species with years); default 0 */
 } sylva_scenario_plant;
 
 /** The scenario's light (the `light` key): the paper's zenith sky, or a site's. */
@@ -83,6 +87,8 @@ typedef struct sylva_scenario {
   char *name;     /**< "untitled" when absent */
   uint64_t seed;  /**< default 1 */
   int iterations; /**< the iteration limit; default 40 */
+  int start_year; /**< the calendar year of iteration 0, 1 to SYLVA_SCENARIO_MAX_YEAR;
+                       0 when not given */
   double world_min[3], world_max[3];
   double voxel;   /**< given, or rho/2 of the smallest rho in use */
   sylva_scenario_species *species;
@@ -134,6 +140,10 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
 
 /** Frees a scenario (NULL is fine). */
 void sylva_scenario_free(sylva_scenario *s);
+
+/** A species as the canonical JSON object of a scenario's species (every key, no
+ *  preset), NUL-terminated and malloc'd; NULL when out of memory. */
+char *sylva_species_json(const sylva_species_def *def);
 
 /** Number of species presets. */
 int sylva_preset_count(void);

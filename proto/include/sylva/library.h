@@ -1,0 +1,26 @@
+/* sylva: the species library, species in years calibrated to the USDA Urban Tree
+ * Database (McPherson, van Doorn and Peper 2016, https://doi.org/10.2737/RDS-2016-0005)
+ * by scripts/species-library. Its file, data/species/library.json, is built into
+ * the binary. A library species is a preset: "preset": "utdb:NoEast:PLAC". */
+#ifndef SYLVA_LIBRARY_H
+#define SYLVA_LIBRARY_H
+
+#include <stddef.h>
+
+#include "sylva/params.h"
+
+/** Prefix of every library name. */
+#define SYLVA_LIBRARY_PREFIX "utdb:"
+
+/** The library's JSON text (`sylva.species-library/1`), NUL-terminated; *len (if
+ *  given) receives its length. */
+const char *sylva_library_text(size_t *len);
+
+/** The species named `name` ("utdb:REGION:CODE"): 0 and *out, SYLVA_ENOTFOUND, or
+ *  SYLVA_ENOMEM. */
+int sylva_library_find(const char *name, sylva_species_def *out);
+
+/** The library's names, ", "-separated, into buf (truncated to size). */
+void sylva_library_names(char *buf, size_t size);
+
+#endif
