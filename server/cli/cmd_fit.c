@@ -105,15 +105,15 @@ int cmd_fit(int argc, char **argv) {
     case OPT_OUT: out_path = arg; break;
     case OPT_REPORT: report = arg; break;
     case OPT_SEEDS:
-      if (cli_parse_u64("fit", "--seeds", arg, 1, 16, &v)) return CLI_EXIT_USAGE;
+      if (cli_parse_u64("fit", "seeds", arg, 1, 16, &v)) return CLI_EXIT_USAGE;
       o.seeds = (int)v;
       break;
     case OPT_EVALS:
-      if (cli_parse_u64("fit", "--evals", arg, 1, 1000, &v)) return CLI_EXIT_USAGE;
+      if (cli_parse_u64("fit", "evals", arg, 1, 1000, &v)) return CLI_EXIT_USAGE;
       o.max_evals = (int)v;
       break;
     case OPT_THREADS:
-      if (cli_parse_u64("fit", "--threads", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
+      if (cli_parse_u64("fit", "threads", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
       o.threads = (int)v;
       break;
     case OPT_RHO: {

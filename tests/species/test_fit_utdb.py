@@ -1,0 +1,41 @@
+"""`sylva fit --utdb` on three species-regions outside the library (issue 20): each
+is complete in the database and spans at least 40 years; its fitted species, grown
+alone (median of 3 seeds), must match the data column of the fit's own report at
+ages 10 to 40: height within 15%, dbh and crown diameter within 20%, crown height
+within 25%. Prints the tables and the fit times.
+Usage: test_fit_utdb.py SYLVA"""
+import json
+import os
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from species_grow import AGES, compare, finish, fit, grow, report_data, sylva  # noqa: E402
+
+# Norway maple (Pacific Northwest), hackberry (Midwest), willow oak (Piedmont).
+KEYS = ('PacfNW:ACPL', 'MidWst:CEOC', 'Piedmt:QUPH')
+TOLERANCES = {'height': 0.15, 'dbh': 0.20, 'crown_diameter': 0.20, 'crown_height': 0.25}
+
+
+def main():
+    exe = sys.argv[1]
+    failures, times = [], []
+    for key in KEYS:
+        info = json.loads(sylva(exe, 'species', '--utdb', key, '--json').stdout)
+        lo, hi = info['ages']
+        if not info['complete'] or hi < max(AGES):
+            failures.append(f'{key}: complete {info["complete"]}, ages {lo} to {hi}')
+            continue
+        with tempfile.TemporaryDirectory() as d:
+            species, secs, summary = fit(exe, ['--utdb', key, '--report', 'report'], d)
+            data = report_data(os.path.join(d, 'report.md'))
+            grown = grow(exe, species, max(AGES), d)
+        times.append(f'{key} ({info["scientific"]}): fit {secs:.0f} s, {summary}')
+        ages = [a for a in AGES if lo <= a <= hi and a in data]
+        failures += compare(f'{key} {info["scientific"]}: data / model', grown, data, TOLERANCES,
+                            ages)
+    print('\n'.join(times))
+    finish(failures)
+
+
+main()
