@@ -1,6 +1,7 @@
 /* Species presets: the rows of IGM Table 2 (docs/model.md, "Fidelity"), plus the
  * project's calibrated values of the keys the paper does not have. What neither
- * gives takes the defaults of sylva_default_species_def(). */
+ * gives takes the defaults of sylva_default_species_def(). Names that start with
+ * "utdb:" are the species library's (sylva/library.h, docs/species.md). */
 #include <string.h>
 
 #include "sylva/library.h"

@@ -1,5 +1,6 @@
 /* Scenario files: strict check, cJSON parse, validation of every rule of
  * scenario.md with errors that name the JSON pointer of the offending value. */
+#include "sylva/library.h"
 #include "sylva/scenario.h"
 
 #include <cjson/cJSON.h>
@@ -471,9 +472,18 @@ static int parse_species(sylva__parser *p, const cJSON *obj, sylva_species_def *
     if (!rc && sylva_preset_find(name, &def) != 0) {
       char list[1024] = "", q[80];
       size_t n = 0;
-      for (int i = 0; i < sylva_preset_count() && n < sizeof list; i++)
-        n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", sylva_preset_name(i));
-      rc = sylva__fail(p, "unknown preset %s (known: %s)", sylva__quote(q, name), list);
+      if (strncmp(name, SYLVA_LIBRARY_PREFIX, strlen(SYLVA_LIBRARY_PREFIX)) == 0) {
+        /* a library name: the library's, and how to make any other */
+        sylva_library_names(list, sizeof list);
+        rc = sylva__fail(p, "unknown library species %s (the library: %s; `sylva fit --utdb "
+                         "REGION:CODE` calibrates any species of the Urban Tree Database)",
+                         sylva__quote(q, name), list);
+      } else {
+        for (int i = 0; i < sylva_preset_count() && n < sizeof list; i++)
+          n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", sylva_preset_name(i));
+        rc = sylva__fail(p, "unknown preset %s (known: %s; and the library's utdb:REGION:CODE, "
+                         "`sylva species`)", sylva__quote(q, name), list);
+      }
     }
     sylva__ptr_pop(p, old);
     if (rc) return rc;
