@@ -283,10 +283,17 @@ test('the pool: two growing runs take turns on one worker; SIGTERM drops what ha
   const d = await startDaemon({ args: ['--workers', '1'] });
   try {
     const c = await connect(d.url);
-    const a = await create(c, 'a', scenario('stand.json', { iterations: 40 }), true);
-    const b = await create(c, 'b', scenario('stand.json', { iterations: 40 }), true);
-    c.send({ type: 'subscribe', run: a.run });
-    c.send({ type: 'subscribe', run: b.run });
+    // created paused and subscribed before they start: a stand grows its 23
+    // iterations in well under a second, so a run started at its creation could
+    // finish before the subscription (seen once in the sanitizer build, no delta)
+    const a = await create(c, 'a', scenario('stand.json', { iterations: 40 }));
+    const b = await create(c, 'b', scenario('stand.json', { iterations: 40 }));
+    c.send({ type: 'subscribe', run: a.run, id: 'sa' });
+    c.send({ type: 'subscribe', run: b.run, id: 'sb' });
+    await c.next((m) => m.type === 'snapshot' && m.run === a.run);
+    await c.next((m) => m.type === 'snapshot' && m.run === b.run);
+    c.send({ type: 'control', run: a.run, action: 'start' });
+    c.send({ type: 'control', run: b.run, action: 'start' });
     const seen = [];
     while (seen.length < 40) {
       const m = await c.next((x) => x.type === 'delta', 60000);
