@@ -47,32 +47,39 @@ static int doom_branch(sylva_world *w, size_t i, int iteration) {
  * root to its highest node, a branch that leaves the path below lift times the
  * stem's height is doomed unless it reaches the top tenth of the height (a
  * codominant stem is no low branch), so the leader is never cut whichever axis
- * carries it. Uses w->remap and w->pipe as scratch. Returns the number doomed, or
- * SYLVA_ENOMEM. */
+ * carries it. One pass finds every stem's highest node, one backward pass every
+ * subtree's reach. Uses w->remap and w->pipe as scratch. Returns the number doomed,
+ * or SYLVA_ENOMEM. */
 static int64_t lift_crowns(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
+  bool any = false;
+  for (int k = 0; k < w->stem_count && !any; k++)
+    any = w->species[w->stems[k].species].def.lift > 0.0;
+  if (!any) return 0;
+  if (SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count)) return SYLVA_ENOMEM;
+  int32_t *top = w->stem_top.data;
+  for (int k = 0; k < w->stem_count; k++) top[k] = w->stems[k].root_slot;
+  double *reach = w->pipe; /* the highest z of each node's subtree */
+  for (size_t i = 0; i < s->count; i++) {
+    reach[i] = s->z[i];
+    int32_t k = s->stem[i];
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && (top[k] < 0 || s->z[i] > s->z[top[k]])) top[k] = (int32_t)i;
+  }
+  for (size_t i = s->count; i-- > 0;)
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0 && reach[i] > reach[s->parent[i]])
+      reach[s->parent[i]] = reach[i];
   int64_t doomed = 0;
   int32_t *next = w->remap; /* on the main path: the path's next node */
   for (int k = 0; k < w->stem_count; k++) {
-    sylva__stem *st = &w->stems[k];
-    double lift = w->species[st->species].def.lift;
-    if (!(lift > 0.0)) continue;
-    int32_t root = st->root_slot, top = root;
-    for (size_t i = (size_t)root; i < s->count; i++)
-      if (s->stem[i] == k && (s->flags[i] & SYLVA__NODE_ALIVE) && s->z[i] > s->z[top])
-        top = (int32_t)i;
-    double *reach = w->pipe; /* the highest z of each node's subtree */
-    for (size_t i = (size_t)root; i < s->count; i++)
-      if (s->stem[i] == k) reach[i] = s->z[i];
-    for (size_t i = s->count; i-- > (size_t)root + 1;)
-      if (s->stem[i] == k && (s->flags[i] & SYLVA__NODE_ALIVE) && reach[i] > reach[s->parent[i]])
-        reach[s->parent[i]] = reach[i];
-    next[top] = -1;
-    for (int32_t n = top; n != root; n = s->parent[n]) next[s->parent[n]] = n;
-    double below = s->z[root] + lift * (s->z[top] - s->z[root]);
+    double lift = w->species[w->stems[k].species].def.lift;
+    int32_t root = w->stems[k].root_slot, tk = top[k];
+    if (!(lift > 0.0) || root < 0) continue;
+    next[tk] = -1;
+    for (int32_t n = tk; n != root; n = s->parent[n]) next[s->parent[n]] = n;
+    double below = s->z[root] + lift * (s->z[tk] - s->z[root]);
     /* a branch that reaches the top tenth of the stem's height competes for the lead */
-    double codominant = s->z[root] + 0.9 * (s->z[top] - s->z[root]);
-    for (int32_t n = root; n != top && s->z[n] < below; n = next[n]) {
+    double codominant = s->z[root] + 0.9 * (s->z[tk] - s->z[root]);
+    for (int32_t n = root; n != tk && s->z[n] < below; n = next[n]) {
       int32_t off = s->axis_child[n] == next[n] ? s->lateral_child[n] : s->axis_child[n];
       if (off < 0 || (s->flags[off] & SYLVA__NODE_DOOMED) || reach[off] >= codominant) continue;
       if (doom_branch(w, (size_t)off, iteration)) return SYLVA_ENOMEM;

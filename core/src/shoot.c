@@ -203,6 +203,12 @@ static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int ite
   int local = sylva__stem_local(st, iteration);
   int markers = d->m0 - local;
   if (markers < d->m_min) markers = d->m_min;
+  /* the crown's widest reach for the stem's height (docs/model.md, "Species in years") */
+  double reach = INFINITY;
+  if (d->crown_max > 0.0) {
+    double h = st->stats.height > d->rho ? st->stats.height : d->rho;
+    reach = 0.5 * d->crown_max * pow(h, d->crown_max_exp);
+  }
   w->shoot.len = 0;
   int32_t tip = sp->slot;
   for (int32_t k = 0; k < sp->n; k++) {
@@ -222,6 +228,8 @@ static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int ite
     for (int i = 0; i < 3; i++) vu[i] = vd[i] + d->mu * vo[i] + d->gamma * d->tropism[i];
     if (!normalize(vu)) memcpy(vu, vd, sizeof vu);
     double p[3] = {p0[0] + d->rho * vu[0], p0[1] + d->rho * vu[1], p0[2] + d->rho * vu[2]};
+    double dx = p[0] - st->root[0], dy = p[1] - st->root[1];
+    if (dx * dx + dy * dy > reach * reach) break; /* beyond the crown's reach: stops */
     int32_t slot = sylva__add_node(w, tip, lateral, p, sp->stem, iteration);
     if (slot == SYLVA_ENOMEM) return SYLVA_ENOMEM;
     if (slot < 0) break; /* outside, obstacle or another stem's voxel: the shoot stops */

@@ -19,9 +19,14 @@
 #include "world_impl.h"
 
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
-enum { HEADER = 32, SKY = 1, CONFLICTS = 2, SCALED = 4 };
-/* Places of the species record that every image has; the rest only with SCALED. */
-enum { PLACES_BEFORE_SCALED = 37 };
+enum { HEADER = 32, SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8 };
+/* Places of the species record that every image has; those up to 42 only with SCALED,
+ * the rest only with CROWN (which implies SCALED). */
+enum { PLACES_BEFORE_SCALED = 37, PLACES_BEFORE_CROWN = 43 };
+
+static int species_places(bool scaled, bool crown) {
+  return crown ? SYLVA_SPECIES_SNAPSHOT_FIELDS : scaled ? PLACES_BEFORE_CROWN : PLACES_BEFORE_SCALED;
+}
 
 typedef struct writer {
   uint8_t *buf;
@@ -152,13 +157,14 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   if (w->status) return w->status;
   writer o = {0};
   bool conflicts = has_conflicts(w);
-  bool scaled = false;
+  bool scaled = false, crown = false;
   for (int i = 0; i < w->species_count; i++) {
     const sylva_species_def *d = &w->species[i].given;
-    scaled = scaled || d->ref_rho != 0.0 || d->acclimation != 0.0 || d->years || d->nursery ||
-             d->shade_weight != 1.0 || d->lift != 0.0;
+    crown = crown || d->crown_max != 0.0 || d->crown_max_exp != 1.0;
+    scaled = scaled || crown || d->ref_rho != 0.0 || d->acclimation != 0.0 || d->years ||
+             d->nursery || d->shade_weight != 1.0 || d->lift != 0.0;
   }
-  int places = scaled ? SYLVA_SPECIES_SNAPSHOT_FIELDS : PLACES_BEFORE_SCALED;
+  int places = species_places(scaled, crown);
   uint8_t zero[HEADER] = {0};
   put(&o, zero, HEADER);
   for (int a = 0; a < 3; a++) put_f64(&o, w->def.min[a]);
@@ -258,7 +264,8 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   uint32_t version = SYLVA_SNAPSHOT_VERSION;
   for (int i = 0; i < 4; i++) h[i] = (uint8_t)(version >> (8 * i));
   uint32_t flags =
-      (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0);
+      (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0) |
+      (crown ? CROWN : 0);
   for (int i = 0; i < 4; i++) h[4 + i] = (uint8_t)(flags >> (8 * i));
   for (int i = 0; i < 8; i++) h[8 + i] = (uint8_t)(payload >> (8 * i));
   uint64_t sum = fnv1a(o.buf + HEADER, payload);
@@ -357,7 +364,7 @@ static void get_species(reader *r, sylva_species_def *d, int places) {
     goto fail;            \
   } while (0)
 
-static int read_world(reader *r, bool has_sky, bool conflicts, bool scaled,
+static int read_world(reader *r, bool has_sky, bool conflicts, bool scaled, bool crown,
                       sylva_world **out) {
   int rc = SYLVA_OK;
   sylva_world *w = NULL;
@@ -400,7 +407,7 @@ static int read_world(reader *r, bool has_sky, bool conflicts, bool scaled,
     sylva_species_def d = sylva_default_species_def();
     d.growth.kind = (sylva_equation_kind)get_u32(r);
     d.allocation = (sylva_allocation)get_u32(r);
-    get_species(r, &d, scaled ? SYLVA_SPECIES_SNAPSHOT_FIELDS : PLACES_BEFORE_SCALED);
+    get_species(r, &d, species_places(scaled, crown));
     if (r->bad) break;
     int id = sylva_world_add_species(w, &d, label);
     if (id < 0) SYLVA__FAIL(id == SYLVA_ENOMEM ? id : SYLVA_EBADIMAGE);
@@ -592,10 +599,11 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED)) return SYLVA_EBADIMAGE;
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN)) return SYLVA_EBADIMAGE;
+  if ((reserved & CROWN) && !(reserved & SCALED)) return SYLVA_EBADIMAGE;
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};
   return read_world(&r, (reserved & SKY) != 0, (reserved & CONFLICTS) != 0, (reserved & SCALED) != 0,
-                    out);
+                    (reserved & CROWN) != 0, out);
 }

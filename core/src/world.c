@@ -64,6 +64,10 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
   }
   w->def.sky = w->grid.sky; /* the world's own copy */
   w->def.sky_count = w->grid.sky_count;
+  if (SYLVA__VEC_RESERVE(w->crown_bins, 2 * sylva__crown_bins(def->max[2] - def->min[2]))) {
+    sylva_world_destroy(w);
+    return SYLVA_ENOMEM;
+  }
   sylva__rng_seed(&w->rng, def->seed);
   *out = w;
   return SYLVA_OK;
@@ -98,6 +102,8 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->finishing.data);
   sylva__free(w->caps.data);
   sylva__free(w->stem_first.data);
+  sylva__free(w->stem_top.data);
+  sylva__free(w->crown_bins.data);
   sylva__free(w->cells.data);
   sylva__free(w->cell_first.data);
   sylva__free(w->cell_items.data);
@@ -482,9 +488,154 @@ static int transplant(sylva_world *w, const sylva_world *n, int first_stem, int 
   return rc;
 }
 
+/* Room for one more plant with `stems` stems. */
+static int reserve_plant_room(sylva_world *w, int stems) {
+  if (w->plant_count == w->plant_cap) {
+    int cap = w->plant_cap ? 2 * w->plant_cap : 8;
+    sylva__plant *p = sylva__realloc(w->plants, (size_t)cap * sizeof *p);
+    if (!p) return SYLVA_ENOMEM;
+    w->plants = p;
+    w->plant_cap = cap;
+  }
+  if (w->stem_count + stems > w->stem_cap) {
+    int cap = w->stem_cap ? w->stem_cap : 8;
+    while (cap < w->stem_count + stems) cap *= 2;
+    sylva__stem *p = sylva__realloc(w->stems, (size_t)cap * sizeof *p);
+    if (!p) return SYLVA_ENOMEM;
+    w->stems = p;
+    w->stem_cap = cap;
+  }
+  return SYLVA_OK;
+}
+
+/* Files the plant whose `stems` stems were just placed (from w->mark.stem_count) and
+ * measures them; returns its id. */
+static int finish_plant(sylva_world *w, const sylva_plant_def *def, int stems) {
+  int pid = w->plant_count;
+  sylva__plant *pl = &w->plants[pid];
+  memset(pl, 0, sizeof *pl);
+  strcpy(pl->label, def->label);
+  pl->species = def->species;
+  pl->first_stem = w->mark.stem_count;
+  pl->stem_count = stems;
+  file_plant(w, pid);
+  w->plant_count++;
+  for (int r = 0; r < stems; r++) sylva__stats_planted(w, pl->first_stem + r);
+  sylva__conflicts(w, w->iteration);
+  SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
+  return pid;
+}
+
+/* ---- measured plants ------------------------------------------------------------ */
+
+/* Checks a measured plant's nodes (docs/model.md, "Measured trees"): parents before
+ * children, one axis and one lateral child each, finite positions and radii above 0,
+ * births at planting or before and never before their parent's, and every node in a
+ * free voxel of the world (another stem's voxel, an obstacle or outside: refused).
+ * Counts the roots. 0 or a status, *bad the node at fault. */
+static int check_measured(const sylva_world *w, const sylva_plant_def *def, int *roots, int *bad) {
+  int n = def->node_count, rc = SYLVA_OK;
+  if (n < 1 || n > SYLVA_MAX_MEASURED_NODES) return n < 1 ? SYLVA_EINVAL : SYLVA_ETOOBIG;
+  uint8_t *links = sylva__calloc((size_t)n, 1); /* 1: has an axis child, 2: a lateral */
+  if (!links) return SYLVA_ENOMEM;
+  *roots = 0;
+  for (int i = 0; i < n && !rc; i++) {
+    const sylva_plant_node *d = &def->nodes[i];
+    *bad = i;
+    bool finite = isfinite(d->p[0]) && isfinite(d->p[1]) && isfinite(d->p[2]) && isfinite(d->radius);
+    if (!finite || !(d->radius > 0.0) || d->birth > 0 || d->parent < -1 || d->parent >= i ||
+        (d->parent < 0 && d->lateral) || d->birth < -SYLVA_MAX_AGE - 1000) {
+      rc = SYLVA_EINVAL;
+      break;
+    }
+    if (d->parent < 0) {
+      ++*roots;
+    } else {
+      uint8_t bit = d->lateral ? 2 : 1;
+      if ((links[d->parent] & bit) || d->birth < def->nodes[d->parent].birth) {
+        rc = SYLVA_EINVAL;
+        break;
+      }
+      links[d->parent] |= bit;
+    }
+    int v[3];
+    float f[3];
+    if (!sylva__voxel_of(w, d->p, f, v))
+      rc = SYLVA_EOUTSIDE;
+    else if (sylva__grid_blocked(&w->grid, v))
+      rc = SYLVA_EBLOCKED;
+    else if (sylva__grid_occupant(&w->grid, v) >= 0)
+      rc = SYLVA_EOCCUPIED;
+  }
+  sylva__free(links);
+  if (!rc) *bad = -1;
+  if (!rc && w->stem_count + *roots > SYLVA_MAX_STEMS) rc = SYLVA_ETOOBIG;
+  return rc;
+}
+
+/* Adds a measured plant: its stems, its nodes as they stand (births counted from now,
+ * radii kept), occupying and shading as grown nodes do. */
+static int add_measured(sylva_world *w, const sylva_plant_def *def, int *bad) {
+  if (def->species < 0 || def->species >= w->species_count || !def->label || !def->label[0] ||
+      strlen(def->label) >= SYLVA_LABEL_MAX || sylva__find_plant(w, def->label) >= 0)
+    return SYLVA_EINVAL;
+  const sylva_species_def *sp = &w->species[def->species].def;
+  if (def->age < 0 || def->age > SYLVA_MAX_AGE || (def->age > 0 && !sp->years)) return SYLVA_EINVAL;
+  int roots = 0;
+  int rc = check_measured(w, def, &roots, bad);
+  if (rc) return rc;
+  if (reserve_plant_room(w, roots)) return SYLVA_ENOMEM;
+  int32_t *map = sylva__malloc((size_t)def->node_count * sizeof *map);
+  if (!map) return SYLVA_ENOMEM;
+  if (sylva__skeleton_reserve(&w->nodes, (size_t)def->node_count) ||
+      reserve_plant_index(w, (size_t)w->plant_count + 1) ||
+      SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + roots) + 1)) {
+    sylva__free(map);
+    return SYLVA_ENOMEM;
+  }
+  int pid = w->plant_count;
+  set_mark(w);
+  /* its stems count the seasons it has grown: a years species' cap goes on from there */
+  int32_t born = (int32_t)w->iteration - (sp->years ? sp->nursery + def->age : 0);
+  for (int i = 0; i < def->node_count && !rc; i++) {
+    const sylva_plant_node *d = &def->nodes[i];
+    int stem = d->parent < 0 ? w->stem_count : w->nodes.stem[map[d->parent]];
+    if (d->parent < 0) {
+      sylva__stem *st = &w->stems[w->stem_count++];
+      memset(st, 0, sizeof *st);
+      st->plant = pid;
+      st->index = stem - w->mark.stem_count;
+      st->species = def->species;
+      st->born = born;
+      memcpy(st->root, d->p, sizeof st->root);
+    }
+    int32_t slot = sylva__add_node(w, d->parent < 0 ? -1 : map[d->parent], d->lateral != 0, d->p,
+                                   stem, w->iteration + d->birth);
+    if (slot < 0) { /* memory, or a voxel its own other stem holds */
+      rc = slot;
+      *bad = i;
+      break;
+    }
+    map[i] = slot;
+    w->nodes.radius[slot] = (float)d->radius;
+    if (d->parent < 0) w->stems[stem].root_slot = slot;
+    rc = sylva__shade_node(w, slot, +1);
+    if (!rc) w->mark.shaded = (size_t)slot + 1;
+  }
+  sylva__free(map);
+  if (!rc && (sylva__conflicts_reserve(w, w->mark.stem_count) || reserve_scratch(w)))
+    rc = SYLVA_ENOMEM;
+  if (rc) {
+    take_back(w);
+    return rc;
+  }
+  return finish_plant(w, def, roots);
+}
+
 int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root) {
   if (bad_root) *bad_root = -1;
   if (w->status) return w->status;
+  if (def && def->nodes) return add_measured(w, def, bad_root);
   if (!def || def->species < 0 || def->species >= w->species_count || def->root_count < 1 ||
       !def->roots || !def->label || !def->label[0] || strlen(def->label) >= SYLVA_LABEL_MAX)
     return SYLVA_EINVAL;
@@ -512,23 +663,10 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   sylva__free(taken);
   /* Room for everything first; then only placing the trunks can fail (a voxel chunk
    * for their occupancy or shade), and that is taken back. */
-  if (w->plant_count == w->plant_cap) {
-    int cap = w->plant_cap ? 2 * w->plant_cap : 8;
-    sylva__plant *p = sylva__realloc(w->plants, (size_t)cap * sizeof *p);
-    if (!p) return SYLVA_ENOMEM;
-    w->plants = p;
-    w->plant_cap = cap;
-  }
-  if (w->stem_count + def->root_count > w->stem_cap) {
-    int cap = w->stem_cap ? w->stem_cap : 8;
-    while (cap < w->stem_count + def->root_count) cap *= 2;
-    sylva__stem *p = sylva__realloc(w->stems, (size_t)cap * sizeof *p);
-    if (!p) return SYLVA_ENOMEM;
-    w->stems = p;
-    w->stem_cap = cap;
-  }
+  if (reserve_plant_room(w, def->root_count)) return SYLVA_ENOMEM;
   if (sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per) ||
-      reserve_plant_index(w, (size_t)w->plant_count + 1))
+      reserve_plant_index(w, (size_t)w->plant_count + 1) ||
+      SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + def->root_count) + 1))
     return SYLVA_ENOMEM;
   int pid = w->plant_count;
   sylva_world *nursery = NULL;
@@ -578,22 +716,12 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       prev = slot;
     }
   }
-  if (sylva__conflicts_reserve(w, w->mark.stem_count)) {
+  /* the scratch the measures use (the crown base's leaf heights) */
+  if (sylva__conflicts_reserve(w, w->mark.stem_count) || reserve_scratch(w)) {
     take_back(w);
     return SYLVA_ENOMEM;
   }
-  sylva__plant *pl = &w->plants[pid];
-  memset(pl, 0, sizeof *pl);
-  strcpy(pl->label, def->label);
-  pl->species = def->species;
-  pl->first_stem = w->mark.stem_count;
-  pl->stem_count = def->root_count;
-  file_plant(w, pid);
-  w->plant_count++;
-  for (int r = 0; r < def->root_count; r++) sylva__stats_planted(w, pl->first_stem + r);
-  sylva__conflicts(w, w->iteration);
-  SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
-  return pid;
+  return finish_plant(w, def, def->root_count);
 }
 
 int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def) {
@@ -662,6 +790,7 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   bool reports = w->reports;
   w->reports = true;
   if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count) ||
+      SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
       sylva__conflicts_reserve(w, 0)) {
     w->reports = reports;
     return SYLVA_ENOMEM;
@@ -731,7 +860,8 @@ static int reserve_rest(sylva_world *w) {
   if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
       SYLVA__VEC_RESERVE(w->shed, count) ||
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
-      SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) || sylva__conflicts_reserve(w, 0))
+      SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) ||
+      SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) || sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
   return SYLVA_OK;
 }
@@ -1010,7 +1140,9 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->radii.cap * sizeof(sylva_radius_change) +
                w->cells.cap * sizeof(sylva__keyed) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
-                w->finishing.cap + w->caps.cap + w->stem_first.cap) * sizeof(int32_t) +
+                w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_top.cap) *
+                   sizeof(int32_t) +
+               w->crown_bins.cap * sizeof(double) +
                w->cell_pos.cap * sizeof(float) +
                (size_t)w->stem_cap * sizeof(sylva__stem) +
                w->entered.cap * sizeof(sylva__entered) + w->prunes.cap * sizeof(sylva_prune_def) +

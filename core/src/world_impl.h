@@ -146,6 +146,10 @@ struct sylva_world {
                                      step can no longer fail */
   SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0 */
   SYLVA__VEC(int32_t) stem_first; /* allocation: first sprout of each stem, stem_count + 1 */
+  SYLVA__VEC(int32_t) stem_top;   /* shedding: each stem's highest live node; stats: its
+                                     leaf-bearing nodes (stem_count + 1, kept reserved) */
+  SYLVA__VEC(double) crown_bins;  /* stats: the lowest and highest leaves of each height
+                                     bin of one stem (sylva__crown_bins, from creation) */
   /* the rest as the phases need them */
   SYLVA__VEC(sylva__sprout) sprouts;
   SYLVA__VEC(int32_t) order;
@@ -188,6 +192,8 @@ static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
 int sylva__species_cap(const sylva__species *sp, int local);
 /** Does a stem of this species stop growing at local iteration T ("Stop")? */
 bool sylva__species_stops(const sylva__species *sp, int local);
+/** Height bins of the crown base's measure for a world of this height (stats.c). */
+size_t sylva__crown_bins(double height);
 /** Does the node at this depth carry a lateral bud? */
 static inline bool sylva__has_bud(const sylva__species *sp, int32_t depth) {
   return depth % sp->bud_every == 0;

@@ -585,14 +585,58 @@ static int cmp_id_ref_name(const void *key, const void *elem) {
   return strcmp((const char *)key, ((const sylva__id_ref *)elem)->id);
 }
 
+/* The "from" object of a plant: {"file", "format"?, "model"?, "age"?}. */
+static int parse_from(sylva__parser *p, const cJSON *obj, sylva_scenario_plant *pl) {
+  static const char *const keys[] = {"file", "format", "model", "age"};
+  size_t old = sylva__ptr_push(p, "from");
+  int rc = sylva__want_object(p, obj);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 4);
+  if (!rc && !member(obj, "file")) rc = sylva__fail_at_key(p, "file", "required");
+  const char *file = "";
+  if (!rc) {
+    size_t o2 = sylva__ptr_push(p, "file");
+    rc = sylva__want_string(p, member(obj, "file"), &file);
+    size_t n = strlen(file);
+    if (!rc && (n == 0 || n > 4096)) rc = sylva__fail(p, "must be 1 to 4096 bytes long, got %zu", n);
+    if (!rc && !(pl->from_file = strdup(file))) rc = sylva__fail_nomem(p);
+    sylva__ptr_pop(p, o2);
+  }
+  if (!rc && member(obj, "format")) {
+    size_t o2 = sylva__ptr_push(p, "format");
+    const char *f = "";
+    rc = sylva__want_string(p, member(obj, "format"), &f);
+    if (!rc && strcmp(f, "mat") && strcmp(f, "text") && strcmp(f, "csv") && strcmp(f, "skeleton")) {
+      char q[80];
+      rc = sylva__fail(p, "unknown format %s (known: mat, text, csv, skeleton)", sylva__quote(q, f));
+    }
+    if (!rc) snprintf(pl->from_format, sizeof pl->from_format, "%s", f);
+    sylva__ptr_pop(p, o2);
+  }
+  double v = 0;
+  bool given;
+  if (!rc) rc = sylva__read_integer(p, obj, "model", 1, 100000, &given, &v);
+  if (!rc) pl->from_model = given ? (int)v : 0;
+  if (!rc) rc = sylva__read_integer(p, obj, "age", 0, SYLVA_MAX_AGE, &given, &v);
+  if (!rc) pl->from_age = given ? (int)v : -1;
+  sylva__ptr_pop(p, old);
+  return rc;
+}
+
 /* by_name: the species sorted by name, for lookups in O(log n). */
 int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *by_name,
                        int species_count, int *stem_count, sylva_scenario_plant *pl,
                        const char **species_name) {
-  static const char *const keys[] = {"id", "species", "roots", "age"};
+  static const char *const keys[] = {"id", "species", "roots", "age", "from"};
   int rc = sylva__want_object(p, obj);
-  if (!rc) rc = sylva__check_keys(p, obj, keys, 4);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 5);
   if (rc) return rc;
+  pl->from_age = -1;
+  if (member(obj, "from")) {
+    /* a file is read only from a scenario, never for a message over the wire */
+    if (!by_name) return sylva__fail_at_key(p, "from", "measured trees come only from a scenario's files");
+    rc = parse_from(p, member(obj, "from"), pl);
+    if (rc) return rc;
+  }
   for (int i = 0; i < 3; i++) /* age is optional */
     if (!member(obj, keys[i])) return sylva__fail_at_key(p, keys[i], "required");
   size_t old = sylva__ptr_push(p, "id");
@@ -651,6 +695,10 @@ int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *
   bool given;
   rc = sylva__read_integer(p, obj, "age", 0, SYLVA_MAX_AGE, &given, &age);
   pl->age = (int)age;
+  if (!rc && pl->from_file && given)
+    rc = sylva__fail_at_key(p, "age", "a measured tree's age goes in from/age");
+  if (!rc && pl->from_file && count != 1)
+    rc = sylva__fail_at_key(p, "roots", "a measured tree stands at one root, got %d", count);
   return rc;
 }
 
@@ -766,7 +814,11 @@ static void scenario_free_parts(sylva_scenario *s) {
   if (!s) return;
   free(s->name);
   free(s->species);
-  for (int i = 0; s->plants && i < s->plant_count; i++) free(s->plants[i].roots);
+  for (int i = 0; s->plants && i < s->plant_count; i++) {
+    free(s->plants[i].roots);
+    free(s->plants[i].from_file);
+    free(s->plants[i].nodes);
+  }
   free(s->plants);
   free(s->obstacles);
   free(s->management);
@@ -1133,6 +1185,17 @@ char *sylva_scenario_json(const sylva_scenario *s) {
     }
     sylva__strbuf_puts(&b, "]");
     if (pl->age) sylva__strbuf_printf(&b, ", \"age\": %d", pl->age);
+    if (pl->from_file) {
+      sylva__strbuf_puts(&b, ", \"from\": {\"file\": ");
+      sylva__strbuf_json_string(&b, pl->from_file);
+      if (pl->from_format[0]) {
+        sylva__strbuf_puts(&b, ", \"format\": ");
+        sylva__strbuf_json_string(&b, pl->from_format);
+      }
+      if (pl->from_model) sylva__strbuf_printf(&b, ", \"model\": %d", pl->from_model);
+      if (pl->from_age >= 0) sylva__strbuf_printf(&b, ", \"age\": %d", pl->from_age);
+      sylva__strbuf_putc(&b, '}');
+    }
     sylva__strbuf_putc(&b, '}');
   }
   sylva__strbuf_puts(&b, s->plant_count ? "\n  ],\n  \"obstacles\": [" : "],\n  \"obstacles\": [");
@@ -1224,16 +1287,38 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
         .root_count = pl->root_count,
         .age = pl->age,
     };
+    if (pl->from_file) {
+      if (!pl->nodes) {
+        size_t old = sylva__ptr_push(&p, "plants");
+        sylva__ptr_push_index(&p, (size_t)i);
+        sylva__ptr_push(&p, "from");
+        rc = fail_status(&p, SYLVA_EINVAL, "the measured tree's file was not read");
+        sylva__ptr_pop(&p, old);
+        goto fail;
+      }
+      pd.roots = NULL;
+      pd.root_count = 0;
+      pd.nodes = pl->nodes;
+      pd.node_count = pl->node_count;
+      pd.age = pl->measured_age;
+    }
     int bad_root = -1;
     rc = sylva_world_add_plant(w, &pd, &bad_root);
     if (rc < 0) {
       size_t old = sylva__ptr_push(&p, "plants");
       sylva__ptr_push_index(&p, (size_t)i);
-      if (bad_root >= 0 && bad_root < pl->root_count) {
+      if (pl->from_file) {
+        sylva__ptr_push(&p, "from");
+      } else if (bad_root >= 0 && bad_root < pl->root_count) {
         sylva__ptr_push(&p, "roots");
         sylva__ptr_push_index(&p, (size_t)bad_root);
       }
-      if (rc == SYLVA_EBLOCKED) {
+      if (pl->from_file && bad_root >= 0) {
+        const sylva_plant_node *d = &pl->nodes[bad_root];
+        rc = fail_status(&p, rc, "the measured tree's node %d at [%g, %g, %g]: %s", bad_root,
+                         d->p[0], d->p[1], d->p[2],
+                         rc == SYLVA_EBLOCKED ? "inside an obstacle" : sylva_strerror(rc));
+      } else if (rc == SYLVA_EBLOCKED) {
         rc = fail_status(&p, rc, "root inside an obstacle");
       } else if (rc == SYLVA_EOUTSIDE) {
         char a[SYLVA_FMT_BUFSIZE * 3], b[SYLVA_FMT_BUFSIZE * 3];

@@ -24,7 +24,7 @@ static const cli_option fit_options[OPT_COUNT] = {
     [OPT_REPORT] = {"report", 0, "PREFIX", "write PREFIX.md and PREFIX.png (default: FILE less .json)"},
     [OPT_SEEDS] = {"seeds", 0, "N", "trees grown per evaluation, medians taken (1-16, default 3)"},
     [OPT_EVALS] = {"evals", 0, "N", "evaluations of the search (1-1000, default 40)"},
-    [OPT_RHO] = {"rho", 0, "M", "internode length in m (0.05-2, default 0.25)"},
+    [OPT_RHO] = {"rho", 0, "M", "internode length in m (0.05-2; default 0.25, halved for slow growth)"},
     [OPT_THREADS] = {"threads", 0, "N", "trees grown at once (1-64, default 2)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };

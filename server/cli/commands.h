@@ -30,6 +30,10 @@ int cmd_fit(int argc, char **argv);
  *  species of the Urban Tree Database. */
 int cmd_species(int argc, char **argv);
 
+/** `sylva import FILE -o OUT.json`: a measured tree (a cylinder model) as a
+ *  skeleton with estimated birth years. */
+int cmd_import(int argc, char **argv);
+
 /** `sylva serve [options]`: the daemon. */
 int cmd_serve(int argc, char **argv);
 

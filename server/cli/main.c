@@ -30,6 +30,9 @@ static void usage(FILE *f) {
         "  fit (DATA.csv | --utdb REGION:CODE) -o SPECIES.json\n"
         "                          calibrate a species in years to measured growth\n"
         "  species [--region R]    the species library (Urban Tree Database species)\n"
+        "  import FILE -o OUT.json\n"
+        "                          a measured tree (TreeQSM, SimpleForest) as a skeleton\n"
+        "                          with estimated birth years\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -63,6 +66,7 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "serve") == 0) return cmd_serve(argc - 1, argv + 1);
   if (strcmp(cmd, "fit") == 0) return cmd_fit(argc - 1, argv + 1);
   if (strcmp(cmd, "species") == 0) return cmd_species(argc - 1, argv + 1);
+  if (strcmp(cmd, "import") == 0) return cmd_import(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else

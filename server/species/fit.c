@@ -20,8 +20,11 @@
 #define MAX_SEEDS 16
 
 sylva_fit_options sylva_fit_default_options(void) {
-  return (sylva_fit_options){.seeds = 3, .threads = 2, .max_evals = 40, .rho = 0.25};
+  return (sylva_fit_options){.seeds = 3, .threads = 2, .max_evals = 40, .rho = 0.0};
 }
+
+/* The base species' shedding threshold. */
+#define R_S 0.5
 
 sylva_species_def sylva_fit_base_species(double rho) {
   /* The years model's fixed choices, each measured (docs/model.md, "Species in
@@ -33,7 +36,7 @@ sylva_species_def sylva_fit_base_species(double rho) {
   d.ref_rho = rho;
   d.years = 1;
   d.acclimation = 1.0;
-  d.r_s = 0.5;
+  d.r_s = R_S;
   d.apical_zone = 1;
   d.leaf_age = 3;
   d.tau = 0;
@@ -327,7 +330,7 @@ static void *grow_one(void *arg) {
   if (j->rc) return NULL;
   double root[1][3] = {{0, 0, 0}};
   int sp = sylva_world_add_species(w, d, "fit");
-  sylva_plant_def pd = {sp, "tree", (const double(*)[3])root, 1, 0};
+  sylva_plant_def pd = {.species = sp, .label = "tree", .roots = (const double(*)[3])root, .root_count = 1};
   j->rc = sp < 0 ? sp : sylva_world_add_plant(w, &pd, NULL);
   if (j->rc >= 0) {
     j->rc = SYLVA_OK;
@@ -483,8 +486,22 @@ typedef struct search {
   int evals, trees;
   int rc;
   double best;
-  double k; /* the height's scale, found apart from the search (scale_height) */
+  double k;     /* the height's scale, found apart from the search (scale_height) */
+  double crown; /* the crown base's control (set_crown), from 0 */
 } search;
+
+/* The crown base's control c: the shedding threshold r_s = R_S e^(2c). The lift is
+ * the managers' (set from the data's crown ratio), and the crown base above it is
+ * the tree's: a crown whose lower branches die too soon for the data keeps them
+ * longer, one that keeps them too long sheds them sooner. */
+#define CROWN_GAIN 1.5 /* per (grown - target crown height) / target height */
+#define CROWN_MIN (-1.5)
+#define CROWN_MAX 0.5
+static void set_crown(sylva_species_def *d, double c) {
+  if (c < CROWN_MIN) c = CROWN_MIN;
+  if (c > CROWN_MAX) c = CROWN_MAX;
+  d->r_s = R_S * exp(2.0 * c);
+}
 
 /* Builds the species for a point of the search: the tropism's weight (below 0: the
  * tropism points down, for crowns wider than tall), and the height's scale. */
@@ -599,11 +616,12 @@ static void decade_errors(const sylva_fit_targets *t, const sylva_fit_targets *g
 
 static void progress(const sylva_fit_options *o, const char *fmt, ...);
 
-/* The height's scale k and the crown's lift. The path grows k times the target
- * height, as much as the leader's bends and its share of the light take off it; the
- * lift sets the crown base. Each round grows the trees, multiplies k by the median
- * over the check ages of target / grown height, and raises the lift by the median
- * of (grown - target crown height) / target height. */
+/* The height's scale k and the crown base's control. The path grows k times the
+ * target height, as much as the leader's bends and its share of the light take off
+ * it; the shedding threshold sets the crown base above the lift. Each round grows the
+ * trees, multiplies k by the median over the check ages of target / grown height,
+ * and raises the control by the median of (grown - target crown height) / target
+ * height. */
 static int scale_height(search *s, double gamma, int rounds) {
   for (int i = 0; i < rounds; i++) {
     sylva_species_def d;
@@ -620,17 +638,45 @@ static int scale_height(search *s, double gamma, int rounds) {
       if (target->height > 0.0 && isfinite(target->crown_ht) && isfinite(grown->crown_ht))
         shift[m++] = (grown->crown_ht - target->crown_ht) / target->height;
     }
-    double f = n ? median(ratio, n) : 1.0, lift = m ? median(shift, m) : 0.0;
+    double f = n ? median(ratio, n) : 1.0, longer = m ? median(shift, m) : 0.0;
     s->k *= f;
     if (s->k < 0.5) s->k = 0.5;
     if (s->k > 2.5) s->k = 2.5;
-    s->def.lift += 0.7 * lift; /* damped: the crown base follows the lift unevenly */
-    if (s->def.lift < 0.0) s->def.lift = 0.0;
-    if (s->def.lift > 0.6) s->def.lift = 0.6;
-    progress(s->o, "fit: height's scale %.3f (grown / target %.3f), lift %.3f", s->k, 1.0 / f,
-             s->def.lift);
+    s->crown += CROWN_GAIN * longer;
+    set_crown(&s->def, s->crown);
+    progress(s->o, "fit: height's scale %.3f (grown / target %.3f), lift %.3f, r_s %.3f", s->k,
+             1.0 / f, s->def.lift, s->def.r_s);
   }
   return SYLVA_OK;
+}
+
+/* The crown's widest reach: the data's crown diameter against height at the check
+ * ages, the power law a H^b fitted in logs (GSL's linear least squares, b within
+ * 0..2), with CROWN_ROOM to spare: an open-grown tree of a height is as wide as the
+ * data and no wider (docs/model.md, "Species in years"). */
+#define CROWN_ROOM 1.05
+static void crown_limit(const sylva_fit_targets *t, const int *ages, int nages,
+                        sylva_species_def *d) {
+  double lx[SYLVA_FIT_MAX_YEARS / 5 + 1], ly[SYLVA_FIT_MAX_YEARS / 5 + 1];
+  size_t n = 0;
+  for (int i = 0; i < nages; i++) {
+    const sylva_fit_sizes *z = &t->at[ages[i]];
+    if (z->height > 0.0 && isfinite(z->crown_dia) && z->crown_dia > 0.0) {
+      lx[n] = log(z->height);
+      ly[n++] = log(z->crown_dia);
+    }
+  }
+  if (!n) return; /* no crown diameter in the data: no limit */
+  double c0 = 0.0, b = 1.0, cov00, cov01, cov11, sumsq;
+  if (n >= 2 && gsl_fit_linear(lx, 1, ly, 1, n, &c0, &b, &cov00, &cov01, &cov11, &sumsq) == GSL_SUCCESS &&
+      isfinite(b))
+    b = b < 0.0 ? 0.0 : b > 2.0 ? 2.0 : b;
+  else
+    b = 1.0;
+  double mean = 0.0; /* ln a for that exponent: the mean of ln CD - b ln H */
+  for (size_t i = 0; i < n; i++) mean += ly[i] - b * lx[i];
+  d->crown_max = CROWN_ROOM * exp(mean / (double)n);
+  d->crown_max_exp = b;
 }
 
 static void progress(const sylva_fit_options *o, const char *fmt, ...) {
@@ -643,13 +689,24 @@ static void progress(const sylva_fit_options *o, const char *fmt, ...) {
   o->progress(o->ctx, line);
 }
 
+/* The internode length when none is given: 0.25 m, halved while the height grows
+ * less than half an internode a season over the first 40 years (or the data's): a
+ * cap rounds to whole internodes, and a tree whose caps are mostly 0 stands still
+ * (docs/model.md, "Calibration"). */
+static double default_rho(const sylva_fit_targets *t) {
+  int a0 = t->first > 0 ? t->first : 0, a = t->years < a0 + 40 ? t->years : a0 + 40;
+  double rate = a > a0 ? (t->at[a].height - t->at[a0].height) / (double)(a - a0) : 0.0, rho = 0.25;
+  while (rho > 0.07 && isfinite(rate) && rate < 0.5 * rho) rho *= 0.5;
+  return rho;
+}
+
 int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt,
                         sylva_fit_result *out, char *err, size_t errlen) {
   sylva_fit_options o = *opt;
   if (o.seeds < 1 || o.seeds > MAX_SEEDS) o.seeds = 3;
   if (o.threads < 1) o.threads = 1;
   if (o.max_evals < 1) o.max_evals = 40;
-  if (!(o.rho > 0.0)) o.rho = 0.25;
+  if (!(o.rho > 0.0)) o.rho = default_rho(t);
   int years = t->years < 60 ? t->years : 60; /* the decades a planner asks about */
   if (!(t->at[years].height > 0.0)) {
     fail(err, errlen, "the targets hold no height");
@@ -668,6 +725,7 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   }
   double lift = nr ? median(ratios, nr) : 0.3;
   s.def.lift = lift < 0.0 ? 0.0 : lift > 0.6 ? 0.6 : lift;
+  crown_limit(t, s.ages, s.nages, &s.def);
   /* the nursery years, once, from the height curve as the data give it */
   int rc = fit_growth(t, years, o.rho, 1.0, &s.nursery, &s.def.growth);
   if (rc) {
@@ -679,7 +737,7 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
            o.rho, s.def.lift);
   /* the height's scale, then the crown's spread with the simulation in the loop, then
    * the height's scale again for that spread */
-  rc = scale_height(&s, s.def.gamma, 2);
+  rc = scale_height(&s, s.def.gamma, 3);
   if (rc) {
     fail(err, errlen, rc == SYLVA_ENOMEM ? "out of memory" : "growing the species failed");
     return rc;
@@ -714,7 +772,7 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   if (gamma < GAMMA_MIN) gamma = GAMMA_MIN;
   if (gamma > GAMMA_MAX) gamma = GAMMA_MAX;
   s.def.mu = mu < 0.2 ? 0.2 : mu > 4.0 ? 4.0 : mu;
-  rc = scale_height(&s, gamma, 2);
+  rc = scale_height(&s, gamma, 3);
   sylva_species_def d;
   if (!rc) rc = species_at(&s, gamma, s.k, &d);
   /* the trunk: tip radius and pipe exponent, then r_tip rescaled (dbh is linear in it) */

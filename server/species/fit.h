@@ -74,7 +74,8 @@ typedef struct sylva_fit_options {
   int seeds;     /**< grown per evaluation, medians taken (default 3) */
   int threads;   /**< at most this many trees grow at once (default 2) */
   int max_evals; /**< of the simplex search (default 40) */
-  double rho;    /**< internode length of the species, also its ref_rho (default 0.25) */
+  double rho;    /**< internode length of the species, also its ref_rho (0: 0.25 m, halved
+                      for slow growth; see sylva_fit_calibrate) */
   /** Progress lines (may be NULL). */
   void (*progress)(void *ctx, const char *line);
   void *ctx;

@@ -92,7 +92,8 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
       sylva_world_destroy(copy);
       return SYLVA_EINVAL;
     }
-    sylva_plant_def def = {species, p->id, (const double(*)[3])p->roots, p->root_count, p->age};
+    sylva_plant_def def = {.species = species, .label = p->id, .roots = (const double(*)[3])p->roots,
+                           .root_count = p->root_count, .age = p->age};
     int bad = -1;
     rc = sylva_world_add_plant(copy, &def, &bad);
     if (rc < 0) {

@@ -168,7 +168,7 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
       {lo[0] + 0.15 * span[0], lo[1] + 0.15 * span[1], lo[2] + 0.82 * span[2]},
       SYLVA_OBSTACLE_SOLID};
   double root[1][3] = {{lo[0] + 0.25 * span[0], lo[1] + 0.25 * span[1], lo[2]}};
-  sylva_plant_def tree = {0, "late", (const double(*)[3])root, 1, 0};
+  sylva_plant_def tree = {0, "late", (const double(*)[3])root, 1, 0, NULL, 0};
   double cut_min[3] = {lo[0] + 0.4 * span[0], lo[1] + 0.4 * span[1], lo[2] + 0.2 * span[2]};
   double cut_max[3] = {lo[0] + 0.6 * span[0], lo[1] + 0.6 * span[1], lo[2] + span[2]};
   for (int k = 0; k < 3;) {

@@ -199,7 +199,7 @@ static sylva_world *stand_of(const char *preset, int rows, double spacing, doubl
     double root[1][3] = {{(i % rows - (rows - 1) / 2.0) * spacing, (i / rows - (rows - 1) / 2.0) * spacing, 0}};
     char label[16];
     snprintf(label, sizeof label, "t%d", i);
-    sylva_plant_def p = {s, label, (const double(*)[3])root, 1, 0};
+    sylva_plant_def p = {s, label, (const double(*)[3])root, 1, 0, NULL, 0};
     if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
   }
   return w;
@@ -219,7 +219,7 @@ static sylva_world *single(const char *preset) {
   sp.tropism[2] = 1.0; /* upright, as the ready scenarios */
   int s = sylva_world_add_species(w, &sp, preset);
   double root[1][3] = {{0, 0, 0}};
-  sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1, 0};
+  sylva_plant_def p = {s, "tree", (const double(*)[3])root, 1, 0, NULL, 0};
   if (sylva_world_add_plant(w, &p, NULL) < 0) exit(1);
   return w;
 }

@@ -30,8 +30,8 @@ static sylva_world *make_world(int iterations) {
   double tree[1][3] = {{-2.0, 0.0, 0.0}};
   double shrub[2][3] = {{2.0, 0.0, 0.0}, {2.4, 0.3, 0.0}};
   /* a label with a space: the OBJ object name must stay one token */
-  sylva_plant_def p1 = {species, "oak", (const double(*)[3])tree, 1, 0};
-  sylva_plant_def p2 = {species, "hazel bush", (const double(*)[3])shrub, 2, 0};
+  sylva_plant_def p1 = {species, "oak", (const double(*)[3])tree, 1, 0, NULL, 0};
+  sylva_plant_def p2 = {species, "hazel bush", (const double(*)[3])shrub, 2, 0, NULL, 0};
   sylva_obstacle_def wall = {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID};
   if (species < 0 || sylva_world_add_plant(w, &p1, NULL) < 0 ||
       sylva_world_add_plant(w, &p2, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {

@@ -1168,8 +1168,8 @@ static sylva_world *snapshot_world(void) {
   CHECK(sylva_world_add_obstacle(w, &wall) >= 0);
   const double tree_roots[][3] = {{0, 0, 0}};
   const double shrub_roots[][3] = {{-2, -2, 0}, {-2.6, -1.7, 0}};
-  sylva_plant_def tree = {species, "t1", tree_roots, 1, 0};
-  sylva_plant_def shrub = {species, "s\"1", shrub_roots, 2, 0};
+  sylva_plant_def tree = {species, "t1", tree_roots, 1, 0, NULL, 0};
+  sylva_plant_def shrub = {species, "s\"1", shrub_roots, 2, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &tree, NULL), 0);
   CHECK_INT(sylva_world_add_plant(w, &shrub, NULL), 1);
   return w;
@@ -1293,7 +1293,7 @@ static sylva_world *years_world(void) {
   sylva_obstacle_def zone = {"crowns", {-5, -5, 1}, {5, 5, 5}, SYLVA_OBSTACLE_ZONE};
   CHECK(sylva_world_add_obstacle(w, &zone) >= 0);
   const double a[][3] = {{-1, 0, 0}}, b[][3] = {{1, 0, 0}};
-  sylva_plant_def pa = {lime, "lime", a, 1, 5}, pb = {oak, "oak", b, 1, 0};
+  sylva_plant_def pa = {lime, "lime", a, 1, 5, NULL, 0}, pb = {oak, "oak", b, 1, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &pa, NULL), 0);
   CHECK_INT(sylva_world_add_plant(w, &pb, NULL), 1);
   return w;
@@ -1472,7 +1472,7 @@ static sylva_world *board_world(void) {
   sp.tropism[2] = 1;
   int species = sylva_world_add_species(w, &sp, "oak");
   const double roots[][3] = {{-1, 0, 0}};
-  sylva_plant_def tree = {species, "t1", roots, 1, 0};
+  sylva_plant_def tree = {species, "t1", roots, 1, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &tree, NULL), 0);
   grow(w, 3);
   return w;

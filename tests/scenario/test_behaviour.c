@@ -13,9 +13,9 @@
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
 
-#define GOLDEN_WALL 0xea49e64c57121232ull
-#define GOLDEN_STAND 0x88e67b4eca5b3718ull
-#define GOLDEN_SHRUB 0x37096fc91337e7baull
+#define GOLDEN_WALL 0xe1f329a86f9bbbaeull
+#define GOLDEN_STAND 0xa278c5b6603914e8ull
+#define GOLDEN_SHRUB 0x53f5502d41063e97ull
 
 static sylva_scenario *load(const char *name) {
   return scenario_file(SOURCE_ROOT "/scenarios", name);

@@ -19,7 +19,7 @@ static sylva_world *small_world(void) {
   sylva_species_def sp = sylva_default_species_def();
   int s = sylva_world_add_species(w, &sp, "oak");
   double roots[2][3] = {{0, 0, 0}, {1, 0, 0}};
-  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, 0};
+  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, 0, NULL, 0};
   sylva_obstacle_def wall = {"wall", {2, -1, 0}, {2.2, 1, 2}, SYLVA_OBSTACLE_SOLID};
   if (s < 0 || sylva_world_add_plant(w, &pd, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {
     sylva_world_destroy(w);
@@ -49,7 +49,7 @@ static void test_bad_ids(void) {
     CHECK_INT(sylva_world_obstacle_at(w, id, &oid, &o), SYLVA_ENOTFOUND);
     CHECK(oid == 77 && o.label == NULL);
     double plant_root[1][3] = {{-2, -2, 0}};
-    sylva_plant_def pd = {id, "late", (const double(*)[3])plant_root, 1, 0};
+    sylva_plant_def pd = {id, "late", (const double(*)[3])plant_root, 1, 0, NULL, 0};
     CHECK_INT(sylva_world_add_plant(w, &pd, NULL), SYLVA_EINVAL);
   }
   /* stems: 0 and 1 exist (the shrub's two roots) */

@@ -50,7 +50,7 @@ static sylva_world *site(void) {
   sp.growth.p[1] = 30;
   int s = sylva_world_add_species(w, &sp, "x");
   double root[1][3] = {{0, 0, 0}};
-  sylva_plant_def pd = {s, "oak", (const double(*)[3])root, 1, 0};
+  sylva_plant_def pd = {s, "oak", (const double(*)[3])root, 1, 0, NULL, 0};
   sylva_world_add_plant(w, &pd, NULL);
   sylva_obstacle_def wall = {"wall", {-3, -3, 0}, {-2.8, 3, 2}, SYLVA_OBSTACLE_SOLID};
   sylva_world_add_obstacle(w, &wall);
@@ -63,8 +63,8 @@ static void edit_by_hand_format1(sylva_world *w) {
   sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID};
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
   double r1[1][3] = {{-1, 0.1, 0}}, r2[2][3] = {{1, -1, 0}, {1.3, -1.2, 0}};
-  sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1, 0};
-  sylva_plant_def b = {0, "shrub2", (const double(*)[3])r2, 2, 0};
+  sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1, 0, NULL, 0};
+  sylva_plant_def b = {0, "shrub2", (const double(*)[3])r2, 2, 0, NULL, 0};
   CHECK(sylva_world_add_plant(w, &a, NULL) >= 0);
   CHECK(sylva_world_add_plant(w, &b, NULL) >= 0);
 }
@@ -77,8 +77,8 @@ static void edit_by_hand(sylva_world *w) {
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
   CHECK(sylva_world_add_obstacle(w, &crown) >= 0);
   double r1[1][3] = {{-1, 0.1, 0}}, r2[2][3] = {{1, -1, 0}, {1.3, -1.2, 0}};
-  sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1, 0};
-  sylva_plant_def b = {0, "shrub2", (const double(*)[3])r2, 2, 0};
+  sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1, 0, NULL, 0};
+  sylva_plant_def b = {0, "shrub2", (const double(*)[3])r2, 2, 0, NULL, 0};
   CHECK(sylva_world_add_plant(w, &a, NULL) >= 0);
   CHECK(sylva_world_add_plant(w, &b, NULL) >= 0);
   CHECK(sylva_world_prune(w, crown.min, crown.max, NULL, NULL) > 0);
@@ -198,7 +198,7 @@ static void test_aged_plant(void) {
 
   sylva_world *w = site_in_years();
   double root[1][3] = {{-1, 0.1, 0}};
-  sylva_plant_def lime = {1, "lime", (const double(*)[3])root, 1, 4};
+  sylva_plant_def lime = {1, "lime", (const double(*)[3])root, 1, 4, NULL, 0};
   CHECK(sylva_world_add_plant(w, &lime, NULL) >= 0);
   uint64_t h = 0;
   CHECK_INT(apply_record(aged, &h, err, sizeof err), SYLVA_OK);

@@ -86,7 +86,7 @@ static sylva_world *make_world(uint64_t seed, unsigned opts) {
   }
   static const double ra[1][3] = {{-12.5, -2, 0}}, rb[1][3] = {{0, -2, 0}},
                       rc[1][3] = {{2.2, 2.2, 0}}, rd[2][3] = {{-4, 2, 0}, {-4.5, 2.5, 0}};
-  sylva_plant_def plants[] = {{s, "a", ra, 1, 0}, {s, "b", rb, 1, 0}, {s, "c", rc, 1, 0}, {s, "d", rd, 2, 0}};
+  sylva_plant_def plants[] = {{s, "a", ra, 1, 0, NULL, 0}, {s, "b", rb, 1, 0, NULL, 0}, {s, "c", rc, 1, 0, NULL, 0}, {s, "d", rd, 2, 0, NULL, 0}};
   for (int i = 0; i < 4; i++)
     if (sylva_world_add_plant(w, &plants[i], NULL) < 0) {
       sylva_world_destroy(w);
@@ -336,7 +336,7 @@ static void test_conflicts_brute_force(void) {
   for (int T = 1; T <= 18; T++) {
     if (T == 3) { /* a tree planted on the road, its trunk inside the zone */
       static const double re[1][3] = {{6, 0, 0}};
-      sylva_plant_def pd = {0, "e", re, 1, 0};
+      sylva_plant_def pd = {0, "e", re, 1, 0, NULL, 0};
       CHECK(sylva_world_add_plant(w, &pd, NULL) >= 0);
       bad += check_conflicts(w, &t, "planted e");
       CHECK_INT(t.first[5][sylva_world_find_obstacle(w, "road")], 2);

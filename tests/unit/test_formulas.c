@@ -172,7 +172,7 @@ static sylva_world *trunk(void) {
   sp.apical_zone = 0;
   int s = sylva_world_add_species(w, &sp, "x");
   double root[1][3] = {{0, 0, 0}};
-  sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1, 0};
+  sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &pd, NULL), 0);
   CHECK_INT(sylva__reserve_scratch(w), 0);
   CHECK_INT(w->nodes.count, 4);

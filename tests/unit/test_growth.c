@@ -13,7 +13,7 @@ static sylva_world *one_tree(sylva_species_def *sp, double h) {
   if (sylva_world_create(&wd, &w)) return NULL;
   int s = sylva_world_add_species(w, sp, "x");
   double root[1][3] = {{0, 0, 0}};
-  sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1, 0};
+  sylva_plant_def pd = {s, "t", (const double(*)[3])root, 1, 0, NULL, 0};
   if (sylva_world_add_plant(w, &pd, NULL) < 0) return NULL;
   return w;
 }
@@ -120,7 +120,7 @@ static sylva_world *small_stand(uint64_t seed) {
   double roots[3][3] = {{0, 0, 0}, {1.2, 0, 0}, {0, 1.2, 0}};
   for (int i = 0; i < 3; i++) {
     char label[8] = {'t', (char)('0' + i), 0};
-    sylva_plant_def pd = {s, label, (const double(*)[3])roots[i], 1, 0};
+    sylva_plant_def pd = {s, label, (const double(*)[3])roots[i], 1, 0, NULL, 0};
     if (sylva_world_add_plant(w, &pd, NULL) < 0) return NULL;
   }
   sylva_obstacle_def wall = {"wall", {-3, -2, 0}, {-2.8, 2, 2}, SYLVA_OBSTACLE_SOLID};
@@ -201,21 +201,21 @@ static void test_snapshot_bad_images(void) {
 static void test_add_plant_errors(void) {
   sylva_world *w = small_stand(3);
   double inside[1][3] = {{-2.9, 0, 0.5}}, out[1][3] = {{9, 0, 0}}, taken[1][3] = {{0, 0, 0}};
-  sylva_plant_def a = {0, "a", (const double(*)[3])inside, 1, 0};
+  sylva_plant_def a = {0, "a", (const double(*)[3])inside, 1, 0, NULL, 0};
   int bad = 0;
   uint64_t h = sylva_world_hash(w);
   CHECK_INT(sylva_world_add_plant(w, &a, &bad), SYLVA_EBLOCKED);
   CHECK_INT(bad, 0);
-  sylva_plant_def b = {0, "b", (const double(*)[3])out, 1, 0};
+  sylva_plant_def b = {0, "b", (const double(*)[3])out, 1, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &b, &bad), SYLVA_EOUTSIDE);
-  sylva_plant_def c = {0, "c", (const double(*)[3])taken, 1, 0};
+  sylva_plant_def c = {0, "c", (const double(*)[3])taken, 1, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &c, &bad), SYLVA_EOCCUPIED);
   double two[2][3] = {{2, 2, 0}, {2.01, 2.01, 0}}; /* two roots of one shrub in one voxel */
-  sylva_plant_def d = {0, "d", (const double(*)[3])two, 2, 0};
+  sylva_plant_def d = {0, "d", (const double(*)[3])two, 2, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &d, &bad), SYLVA_EOCCUPIED);
   CHECK_INT(bad, 1);
   double free_spot[1][3] = {{2, -2, 0}};
-  sylva_plant_def e = {0, "t1", (const double(*)[3])free_spot, 1, 0}; /* a label in use */
+  sylva_plant_def e = {0, "t1", (const double(*)[3])free_spot, 1, 0, NULL, 0}; /* a label in use */
   CHECK_INT(sylva_world_add_plant(w, &e, &bad), SYLVA_EINVAL);
   CHECK(sylva_world_hash(w) == h); /* nothing changed */
   CHECK_INT(sylva_world_plant_count(w), 3);
@@ -224,11 +224,11 @@ static void test_add_plant_errors(void) {
     char label[16];
     snprintf(label, sizeof label, "p%d", i);
     double root[1][3] = {{-2.5 + (i % 20) * 0.25, -2.5 + (i / 20) * 0.25, 0}};
-    sylva_plant_def pd = {0, label, (const double(*)[3])root, 1, 0};
+    sylva_plant_def pd = {0, label, (const double(*)[3])root, 1, 0, NULL, 0};
     int rc = sylva_world_add_plant(w, &pd, NULL);
     if (rc < 0 && rc != SYLVA_EOCCUPIED && rc != SYLVA_EBLOCKED) CHECK_INT(rc, 0);
   }
-  sylva_plant_def again = {0, "p7", (const double(*)[3])free_spot, 1, 0};
+  sylva_plant_def again = {0, "p7", (const double(*)[3])free_spot, 1, 0, NULL, 0};
   CHECK_INT(sylva_world_add_plant(w, &again, &bad), SYLVA_EINVAL);
   sylva_world_destroy(w);
 }

@@ -160,7 +160,7 @@ static sylva_world *tree_world(const sylva_sky_dir *sky, int sky_count, bool boa
   sylva_species_def sp = sylva_default_species_def();
   int s = sylva_world_add_species(w, &sp, "oak");
   double roots[1][3] = {{0, 0, 0}};
-  sylva_plant_def pd = {s, "tree", (const double(*)[3])roots, 1, 0};
+  sylva_plant_def pd = {s, "tree", (const double(*)[3])roots, 1, 0, NULL, 0};
   sylva_obstacle_def roof = {"board", {-1, -1, 3.0}, {1, 1, 3.2}, SYLVA_OBSTACLE_SOLID};
   if (s < 0 || sylva_world_add_plant(w, &pd, NULL) < 0 ||
       (board && sylva_world_add_obstacle(w, &roof) < 0)) {

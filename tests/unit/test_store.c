@@ -24,14 +24,14 @@ static sylva_world *world_of(bool years) {
   sp.years = years;
   int s = sylva_world_add_species(w, &sp, "x");
   double roots[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
-  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, years ? 2 : 0};
+  sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, years ? 2 : 0, NULL, 0};
   sylva_world_add_plant(w, &pd, NULL);
   if (years) {
     sylva_species_def igm = sylva_default_species_def();
     igm.tropism[2] = 1.0;
     double root[1][3] = {{-1, -1, 0}};
     sylva_plant_def tree = {sylva_world_add_species(w, &igm, "igm"), "tree",
-                            (const double(*)[3])root, 1, 0};
+                            (const double(*)[3])root, 1, 0, NULL, 0};
     sylva_world_add_plant(w, &tree, NULL);
   }
   return w;

@@ -58,6 +58,10 @@ typedef struct sylva_species_def {
   double lift;             /**< 0..0.9: after each iteration, the trunk's branches below
                                 this share of the height are cut, as street trees are
                                 lifted (docs/model.md, "Species in years") */
+  double crown_max;        /**< >= 0: no node stands farther from its stem's root, across,
+                                than half of crown_max * H^crown_max_exp m for the stem's
+                                height H (0: no limit; docs/model.md, "Species in years") */
+  double crown_max_exp;    /**< 0..2: the exponent of that limit */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */

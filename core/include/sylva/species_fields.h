@@ -27,10 +27,10 @@
  * growth.kind and allocation come first as u32, growth.p[] takes places 1-3 and
  * tropism[] places 14-16.
  *
- * Places 37 and up (ref_rho, acclimation, years, nursery, shade_weight, lift) are
- * written only in
- * images with the SCALED flag (a species with a time scale or metric counts), so
- * images of worlds without such species keep their bytes.
+ * Places 37 to 42 (ref_rho, acclimation, years, nursery, shade_weight, lift) are
+ * written only in images with the SCALED flag (a species with a time scale or metric
+ * counts), places 43 and 44 (crown_max, crown_max_exp) only in images with the CROWN
+ * flag, so images of worlds without such species keep their bytes.
  *
  * Adding a field: add it to sylva_species_def and here (at the end of its group,
  * with the next place, 37 for the first), raise SYLVA_SPECIES_SNAPSHOT_FIELDS and
@@ -78,6 +78,8 @@
   X(acclimation,   double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 38)          \
   X(shade_weight,  double, 1,     0,    1000,   SYLVA_FIELD_MIN_EXCLUSIVE, species, 41)          \
   X(lift,          double, 0,     0,    0.9,    SYLVA_FIELD_CLOSED,        species, 42)          \
+  X(crown_max,     double, 0,     0,    1000,   SYLVA_FIELD_CLOSED,        species, 43)          \
+  X(crown_max_exp, double, 1,     0,    2,      SYLVA_FIELD_CLOSED,        species, 44)          \
   X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
   X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
   X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
@@ -86,6 +88,6 @@
 
 /** Places in a snapshot's species record: the list's fields and the hand-written
  *  growth.p[3] and tropism[3]. */
-#define SYLVA_SPECIES_SNAPSHOT_FIELDS 43
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 45
 
 #endif

@@ -28,6 +28,8 @@
 #define SYLVA_MAX_STEMS 1000000
 /** Oldest age (years) a plant may be planted at. */
 #define SYLVA_MAX_AGE 500
+/** Most nodes a measured plant (sylva_plant_def.nodes) may bring. */
+#define SYLVA_MAX_MEASURED_NODES 50000000
 /** Most voxels a world's box may span (memory is only spent where something is). */
 #define SYLVA_MAX_VOXELS 68719476736.0 /* 2^36 */
 
@@ -64,14 +66,29 @@ typedef struct sylva_world_def {
 } sylva_world_def;
 
 /** A plant: one root is a tree, several roots make a shrub (one stem per root). */
+/** A node of a measured plant (sylva_plant_def.nodes), parents before children. */
+typedef struct sylva_plant_node {
+  double p[3];   /**< metres */
+  double radius; /**< metres, above 0 */
+  int parent;    /**< an earlier node's index, or -1 for a stem's root */
+  int lateral;   /**< 1: the node starts a branch off its parent's axis */
+  int birth;     /**< the iteration it was born, counted from planting: 0 or below */
+} sylva_plant_node;
+
 typedef struct sylva_plant_def {
   int species;              /**< id from sylva_world_add_species */
   const char *label;        /**< the plant's id in scenario and exports */
-  const double (*roots)[3]; /**< root positions, metres */
+  const double (*roots)[3]; /**< root positions, metres (not with nodes) */
   int root_count;
   /** Age in years at planting (species with years only; 0 otherwise): the stem is
-   *  grown nursery + age seasons in open light before it is placed. */
+   *  grown nursery + age seasons in open light before it is placed. With nodes, the
+   *  measured tree's age: its stems count nursery + age seasons, grown already. */
   int age;
+  /** A measured plant (docs/model.md, "Measured trees"): its nodes as they stand,
+   *  one stem per root (parent -1), placed as given with their radii and births
+   *  and grown on from their buds. NULL for a plant grown from its roots. */
+  const sylva_plant_node *nodes;
+  int node_count;
 } sylva_plant_def;
 
 /** What an obstacle is. */
@@ -178,8 +195,9 @@ void sylva_world_destroy(sylva_world *w);
 
 /** Adds a species; returns its id (>= 0) or a negative status. */
 int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const char *label);
-/** Adds a plant with its initial trunks; returns its id or a negative status.
- *  On failure *bad_root (if given) is the index of the root at fault, or -1. */
+/** Adds a plant with its initial trunks (or a measured plant's nodes); returns its id
+ *  or a negative status. On failure *bad_root (if given) is the index of the root
+ *  (of a measured plant: the node) at fault, or -1. */
 int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root);
 /** Adds an obstacle; returns its id or a negative status (SYLVA_EINVAL for a
  *  duplicate label, an empty box or an unknown kind). A zone added over nodes counts

@@ -51,6 +51,17 @@ typedef struct sylva_scenario_plant {
   int root_count;
   int age;            /**< years at planting, 0 to SYLVA_MAX_AGE (above 0 only
                            for a species with years); default 0 */
+  /** "from": a measured tree (docs/scenario.md, "Plants"), standing at roots[0].
+   *  from_file is NULL when the plant has none. */
+  char *from_file;      /**< as given: a path relative to the scenario's file */
+  char from_format[16]; /**< mat, text, csv or skeleton; "" to sniff */
+  int from_model;       /**< 1-based; 0: the first */
+  int from_age;         /**< the tree's age in years; -1: from the species' growth */
+  /** The measured tree's nodes, read by the caller from from_file before
+   *  sylva_scenario_build (the server's files_read_measured); owned by the plant. */
+  sylva_plant_node *nodes;
+  int node_count;
+  int measured_age; /**< the age those nodes were given */
 } sylva_scenario_plant;
 
 /** The scenario's light (the `light` key): the paper's zenith sky, or a site's. */
