@@ -61,6 +61,7 @@ for (const b of document.querySelectorAll('[data-view]')) b.onclick = () => view
 // The panels that show what changed in the watched run (see watch.mjs).
 function changed(what) {
   if (what === 'switch') {
+    timeline.reset();
     runs.render();
     controls.switched();
     light.hide();
@@ -68,6 +69,7 @@ function changed(what) {
     edit.render();
     conflicts.render();
   } else if (what === 'snapshot') {
+    timeline.reset();
     edit.speciesOptions();
     light.render();
   } else if (what === 'live') {

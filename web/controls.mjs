@@ -1,6 +1,7 @@
 // The run's controls in the bar under the view: the watched run's title in the
 // header, start, pause, step (count) and stop with the run's status beside them,
-// fork at the shown iteration, and the export links of the shown iteration.
+// fork at the shown iteration, and the export links of the shown iteration (neither
+// for a measured tree's past stage before iteration 0, which the store does not hold).
 import { $ } from './dom.mjs';
 import { controlsDisabled, exportHref, stepCount } from './helpers.mjs';
 
@@ -57,12 +58,17 @@ export class ControlsPanel {
     $('status').dataset.status = st ?? '';
     const off = controlsDisabled(st);
     for (const id of ['start', 'pause', 'step', 'stop']) $(id).disabled = off[id];
-    $('fork').disabled = !this.watch.run;
+    $('fork').disabled = !this.watch.run || this.watch.shown().iteration < 0;
   }
 
-  // The export links name the shown iteration.
+  // The export links and the fork name the shown iteration; a stage before
+  // iteration 0 has neither (the links lose their href).
   renderExports() {
     const run = this.watch.run, it = this.watch.shown().iteration;
-    for (const [id, format] of EXPORTS) $(id).href = run ? exportHref(run.name, format, it) : '';
+    for (const [id, format] of EXPORTS) {
+      if (run && it >= 0) $(id).href = exportHref(run.name, format, it);
+      else $(id).removeAttribute('href');
+    }
+    $('fork').disabled = !run || it < 0;
   }
 }

@@ -252,3 +252,49 @@ export function skyLabel(sky) {
   if (sky === 'zenith') return 'zenith light';
   return 'light';
 }
+
+// ---- measured trees --------------------------------------------------------------
+
+// The pipe model's exponent a measured tree's past is drawn with (docs/model.md:
+// `pipe_exponent`'s default v; a snapshot does not carry the species' own).
+export const PIPE_EXPONENT = 2.5;
+
+// A measured tree's stage at an iteration T before iteration 0 (docs/model.md,
+// "Measured trees"), from the nodes at iteration 0 held in slots, each parent
+// before its children: `parent` (a slot, -1 for a root), `birth`, `radius`, and
+// optionally `dead` (slots to leave out, with their subtrees), over slots 0 to
+// count - 1. Returns {slots, radius}: the slots shown at T in slot order (born by
+// T, with their parent shown: births never decrease from parent to child, so
+// that is the nodes born by T), and each one's radius by the pipe model of that
+// stage: its radius at 0 times (tips of its subtree shown at T / tips of its
+// subtree at 0)^(1 / exponent).
+export function pastStage({ parent, birth, radius, dead = null, count }, T, exponent = PIPE_EXPONENT) {
+  const shown = new Uint8Array(count);
+  let n = 0;
+  for (let k = 0; k < count; k++) {
+    if (dead && dead[k]) continue;
+    const p = parent[k];
+    if (birth[k] <= T && (p < 0 || shown[p])) {
+      shown[k] = 1;
+      n++;
+    }
+  }
+  // tips from the leaves down: a slot without children is a tip of its own subtree
+  const tips0 = new Float64Array(count), tipsT = new Float64Array(count);
+  for (let k = count - 1; k >= 0; k--) {
+    if (dead && dead[k]) continue;
+    const p = parent[k];
+    if (tips0[k] === 0) tips0[k] = 1;
+    if (p >= 0) tips0[p] += tips0[k];
+    if (!shown[k]) continue;
+    if (tipsT[k] === 0) tipsT[k] = 1;
+    if (p >= 0) tipsT[p] += tipsT[k];
+  }
+  const slots = new Int32Array(n), r = new Float32Array(n);
+  for (let k = 0, i = 0; k < count; k++) {
+    if (!shown[k]) continue;
+    slots[i] = k;
+    r[i++] = tipsT[k] === tips0[k] ? radius[k] : radius[k] * Math.pow(tipsT[k] / tips0[k], 1 / exponent);
+  }
+  return { slots, radius: r };
+}

@@ -7,6 +7,7 @@
 // slot and marked dead (zero length, so they draw nothing); compact() squeezes
 // them out later, in a task of its own, so that applying a delta stays short.
 // Nothing here knows about three.js or the DOM.
+import { pastStage } from './helpers.mjs';
 
 const GROW = 2;
 const NONE = 2 ** 31;
@@ -27,6 +28,7 @@ export class Skeleton {
     this.voxel = 0;
     this.stats = [];
     this.startYear = null;   // the calendar year of iteration 0 (a run with a start year)
+    this.earliest = 0;       // the earliest birth of the snapshot: below 0 for a tree with a past
     this.idSlot = new Int32Array(1024).fill(-1);
     this.scratch = new Int32Array(0);
     this.allocate(capacity);
@@ -137,6 +139,10 @@ export class Skeleton {
     }
     // a stem's nodes come in id order, parents first
     this.append(msg.nodes, 0, total, msg.nodes.birth);
+    // (a delta's nodes are born at its iteration, never before 1)
+    let earliest = 0;
+    for (let i = 0, b = msg.nodes.birth; i < total; i++) if (b[i] < earliest) earliest = b[i];
+    this.earliest = earliest;
     this.plants = msg.plants;
     this.species = msg.species || [];
     this.obstacles = msg.obstacles || [];
@@ -242,6 +248,35 @@ export class Skeleton {
     const from = this.changedFrom;
     this.changedFrom = this.count;
     return from;
+  }
+
+  // A new skeleton of this one's world as it was at an iteration T before this
+  // one's: a measured tree's past stage (docs/model.md, "Measured trees"), the
+  // nodes born by T with their radii by that stage's pipe model (helpers.mjs,
+  // pastStage). Its iteration is T; it has no stats.
+  stageAt(T) {
+    const stage = pastStage(this, T);
+    const n = stage.slots.length;
+    const nodes = {
+      n, id: new Int32Array(n), parent: new Int32Array(n), plant: new Uint16Array(n),
+      stem: new Uint16Array(n), birth: new Int32Array(n), xyzr: new Float32Array(n * 4),
+    };
+    for (let i = 0; i < n; i++) {
+      const k = stage.slots[i], p = this.parent[k];
+      nodes.id[i] = this.id[k];
+      nodes.parent[i] = p >= 0 ? this.id[p] : -1;
+      nodes.plant[i] = this.plant[k];
+      nodes.stem[i] = this.stem[k];
+      nodes.birth[i] = this.birth[k];
+      nodes.xyzr.set(this.end.subarray(k * 3, k * 3 + 3), i * 4);
+      nodes.xyzr[i * 4 + 3] = stage.radius[i];
+    }
+    const sk = new Skeleton();
+    sk.loadSnapshot({
+      nodes, plants: this.plants, species: this.species, obstacles: this.obstacles, sky: this.sky,
+      start_year: this.startYear, world: this.world, voxel: this.voxel, iteration: T, seq: -1, stats: [],
+    });
+    return sk;
   }
 
   // The held skeleton in the `sylva.skeleton/1` export format (cli.md), for the

@@ -1,8 +1,11 @@
 // The timeline: a slider over the stored iterations of the watched run. Moving it
 // shows the chosen one (the daemon restores it from the store: `get`) while the
 // live run goes on in the background; Live, or the slider at the live iteration,
-// returns. Beside it the shown iteration (its calendar year first, in a run with a
-// start year), and over the view its internodes.
+// returns. A run whose earliest node birth is below 0 (a measured tree's past,
+// docs/model.md "Measured trees") starts there: an iteration T < 0 shows stored
+// iteration 0 as it was at T, the nodes born by T with the pipe model's radii
+// (Skeleton.stageAt). Beside it the shown iteration (its calendar year first, in
+// a run with a start year), and over the view its internodes.
 import { $ } from './dom.mjs';
 import { iterationLabel } from './helpers.mjs';
 import { Skeleton } from './skeleton.mjs';
@@ -15,6 +18,7 @@ export class Timeline {
     this.watch = watch;
     this.timer = 0;    // the pending fetch after the slider moved
     this.serial = 0;   // the latest fetch; replies to older ones are dropped
+    this.zero = null;  // {run, promise}: the run's stored iteration 0, for the stages before it
     this.slider = $('timeline');
     this.slider.oninput = () => {
       clearTimeout(this.timer);
@@ -41,19 +45,43 @@ export class Timeline {
     if (it >= this.watch.live.iteration) { this.goLive(); return; }
     const serial = ++this.serial;
     try {
-      const snap = await this.session.request({ type: 'get', run: this.watch.run.run, iteration: it });
+      const sk = await (it < 0 ? this.iterationZero() : this.stored(it));
       if (serial !== this.serial) return;
-      const sk = new Skeleton();
-      sk.loadSnapshot(snap);
-      this.watch.showStored(sk);
+      this.watch.showStored(it < 0 ? sk.stageAt(it) : sk);
     } catch (e) {
       this.session.message(e.message, true);
     }
   }
 
+  // A stored iteration's skeleton, from the daemon.
+  async stored(it) {
+    const snap = await this.session.request({ type: 'get', run: this.watch.run.run, iteration: it });
+    const sk = new Skeleton();
+    sk.loadSnapshot(snap);
+    return sk;
+  }
+
+  // The watched run's stored iteration 0, fetched once for all the stages before it.
+  iterationZero() {
+    const run = this.watch.run.run;
+    if (this.zero?.run !== run) {
+      const promise = this.stored(0);
+      this.zero = { run, promise };
+      promise.catch(() => { if (this.zero?.promise === promise) this.zero = null; });
+    }
+    return this.zero.promise;
+  }
+
+  // Another run is watched, or the live world was loaded again (after an edit,
+  // which may have changed iteration 0): iteration 0 is fetched again when needed.
+  reset() {
+    this.zero = null;
+  }
+
   // The live skeleton changed: the slider reaches its iteration (and follows it
-  // while live).
+  // while live), and starts at its earliest birth when that is below 0.
   liveChanged() {
+    this.slider.min = String(Math.min(0, this.watch.live.earliest));
     this.slider.max = String(this.watch.live.iteration);
     if (!this.watch.history) this.slider.value = String(this.watch.live.iteration);
     this.render();

@@ -5,7 +5,7 @@ import {
   round, wsAddress, connectionLabel, runSummary, runCells, runHash, runFromHash, mostRecentRun, initialRun,
   controlsDisabled, stepCount, exportHref, freeId, parsePoint, obstacleBox, obstacleFromFields, plantAt,
   parseScenario, createErrorPlace, parseStatsCsv, csvCells, zoneFromFields, skyLabel,
-  yearOf, iterationLabel, statsInYears,
+  yearOf, iterationLabel, statsInYears, pastStage, PIPE_EXPONENT,
 } from '../../web/helpers.mjs';
 import {
   isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, clearanceRows, stemLabel,
@@ -324,4 +324,46 @@ test('the conflicts rows: one per stem and zone, from the stats\' zones', () => 
   assert.deepEqual(clearanceRows(undefined), []);
   assert.equal(stemLabel('tree', 0, 1), 'tree');
   assert.equal(stemLabel('shrub', 1, 2), 'shrub/1');
+});
+
+test('a measured tree\'s past stage: the nodes born by T, radii by the pipe model of that stage', () => {
+  // slots, parents first:   0 (root, -3)
+  //                         └ 1 (-3) ┬ 2 (-2) ─ 4 (0)
+  //                                  └ 3 (-1) ─ 5 (0)
+  //                         └ 6 (-1)
+  // tips at 0: 4, 5, 6 (node 1's subtree 2 of them, the root's 3)
+  const tree = {
+    parent: new Int32Array([-1, 0, 1, 1, 2, 3, 0]),
+    birth: new Int32Array([-3, -3, -2, -1, 0, 0, -1]),
+    radius: new Float32Array([0.1, 0.08, 0.05, 0.04, 0.02, 0.02, 0.03]),
+    count: 7,
+  };
+  const copy = structuredClone(tree);
+  const at = (T, exponent) => {
+    const { slots, radius } = pastStage(tree, T, exponent);
+    return { slots: Array.from(slots), radius: Array.from(radius) };
+  };
+  // (the radii are held as Float32Array values)
+  const f = (r, tips, tips0, v = 2.5) => Math.fround(Math.fround(r) * (tips / tips0) ** (1 / v));
+  assert.equal(PIPE_EXPONENT, 2.5);
+  // the youngest stage: a stem of two nodes, one tip for three at 0 (two for node 1)
+  assert.deepEqual(at(-3), { slots: [0, 1], radius: [f(0.1, 1, 3), f(0.08, 1, 2)] });
+  assert.deepEqual(at(-2), { slots: [0, 1, 2], radius: [f(0.1, 1, 3), f(0.08, 1, 2), Math.fround(0.05)] });
+  // by -1 the tree has all three of its tips: the radii are those at 0
+  assert.deepEqual(at(-1), { slots: [0, 1, 2, 3, 6], radius: [0.1, 0.08, 0.05, 0.04, 0.03].map(Math.fround) });
+  assert.deepEqual(at(0), { slots: [0, 1, 2, 3, 4, 5, 6], radius: Array.from(tree.radius) });
+  assert.deepEqual(at(5), at(0));
+  // before the earliest birth: nothing
+  assert.deepEqual(at(-4), { slots: [], radius: [] });
+  // the exponent: the species' own when it is known
+  assert.deepEqual(at(-3, 2).radius, [f(0.1, 1, 3, 2), f(0.08, 1, 2, 2)]);
+  // shown only with its parent (a birth before its parent's), dead slots and their
+  // subtrees left out, and tips counted over the live slots only
+  const odd = { ...tree, birth: new Int32Array([-3, -3, -2, -1, -3, 0, -1]) };
+  assert.deepEqual(Array.from(pastStage(odd, -3).slots), [0, 1]);
+  const dead = new Uint8Array([0, 0, 0, 1, 0, 1, 0]);
+  const pruned = pastStage({ ...tree, dead }, -2);
+  assert.deepEqual(Array.from(pruned.slots), [0, 1, 2]);
+  assert.deepEqual(Array.from(pruned.radius), [f(0.1, 1, 2), 0.08, 0.05].map(Math.fround));
+  assert.deepEqual(tree, copy, 'the arguments are not changed');
 });

@@ -80,6 +80,40 @@ test('growing past the capacity keeps every node', () => {
     radii: [], shed: [], stats: [] }), /parent 8999 is not held/);
 });
 
+test('a measured tree\'s past: the earliest birth, and the stage at an iteration before 0', () => {
+  // two stems: a measured one born from -4 (a fork at node 2), a young one from 0
+  const sk = new Skeleton(4);
+  sk.loadSnapshot({
+    iteration: 0, seq: 0, world: { min: [0, 0, 0], max: [6, 1, 3] }, voxel: 0.05, obstacles: [], stats: [{}, {}],
+    start_year: 2027, sky: 'zenith', species: ['plane'],
+    plants: [{ id: 'p', stems: [
+      { root: [0, 0, 0], nodes: [[0, -1, 0, 0, 0, 0.04, -4], [2, 0, 0, 0, 1, 0.03, -4], [4, 2, 0, 0, 2, 0.01, -1],
+        [5, 2, 1, 0, 2, 0.01, 0]] },
+      { root: [5, 0, 0], nodes: [[1, -1, 5, 0, 0, 0.01, 0], [3, 1, 5, 0, 1, 0.01, 0]] }] }],
+  });
+  assert.equal(sk.earliest, -4);
+  // a delta's nodes are born at its iteration: the earliest birth stays
+  sk.applyDelta({ seq: 1, iteration: 1, added: [[6, 5, 0, 0, 1, 0, 3, 0.003]], radii: [], shed: [], stats: [] });
+  assert.equal(sk.earliest, -4);
+  const zero = twoStems();
+  assert.equal(zero.earliest, 0, 'a tree without a past');
+  const base = new Skeleton(4);
+  base.loadSnapshot({ ...sk.toExport(), iteration: 0, seq: 0, stats: [], start_year: 2027 });
+  const at = base.stageAt(-2);
+  assert.equal(at.iteration, -2);
+  assert.equal(at.startYear, 2027);
+  assert.deepEqual(at.stats, []);
+  assert.equal(at.live, 2);
+  const ex = at.toExport();
+  // the stem of two nodes: one tip above each, of the two at 0 (nodes 4 and 6)
+  assert.deepEqual(ex.plants[0].stems[0].nodes, [
+    [0, -1, 0, 0, 0, Math.fround(Math.fround(0.04) * (1 / 2) ** 0.4), -4],
+    [2, 0, 0, 0, 1, Math.fround(Math.fround(0.03) * (1 / 2) ** 0.4), -4]]);
+  assert.deepEqual(ex.plants[0].stems[1].nodes, []);
+  assert.equal(at.start[3 * 1 + 2], 0, 'a branch starts at its parent');
+  assert.equal(base.live, 7, 'the skeleton it was made from is unchanged');
+});
+
 test('snapshot plus deltas from a real daemon equal the export at every iteration', async () => {
   const d = await startDaemon({});
   try {
