@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "../check.h"
 #include "../list_dir.h"
@@ -538,6 +539,43 @@ static bool stages_monotone(const sylva_tree *a, const sylva_tree *b) {
   return b->count <= a->count && b->height <= a->height && b->volume <= a->volume;
 }
 
+/* The tree through TreeQSM's text and SimpleForest's CSV (written from the .mat's
+ * cylinders, read back) is the .mat's tree, node for node. */
+static void same_through_text_and_csv(const sylva_qsm *q, const sylva_tree_options *o,
+                                      const sylva_tree *t, const char *name) {
+  char dir[] = "/tmp/sylva-tree-XXXXXX";
+  if (!mkdtemp(dir)) {
+    CHECK(false);
+    return;
+  }
+  for (int k = 0; k < 2; k++) {
+    char path[128], err[512];
+    snprintf(path, sizeof path, "%s/tree.%s", dir, k ? "csv" : "txt");
+    int rc = k ? sylva_qsm_write_csv(q, path) : sylva_qsm_write_text(q, path);
+    CHECK_INT(rc, 0);
+    sylva_qsm back = {0};
+    if (!rc) rc = sylva_qsm_read(path, k ? SYLVA_QSM_CSV : SYLVA_QSM_TEXT, 0, &back, err, sizeof err);
+    CHECK_INT(rc, 0);
+    if (!rc) {
+      sylva_tree u = build(&back, o);
+      bool same = u.count == t->count;
+      for (size_t i = 0; same && i < t->count; i++) {
+        const sylva_tree_node *a = &u.node[i], *b = &t->node[i];
+        same = a->p[0] == b->p[0] && a->p[1] == b->p[1] && a->p[2] == b->p[2] &&
+               a->radius == b->radius && a->parent == b->parent && a->lateral == b->lateral &&
+               a->birth == b->birth;
+      }
+      if (!same) fprintf(stderr, "%s through %s: %zu nodes against %zu\n", name, k ? "csv" : "text",
+                         u.count, t->count);
+      CHECK(same);
+      sylva_tree_free(&u);
+    }
+    sylva_qsm_free(&back);
+    remove(path);
+  }
+  rmdir(dir);
+}
+
 /* Every ITSMe file: height within 2% of TreeHeight, DBH within 10% of DBHqsm, volume
  * within 10% of TotalVolume, stages 0, 5 and 15 years before shrinking, stage 0 the
  * import itself. */
@@ -586,6 +624,7 @@ static void test_itsme(void) {
     sylva_tree_free(&s0);
     sylva_tree_free(&s5);
     sylva_tree_free(&s15);
+    same_through_text_and_csv(&q, &o, &t, names[f]);
     sylva_tree_free(&t);
     sylva_qsm_free(&q);
   }
