@@ -11,12 +11,12 @@
 
 #include "commands.h"
 #include "fit.h"
+#include "measured.h"
 #include "options.h"
 #include "outfile.h"
 #include "qsm.h"
 #include "sylva/library.h"
 #include "tree.h"
-#include "utdb.h"
 
 enum {
   OPT_FORMAT, OPT_MODEL, OPT_SPECIES, OPT_AGE, OPT_RHO, OPT_BEFORE, OPT_OUT, OPT_HELP, OPT_COUNT
@@ -42,8 +42,8 @@ static void import_usage(FILE *f) {
         "or text, SimpleForest CSV, or a sylva.skeleton/1 file), into a sylva skeleton of\n"
         "internodes of the species' length rho. Each node gets its estimated birth year\n"
         "(0 the season of the measurement, earlier years negative) from its path to the\n"
-        "tips and the species' height curve of the Urban Tree Database, scaled to the\n"
-        "tree's height at its age. Pieces of the model that float above the ground are\n"
+        "tips, its height and the species' own growth curve, scaled to the tree's\n"
+        "height at its age. Pieces of the model that float above the ground are\n"
         "left out; roots that start on the ground are stems of their own.\n"
         "\n"
         "OUT.json holds one plant, \"imported\", one stem per root; with --years-before N\n"
@@ -55,38 +55,6 @@ static void import_usage(FILE *f) {
         "Options:\n",
         f);
   cli_print_options(f, import_options, OPT_COUNT);
-}
-
-/* The species' height over age, from the Urban Tree Database curves of its
- * region and code (the library name utdb:REGION:CODE): heights[0..*years]. */
-static int species_heights(const char *name, double *heights, int *years) {
-  const char *region = name + strlen(SYLVA_LIBRARY_PREFIX);
-  const char *colon = strchr(region, ':');
-  char reg[32];
-  if (!colon || (size_t)(colon - region) >= sizeof reg) {
-    fprintf(stderr, "sylva: --species: %s is not utdb:REGION:CODE\n", name);
-    return CLI_EXIT_FAILURE;
-  }
-  memcpy(reg, region, (size_t)(colon - region));
-  reg[colon - region] = '\0';
-  sylva_utdb *u = NULL;
-  if (sylva_utdb_builtin(&u)) {
-    fprintf(stderr, "sylva: the built-in Urban Tree Database could not be read\n");
-    return CLI_EXIT_FAILURE;
-  }
-  const sylva_utdb_species *s = sylva_utdb_find(u, reg, colon + 1);
-  sylva_fit_targets targets;
-  char err[256] = "";
-  int rc = s ? sylva_fit_targets_utdb(s, &targets, err, sizeof err) : SYLVA_ENOTFOUND;
-  sylva_utdb_free(u);
-  if (rc) {
-    fprintf(stderr, "sylva: --species %s: no height curve in the Urban Tree Database%s%s\n", name,
-            err[0] ? ": " : "", err);
-    return CLI_EXIT_FAILURE;
-  }
-  *years = targets.years;
-  for (int a = 0; a <= targets.years; a++) heights[a] = targets.at[a].height;
-  return CLI_EXIT_OK;
 }
 
 /* cJSON builders that remember a failed allocation in *ok. */
@@ -232,7 +200,7 @@ int cmd_import(int argc, char **argv) {
       break;
     case OPT_SPECIES: species = arg; break;
     case OPT_AGE:
-      if (cli_parse_u64("import", "age", arg, 1, SYLVA_FIT_MAX_YEARS, &v)) return CLI_EXIT_USAGE;
+      if (cli_parse_u64("import", "age", arg, 1, SYLVA_MAX_AGE, &v)) return CLI_EXIT_USAGE;
       age = (int)v;
       break;
     case OPT_RHO: {
@@ -272,12 +240,9 @@ int cmd_import(int argc, char **argv) {
     return cli_usage_error("import", "--species: unknown library species '%s' (the library: %s)",
                            species, list);
   }
-  static double heights[SYLVA_FIT_MAX_YEARS + 1];
-  int years = 0;
-  if ((rc = species_heights(species, heights, &years))) return rc;
-  if (age > years)
-    return cli_usage_error("import", "--age: %d is beyond %s's height curve (ages 0 to %d)", age,
-                           species, years);
+  /* the same curve a scenario's measured plant is dated on */
+  static double heights[SYLVA_MAX_AGE + 1];
+  int years = sylva_import_curve(&def, age, heights);
 
   sylva_qsm q = {0};
   char err[1024] = "";

@@ -19,6 +19,14 @@ void sylva_import_species_heights(const sylva_species_def *d, double *heights, i
   }
 }
 
+int sylva_import_curve(const sylva_species_def *d, int age, double *heights) {
+  sylva_import_species_heights(d, heights, SYLVA_MAX_AGE);
+  /* the curve's oldest age: where it is within 1% of its end, growing no more */
+  int a = 1;
+  while (a < SYLVA_MAX_AGE && heights[a] < 0.99 * heights[SYLVA_MAX_AGE]) a++;
+  return age > a ? age : a;
+}
+
 /* The file's path: as given when absolute, else beside the scenario. */
 static char *resolve(const char *scenario_path, const char *file) {
   if (file[0] == '/') return strdup(file);
@@ -43,15 +51,10 @@ static int read_plant(const char *scenario_path, const sylva_scenario *s, int i,
                           sizeof why);
   double *heights = NULL;
   sylva_tree t = {0};
-  int years = SYLVA_MAX_AGE;
-  if (!rc && !(heights = malloc((size_t)(years + 1) * sizeof *heights))) rc = SYLVA_ENOMEM;
+  int years = 0;
+  if (!rc && !(heights = malloc((size_t)(SYLVA_MAX_AGE + 1) * sizeof *heights))) rc = SYLVA_ENOMEM;
   if (!rc) {
-    sylva_import_species_heights(d, heights, years);
-    /* the curve's oldest age: where it is within 1% of its end, growing no more */
-    int a = 1;
-    while (a < years && heights[a] < 0.99 * heights[years]) a++;
-    if (pl->from_age > a) a = pl->from_age;
-    years = a;
+    years = sylva_import_curve(d, pl->from_age, heights);
     sylva_tree_options o = {.rho = d->rho, .heights = heights, .years = years,
                             .age = pl->from_age > 0 ? pl->from_age : 0,
                             .pipe_exponent = d->pipe_exponent};

@@ -12,6 +12,12 @@
  *  never decreasing. heights holds years + 1 values. */
 void sylva_import_species_heights(const sylva_species_def *d, double *heights, int years);
 
+/** The height curve a measured tree is dated on (docs/model.md, "Measured trees"):
+ *  the species' own growth (sylva_import_species_heights) up to its oldest age, the
+ *  first at which it is within 1% of its height at SYLVA_MAX_AGE, or `age` when that
+ *  is older. heights holds SYLVA_MAX_AGE + 1 values; returns the last age. */
+int sylva_import_curve(const sylva_species_def *d, int age, double *heights);
+
 /** Reads every plant's "from" file of s (paths relative to the directory of
  *  scenario_path), builds the tree at the plant's root for its species (rho, pipe
  *  exponent, height curve) and gives the plant its nodes and age. 0, or a negative

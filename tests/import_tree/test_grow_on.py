@@ -80,6 +80,10 @@ def main():
         summary = json.loads(imported.stdout)
         check(len(a) == summary["nodes"], "the plant holds the import's %d nodes at iteration 0 (got %d)"
               % (summary["nodes"], len(a)))
+        # dated on the same curve: the run's iteration 0 carries the import's births
+        births = sorted(n[6] for n in nodes_of(os.path.join(tmp, "imp.json")).values())
+        check(births == sorted(n[6] for n in a.values()),
+              "the scenario's plant and `sylva import` give the same births")
         # the measured part: kept (not shed here) with its position, parent and birth; radii >= measured
         kept = [i for i in a if i in b]
         check(len(kept) == len(a), "every measured node is still there (%d of %d)" % (len(kept), len(a)))

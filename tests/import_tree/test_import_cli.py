@@ -111,7 +111,7 @@ def main():
                                ["--format: 'las' is not mat, text, csv or skeleton"]),
             'unknown species': (['import', trunk, '--species', 'utdb:NoEast:NOPE'],
                                 ["unknown library species 'utdb:NoEast:NOPE'", 'utdb:NoEast:PLAC']),
-            'age beyond the curve': (['import', trunk, '--age', '100'], ['--age: 100', '0 to 92']),
+            'age beyond the oldest': (['import', trunk, '--age', '501'], ['--age', '500']),
             'age zero': (['import', trunk, '--age', '0'], ['--age: expected an integer from 1']),
             'rho too short': (['import', trunk, '--rho', '0.001'], ["--rho: '0.001'"]),
             'before the planting': (['import', trunk, '--age', '20', '--years-before', '21'],
