@@ -5,8 +5,8 @@ at its root as imported; after 12 seasons the measured part is unchanged except 
 (which never shrink), every new node descends from a bud of the measured tree (a tip
 or a node bearing leaves: born within leaf_age seasons), no node is inside the wall,
 and a run stopped at 6 and resumed exports the same bytes as the continuous one.
-A `from` file that is missing, a tree reaching into the wall, and `from` in a
-message-like plant without a scenario are refused with a named error.
+A `from` file that is missing, a tree reaching into an obstacle and a tree reaching
+out of the world are refused by validate and run with a named error.
 
   test_grow_on.py SYLVA DATA_DIR
 """
@@ -124,7 +124,8 @@ def main():
         for extra, wall, words in (
                 ({"from": {"file": "nowhere.mat"}}, WALL, ["/plants/0/from", "nowhere.mat"]),
                 ({}, {"id": "w", "kind": "box", "min": [-0.5, -0.5, 5], "max": [0.5, 0.5, 6]},
-                 ["/plants/0/from", "node", "obstacle"])):
+                 ["/plants/0/from", "node", "obstacle"]),
+                ({"roots": [[0, 0, 10]]}, WALL, ["/plants/0/from", "node", "outside the world"])):
             bad_scen = os.path.join(tmp, "bad.json")
             with open(bad_scen, "w") as f:
                 json.dump(scenario(3, extra, wall), f)
