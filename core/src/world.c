@@ -142,7 +142,7 @@ static int round_count(double v, int lo, int hi) {
  * it fades over the same metres. */
 static void scale_counts(sylva__species *sp) {
   sylva_species_def *d = &sp->def;
-  sp->shade_scale = 1.0;
+  sp->scale = 1.0;
   sp->bud_every = 1;
   if (!(d->ref_rho > 0.0)) return;
   double s = d->ref_rho / d->rho;
@@ -156,7 +156,7 @@ static void scale_counts(sylva__species *sp) {
   d->pyramid_depth = round_count(d->pyramid_depth * s, 1, 64);
   d->b_min = pow(d->b_min, 1.0 / s);
   d->b_max = pow(d->b_max, 1.0 / s);
-  sp->shade_scale = 1.0 / s;
+  sp->scale = s;
   sp->bud_every = round_count(s, 1, 1000);
 }
 
@@ -214,8 +214,8 @@ double sylva__species_b(const sylva__species *sp, int t) {
  * that of the same shoot at ref_rho, sum of b_ref^-2k (docs/model.md, "Species in
  * years"). Measured: the plain 1 / s left the tree at rho / 2 with a fifth less DBH. */
 static double chain_weight(const sylva__species *sp, double b) {
-  if (sp->shade_scale == 1.0) return 1.0;
-  double s = 1.0 / sp->shade_scale;
+  if (sp->scale == 1.0) return 1.0;
+  double s = sp->scale;
   double x = pow(b, -2.0 * s), y = pow(b, -2.0);
   return (x / (1.0 - x)) / (y / (1.0 - y));
 }
@@ -230,7 +230,10 @@ const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
       p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * weight * SYLVA__SHADE_ONE + 0.5);
       p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
     }
-    p->column = (int64_t)floor(sp->def.shade_column * sp->shade_scale * sp->def.shade_weight * SYLVA__SHADE_ONE + 0.5);
+    /* the column: a point below a crown sums the nodes above it in its voxel column,
+     * s times as many per metre of shoot in a voxel s^2 times smaller: weighted s, the
+     * same crown casts the same column shade at any rho */
+    p->column = (int64_t)floor(sp->def.shade_column * sp->scale * sp->def.shade_weight * SYLVA__SHADE_ONE + 0.5);
     sp->shade_cache_t = t;
   }
   return &sp->shade;

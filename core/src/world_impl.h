@@ -13,8 +13,8 @@ typedef struct sylva__species {
   sylva_species_def def;   /* as the phases use it: for a species with ref_rho, its
                               counts scaled to its rho (docs/model.md, "Species in years") */
   sylva_species_def given; /* as it was added: what queries and snapshots give back */
-  double shade_scale;      /* weight of one node's shade: ref_rho / rho nodes cast what
-                              one node of ref_rho would (1 without ref_rho) */
+  double scale;            /* s = ref_rho / rho: nodes per internode of ref_rho (1
+                              without ref_rho); weighs each node's shade */
   int bud_every;           /* a node carries a lateral bud when its depth is a multiple */
   char label[SYLVA_LABEL_MAX];
   int t95;             /* first local iteration with X(T) >= 0.95 limit */

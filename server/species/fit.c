@@ -23,8 +23,10 @@ sylva_fit_options sylva_fit_default_options(void) {
   return (sylva_fit_options){.seeds = 3, .threads = 2, .max_evals = 40, .rho = 0.0};
 }
 
-/* The base species' shedding threshold. */
+/* The base species' shedding threshold and column shade (the crown base's control
+ * moves both, set_crown). */
 #define R_S 0.5
+#define SHADE_COLUMN 0.002
 
 sylva_species_def sylva_fit_base_species(double rho) {
   /* The years model's fixed choices, each measured (docs/model.md, "Species in
@@ -37,6 +39,7 @@ sylva_species_def sylva_fit_base_species(double rho) {
   d.years = 1;
   d.acclimation = 1.0;
   d.r_s = R_S;
+  d.shade_column = SHADE_COLUMN;
   d.apical_zone = 1;
   d.leaf_age = 3;
   d.tau = 0;
@@ -495,12 +498,13 @@ typedef struct search {
  * the tree's: a crown whose lower branches die too soon for the data keeps them
  * longer, one that keeps them too long sheds them sooner. */
 #define CROWN_GAIN 1.5 /* per (grown - target crown height) / target height */
-#define CROWN_MIN (-1.5)
+#define CROWN_MIN (-2.0)
 #define CROWN_MAX 0.5
 static void set_crown(sylva_species_def *d, double c) {
   if (c < CROWN_MIN) c = CROWN_MIN;
   if (c > CROWN_MAX) c = CROWN_MAX;
   d->r_s = R_S * exp(2.0 * c);
+  d->shade_column = SHADE_COLUMN * exp(2.0 * c);
 }
 
 /* Builds the species for a point of the search: the tropism's weight (below 0: the
