@@ -1,7 +1,7 @@
 // The viewer's wiring: the session with the daemon, the watched run, the 3D view,
 // the plots and the panels (runs, zone conflicts, new run, controls, edit tools,
-// timeline, light), and what each daemon message and each change of the watched
-// run updates. window.sylva exposes the page's state for tests and debugging.
+// timeline, light), the compare view, and what each daemon message and each
+// change of the watched run updates. window.sylva exposes the page's state for tests and debugging.
 import { $ } from './dom.mjs';
 import { Session } from './session.mjs';
 import { Watch } from './watch.mjs';
@@ -14,6 +14,7 @@ import { EditTools } from './edit.mjs';
 import { Timeline } from './timeline.mjs';
 import { LightPanel } from './light.mjs';
 import { ConflictsPanel } from './conflicts.mjs';
+import { CompareView } from './compare.mjs';
 import { countInZones, zonesOf } from './zones.mjs';
 import { yearOf } from './helpers.mjs';
 
@@ -48,7 +49,12 @@ async function open(entry) {
   await runs.refresh();
 }
 
-const runs = new RunsPanel({ session, watch });
+const compare = new CompareView({ session });
+const runs = new RunsPanel({
+  session, watch, onCompare: (entries) => compare.open(entries), onList: (list) => compare.update(list),
+  // a run clicked in the list is watched in the single view
+  onPick: () => compare.close(),
+});
 const create = new CreatePanel({ session, open });
 const controls = new ControlsPanel({ session, watch, onStatus: handlers.status, open });
 const edit = new EditTools({ session, watch, view });
@@ -133,4 +139,6 @@ window.sylva = {
   project: (x, y, z) => view.project(x, y, z),
   setView: (name) => { view.setView(name); view.render(); },
   render: () => view.render(),
+  compare: () => compare.state(),
+  compareImages: () => compare.images(),
 };

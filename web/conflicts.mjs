@@ -8,12 +8,19 @@
 import { $ } from './dom.mjs';
 import { clearanceRows, conflictRows, stemLabel } from './zones.mjs';
 
+// The page's panel (index.html); the compare view gives each of its runs a panel
+// of its own, with these elements.
+const pageElements = () => ({
+  conflicts: $('conflicts'), first: $('conflicts-first'), empty: $('conflicts-empty'), clearances: $('clearances'),
+});
+
 export class ConflictsPanel {
-  constructor({ watch, timeline }) {
+  constructor({ watch, timeline, elements = pageElements() }) {
     this.watch = watch;
     this.timeline = timeline;
-    this.body = $('conflicts').tBodies[0];
-    this.clearBody = $('clearances').tBodies[0];
+    this.el = elements;
+    this.body = elements.conflicts.tBodies[0];
+    this.clearBody = elements.clearances.tBodies[0];
     this.key = '';   // what the table shows, to rebuild it only when that changes
   }
 
@@ -32,7 +39,7 @@ export class ConflictsPanel {
     if (key === this.key) return;
     this.key = key;
     const stems = new Map(this.watch.live.plants.map((p) => [p.id, p.stems.length]));
-    $('conflicts-first').textContent = start ? 'first year' : 'first';
+    this.el.first.textContent = start ? 'first year' : 'first';
     this.body.textContent = '';
     for (const r of rows) {
       const tr = this.body.insertRow();
@@ -43,7 +50,7 @@ export class ConflictsPanel {
         r.nodes.toLocaleString('en')]) tr.insertCell().textContent = v;
       tr.onclick = () => this.timeline.jumpTo(r.first - start);
     }
-    $('conflicts-empty').hidden = rows.length > 0;
+    this.el.empty.hidden = rows.length > 0;
     this.clearBody.textContent = '';
     for (const r of clear) {
       const tr = this.clearBody.insertRow();
@@ -51,6 +58,6 @@ export class ConflictsPanel {
       for (const v of [stemLabel(r.plant, r.stem, stems.get(r.plant) ?? 1), r.obstacle,
         r.distance.toFixed(2), String(r.pruned)]) tr.insertCell().textContent = v;
     }
-    $('clearances').hidden = clear.length === 0;
+    this.el.clearances.hidden = clear.length === 0;
   }
 }

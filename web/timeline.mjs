@@ -10,7 +10,51 @@ import { $ } from './dom.mjs';
 import { iterationLabel } from './helpers.mjs';
 import { Skeleton } from './skeleton.mjs';
 
-const SETTLE_MS = 120;   // the slider's resting time before its iteration is fetched
+export const SETTLE_MS = 120;   // the slider's resting time before its iteration is fetched
+const BUSY_TRIES = 40;          // `get` answered busy (--max-jobs): tries in all
+const BUSY_WAIT_MS = 150;       // and the wait before the next
+
+// A run's stored iterations as skeletons, from the daemon: `get` for iteration 0
+// and later ones; for an iteration T below 0 (a measured tree's past), the stage
+// of stored iteration 0 at T (Skeleton.stageAt), iteration 0 fetched once. The
+// timeline has one for the watched run, and the compare view one for each run.
+export class StoredIterations {
+  constructor(session, run) {
+    this.session = session;
+    this.run = run;
+    this.zero = null;   // the promise of stored iteration 0
+  }
+
+  at(it) {
+    return it < 0 ? this.iterationZero().then((sk) => sk.stageAt(it)) : this.stored(it);
+  }
+
+  // A stored iteration's skeleton. The daemon restores it as a job, and refuses
+  // one past its --max-jobs with `busy` (other pages, or the compare view's other
+  // runs, may hold them): that is asked again a moment later.
+  async stored(it) {
+    for (let tries = 1; ; tries++) {
+      try {
+        const snap = await this.session.request({ type: 'get', run: this.run, iteration: it });
+        const sk = new Skeleton();
+        sk.loadSnapshot(snap);
+        return sk;
+      } catch (e) {
+        if (e.code !== 'busy' || tries >= BUSY_TRIES) throw e;
+        await new Promise((r) => setTimeout(r, BUSY_WAIT_MS));
+      }
+    }
+  }
+
+  iterationZero() {
+    if (!this.zero) {
+      const promise = this.stored(0);
+      this.zero = promise;
+      promise.catch(() => { if (this.zero === promise) this.zero = null; });
+    }
+    return this.zero;
+  }
+}
 
 export class Timeline {
   constructor({ session, watch }) {
@@ -18,7 +62,7 @@ export class Timeline {
     this.watch = watch;
     this.timer = 0;    // the pending fetch after the slider moved
     this.serial = 0;   // the latest fetch; replies to older ones are dropped
-    this.zero = null;  // {run, promise}: the run's stored iteration 0, for the stages before it
+    this.source = null; // StoredIterations of the watched run
     this.slider = $('timeline');
     this.slider.oninput = () => {
       clearTimeout(this.timer);
@@ -45,37 +89,20 @@ export class Timeline {
     if (it >= this.watch.live.iteration) { this.goLive(); return; }
     const serial = ++this.serial;
     try {
-      const sk = await (it < 0 ? this.iterationZero() : this.stored(it));
+      const run = this.watch.run.run;
+      if (this.source?.run !== run) this.source = new StoredIterations(this.session, run);
+      const sk = await this.source.at(it);
       if (serial !== this.serial) return;
-      this.watch.showStored(it < 0 ? sk.stageAt(it) : sk);
+      this.watch.showStored(sk);
     } catch (e) {
       this.session.message(e.message, true);
     }
   }
 
-  // A stored iteration's skeleton, from the daemon.
-  async stored(it) {
-    const snap = await this.session.request({ type: 'get', run: this.watch.run.run, iteration: it });
-    const sk = new Skeleton();
-    sk.loadSnapshot(snap);
-    return sk;
-  }
-
-  // The watched run's stored iteration 0, fetched once for all the stages before it.
-  iterationZero() {
-    const run = this.watch.run.run;
-    if (this.zero?.run !== run) {
-      const promise = this.stored(0);
-      this.zero = { run, promise };
-      promise.catch(() => { if (this.zero?.promise === promise) this.zero = null; });
-    }
-    return this.zero.promise;
-  }
-
   // Another run is watched, or the live world was loaded again (after an edit,
   // which may have changed iteration 0): iteration 0 is fetched again when needed.
   reset() {
-    this.zero = null;
+    this.source = null;
   }
 
   // The live skeleton changed: the slider reaches its iteration (and follows it

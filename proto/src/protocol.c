@@ -516,6 +516,27 @@ char *sylva_msg_status(int64_t run, sylva_run_status status, int iteration, int 
   return sylva__strbuf_finish(&b);
 }
 
+/* ,"axes":{...} from the store's text of a run's axes. The text is parsed and each
+ * string member written again, so that whatever the store holds, the message stays
+ * valid JSON of the documented shape (a member that is not a string is left out). */
+static void put_axes(sylva__strbuf *b, const char *axes) {
+  cJSON *j = axes ? cJSON_Parse(axes) : NULL;
+  if (cJSON_IsObject(j)) {
+    sylva__strbuf_puts(b, ",\"axes\":{");
+    bool first = true;
+    for (const cJSON *m = j->child; m; m = m->next) {
+      if (!cJSON_IsString(m) || !m->string) continue;
+      if (!first) sylva__strbuf_putc(b, ',');
+      first = false;
+      put_string(b, m->string);
+      sylva__strbuf_putc(b, ':');
+      put_string(b, m->valuestring);
+    }
+    sylva__strbuf_putc(b, '}');
+  }
+  cJSON_Delete(j);
+}
+
 static void put_runs(sylva__strbuf *b, const sylva_run_summary *runs, size_t n) {
   sylva__strbuf_putc(b, '[');
   for (size_t i = 0; i < n; i++) {
@@ -524,8 +545,15 @@ static void put_runs(sylva__strbuf *b, const sylva_run_summary *runs, size_t n) 
     put_string(b, r->name);
     sylva__strbuf_puts(b, ",\"status\":");
     put_string(b, sylva_run_status_name(r->status));
-    sylva__strbuf_printf(b, ",\"iteration\":%d,\"stems\":%d,\"nodes\":%" PRId64 "%s}",
+    sylva__strbuf_printf(b, ",\"iteration\":%d,\"stems\":%d,\"nodes\":%" PRId64 "%s",
                          r->iteration, r->stems, r->nodes, r->loading ? ",\"loading\":true" : "");
+    if (r->sweep) {
+      sylva__strbuf_puts(b, ",\"sweep\":");
+      put_string(b, r->sweep);
+      sylva__strbuf_printf(b, ",\"position\":%d", r->position);
+      put_axes(b, r->axes);
+    }
+    sylva__strbuf_putc(b, '}');
   }
   sylva__strbuf_putc(b, ']');
 }

@@ -1,9 +1,16 @@
-/* `sylva validate`: parse and build a scenario, report what it holds. */
+/* `sylva validate`: parse and build a scenario, or check a sweep plan, and report
+ * what it holds. */
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
 
 #include "commands.h"
 #include "cli_input.h"
+#include "files.h"
 #include "options.h"
+#include "plan.h"
 #include "sylva/encode.h"
 
 static const cli_option validate_options[] = {
@@ -12,7 +19,7 @@ static const cli_option validate_options[] = {
 #define VALIDATE_OPTION_COUNT ((int)(sizeof validate_options / sizeof validate_options[0]))
 
 static void validate_usage(FILE *f) {
-  fputs("Usage: sylva validate SCENARIO.json\n"
+  fputs("Usage: sylva validate SCENARIO.json | PLAN.json\n"
         "\n"
         "Checks a scenario without running it: JSON syntax, every key and value, at\n"
         "least one plant, and that each root lies inside the world and outside the\n"
@@ -20,10 +27,64 @@ static void validate_usage(FILE *f) {
         "  ok: NAME: P plants, S stems, O obstacles[ (Z zones)][, M pruning schedules]\n"
         "      [, site sky at latitude L][, start year Y], voxel V m, NXxNYxNZ voxels\n"
         "or the error, named by its JSON pointer, on stderr (exit status 2).\n"
+        "A sweep plan (sylva.sweep/1) is checked as `sylva sweep` checks it, every\n"
+        "run's scenario too; it prints\n"
+        "  ok: sweep NAME: R runs (AXIS N x AXIS N ...)\n"
         "\n"
         "Options:\n",
         f);
   cli_print_options(f, validate_options, VALIDATE_OPTION_COUNT);
+}
+
+/* Whether the file is a sweep plan: a JSON object whose "format" is the plan's. An
+ * unreadable or malformed file is not; the scenario's reader then names what is
+ * wrong with it. */
+static bool is_plan(const char *path) {
+  char *data = NULL;
+  size_t len = 0;
+  if (files_read(path, FILES_MAX_INPUT, &data, &len)) return false;
+  cJSON *root = cJSON_ParseWithLength(data, len);
+  free(data);
+  const cJSON *format = cJSON_GetObjectItemCaseSensitive(root, "format");
+  bool plan = cJSON_IsString(format) && strcmp(format->valuestring, SWEEP_FORMAT) == 0;
+  cJSON_Delete(root);
+  return plan;
+}
+
+/* A sweep plan: the plan as `sylva sweep` reads it (--force: a plan of more runs than
+ * the default limit is still valid), then every run's scenario. */
+static int validate_plan(const char *path) {
+  sweep_plan *p;
+  char err[1200];
+  if (sweep_plan_load(path, true, &p, err, sizeof err)) {
+    fprintf(stderr, "sylva: %s\n", err);
+    return CLI_EXIT_USAGE;
+  }
+  int rc = CLI_EXIT_OK;
+  for (int i = 0; i < p->runs && rc == CLI_EXIT_OK; i++) {
+    sweep_run r;
+    if (sweep_plan_run(p, i, &r, err, sizeof err)) {
+      fprintf(stderr, "sylva: %s: run %d: %s\n", path, i, err);
+      rc = CLI_EXIT_USAGE;
+      break;
+    }
+    sylva_scenario *s = NULL;
+    if (sylva_scenario_parse(r.scenario, strlen(r.scenario), &s, err, sizeof err)) {
+      fprintf(stderr, "sylva: %s: run \"%s\": %s\n", path, r.name, err);
+      rc = CLI_EXIT_USAGE;
+    }
+    sylva_scenario_free(s);
+    sweep_run_free(&r);
+  }
+  if (rc == CLI_EXIT_OK) {
+    printf("ok: sweep %s: %d runs (", p->name, p->runs);
+    for (int a = 0; a < p->axis_count; a++)
+      printf("%s%s %d", a ? " x " : "", p->axes[a].name, p->axes[a].count);
+    printf(")%s\n", p->runs > SWEEP_MAX_RUNS ? ", more than sylva sweep runs without --force" : "");
+  }
+  sweep_plan_free(p);
+  if (rc == CLI_EXIT_OK && fflush(stdout) != 0) rc = CLI_EXIT_FAILURE;
+  return rc;
 }
 
 int cmd_validate(int argc, char **argv) {
@@ -42,6 +103,7 @@ int cmd_validate(int argc, char **argv) {
     return cli_usage_error("validate", argc - first == 0 ? "missing SCENARIO.json"
                                                          : "expected one SCENARIO.json");
   const char *path = argv[first];
+  if (is_plan(path)) return validate_plan(path);
 
   sylva_scenario *s;
   int rc = cli_input_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s);

@@ -34,6 +34,14 @@ int cmd_species(int argc, char **argv);
  *  skeleton with estimated birth years. */
 int cmd_import(int argc, char **argv);
 
+/** `sylva sweep PLAN.json`: a plan's runs, locally, as a Slurm array job, or merged
+ *  from its tasks' stores. */
+int cmd_sweep(int argc, char **argv);
+
+/** `sylva report --db FILE [--sweep NAME] [--years LIST] -o OUT.csv|html|pdf`: a sweep's
+ *  runs compared at chosen years. */
+int cmd_report(int argc, char **argv);
+
 /** `sylva serve [options]`: the daemon. */
 int cmd_serve(int argc, char **argv);
 

@@ -33,6 +33,11 @@ static void usage(FILE *f) {
         "  import FILE -o OUT.json\n"
         "                          a measured tree (TreeQSM, SimpleForest) as a skeleton\n"
         "                          with estimated birth years\n"
+        "  sweep PLAN.json (--db OUT.db | --slurm DIR | --merge DIR --db OUT.db)\n"
+        "                          a plan's runs (species, seeds, variants), locally or\n"
+        "                          as a Slurm array job\n"
+        "  report --db FILE [--sweep NAME] [--years LIST] -o OUT.csv|html|pdf\n"
+        "                          a sweep's runs compared at chosen years\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -67,6 +72,8 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "fit") == 0) return cmd_fit(argc - 1, argv + 1);
   if (strcmp(cmd, "species") == 0) return cmd_species(argc - 1, argv + 1);
   if (strcmp(cmd, "import") == 0) return cmd_import(argc - 1, argv + 1);
+  if (strcmp(cmd, "sweep") == 0) return cmd_sweep(argc - 1, argv + 1);
+  if (strcmp(cmd, "report") == 0) return cmd_report(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else

@@ -16,6 +16,7 @@
 #include "export.h"
 #include "files.h"
 #include "mesh.h"
+#include "report.h"
 #include "runs.h"
 
 /* Bytes of a reply's body per lws_write. */
@@ -23,14 +24,20 @@
 /* How often a connection waiting for its export is checked for the client leaving. */
 #define HTTP_WATCH_USECS 500000
 
-/* An export written off the loop thread into a tmpfile. */
+/* What an http_job writes. */
+typedef enum job_kind { JOB_EXPORT, JOB_REPORT } job_kind;
+
+/* An export, or a sweep's report, written off the loop thread into a tmpfile. */
 struct http_job {
   uv_work_t work;
   server *d;
   struct lws *wsi; /* with pss: NULL once the transaction is gone */
   http_pss *pss;
-  char *name;      /* the run's name (spec.name) */
+  job_kind kind;
+  char *name;      /* the run's name (spec.name), or the sweep's */
   export_spec spec;
+  report_format format; /* a report's */
+  int years[REPORT_MAX_YEARS], nyears;
   FILE *file;      /* the result, rewound */
   size_t size;
   int failed;
@@ -40,6 +47,13 @@ struct http_job {
 static const char *const export_types[] = {
     [EXPORT_SKELETON] = "application/json", [EXPORT_OBJ] = "text/plain; charset=utf-8",
     [EXPORT_PLY] = "application/octet-stream", [EXPORT_CSV] = "text/csv"};
+
+/* A report's content type and file extension, by format. */
+static const char *const report_types[] = {[REPORT_CSV] = "text/csv",
+                                           [REPORT_HTML] = "text/html; charset=utf-8",
+                                           [REPORT_PDF] = "application/pdf"};
+static const char *const report_extensions[] = {
+    [REPORT_CSV] = "csv", [REPORT_HTML] = "html", [REPORT_PDF] = "pdf"};
 
 /* ---- replies ------------------------------------------------------------------ */
 
@@ -234,11 +248,44 @@ static void scenario_file(server *d, http_pss *pss, const char *name) {
   reply(pss, 200, "application/json", data, len);
 }
 
-/* ---- exports -------------------------------------------------------------------- */
+/* ---- exports and reports, off the loop ------------------------------------------ */
 
 static void log_warning(const char *msg) { server_log(NULL, "export: %s", msg); }
+static void log_report_warning(const char *msg) { server_log(NULL, "report: %s", msg); }
 
-/* Worker thread: the export into a tmpfile. */
+/* The last part of a path ("runs.db" of "/srv/sylva/runs.db"): a report's title
+ * names its store, and a download need not tell where the daemon keeps it. */
+static const char *base_name(const char *path) {
+  const char *slash = strrchr(path, '/');
+  return slash && slash[1] ? slash + 1 : path;
+}
+
+/* Worker thread: the sweep's report (report.h), as `sylva report` writes it. A
+ * sweep the store does not have is SERVER_EINPUT (a 404). */
+static int write_report(http_job *j) {
+  report_request q = {.db = base_name(j->d->opt.db), .sweep = j->name, .years = j->years,
+                      .nyears = j->nyears};
+  report *r = NULL;
+  int rc = report_load(j->d->reader, &q, &r, j->err, sizeof j->err);
+  if (rc) return rc;
+  report_draw_options o = {.view = RENDER_FRONT, .width = 0, .warn = log_report_warning};
+  switch (j->format) {
+  case REPORT_CSV: rc = report_write_csv(j->file, r, j->err, sizeof j->err); break;
+  case REPORT_HTML:
+    rc = report_write_html(j->file, j->d->reader, r, &o, j->err, sizeof j->err);
+    break;
+  default: rc = report_write_pdf(j->file, j->d->reader, r, &o, j->err, sizeof j->err); break;
+  }
+  report_free(r);
+  /* a write error can also show only when the buffer goes out */
+  if (!rc && fflush(j->file) != 0) {
+    rc = SERVER_EWRITE;
+    snprintf(j->err, sizeof j->err, "temporary file: %s", strerror(errno));
+  }
+  return rc;
+}
+
+/* Worker thread: the export or report into a tmpfile. */
 static void job_work(uv_work_t *req) {
   http_job *j = req->data;
   j->file = tmpfile();
@@ -247,8 +294,11 @@ static void job_work(uv_work_t *req) {
     snprintf(j->err, sizeof j->err, "cannot create a temporary file: %s", strerror(errno));
     return;
   }
-  j->failed = export_write(j->file, j->d->reader, &j->spec, log_warning, j->err,
-                           sizeof j->err);
+  if (j->kind == JOB_REPORT)
+    j->failed = write_report(j);
+  else
+    j->failed = export_write(j->file, j->d->reader, &j->spec, log_warning, j->err,
+                             sizeof j->err);
   if (j->failed) return;
   off_t size = ftello(j->file);
   if (size < 0 || fseeko(j->file, 0, SEEK_SET) != 0) {
@@ -264,13 +314,27 @@ static void job_done(uv_work_t *req, int status) {
   http_job *j = req->data;
   j->d->jobs--;
   if (status == UV_ECANCELED) j->failed = SERVER_OK; /* the client left before it started */
-  if (j->failed) server_log(j->name, "export failed: %s", j->err);
+  /* a report of a sweep the store lacks is the client's mistake, not a failure */
+  bool unknown = j->kind == JOB_REPORT && j->failed == SERVER_EINPUT;
+  if (j->failed && !unknown) {
+    if (j->kind == JOB_REPORT)
+      server_log(NULL, "report of sweep \"%s\" failed: %s", j->name, j->err);
+    else
+      server_log(j->name, "export failed: %s", j->err);
+  }
   http_pss *pss = j->pss;
   if (!pss) {
-    server_log(j->name, "export: the client left before it was written");
+    if (j->kind == JOB_REPORT)
+      server_log(NULL, "report of sweep \"%s\": the client left before it was written",
+                 j->name);
+    else
+      server_log(j->name, "export: the client left before it was written");
   } else {
     pss->job = NULL;
-    if (j->failed) {
+    char q[80];
+    if (unknown) {
+      reply_text(pss, 404, "no sweep \"%s\"", shown(q, sizeof q, j->name));
+    } else if (j->failed) {
       reply_text(pss, 500, "%s", j->err);
     } else {
       pss->status = 200;
@@ -290,40 +354,56 @@ static void job_done(uv_work_t *req, int status) {
   free(j);
 }
 
-/* Starts writing spec off the loop; the reply follows when it is done. */
-static void start_export(server *d, struct lws *wsi, http_pss *pss, const run *r,
-                         const export_spec *spec) {
+/* A new job named name (a run's or a sweep's), or NULL after a reply saying why
+ * not (the daemon stopping, --max-jobs, memory). */
+static http_job *new_job(server *d, http_pss *pss, job_kind kind, const char *name) {
   if (d->stopping) {
     reply_text(pss, 503, "the daemon is stopping");
-    return;
+    return NULL;
   }
   const char *busy = runs_job_room(d);
   if (busy) {
     reply_text(pss, 503, "%s", busy);
-    return;
+    return NULL;
   }
   http_job *j = calloc(1, sizeof *j);
-  if (!j || !(j->name = strdup(r->name))) {
+  if (!j || !(j->name = strdup(name))) {
     free(j);
     reply_text(pss, 500, "out of memory");
-    return;
+    return NULL;
   }
   j->d = d;
-  j->spec = *spec;
-  j->spec.run = r->id;
-  j->spec.name = j->name;
+  j->kind = kind;
   j->work.data = j;
+  return j;
+}
+
+/* Queues j on libuv's threadpool (with the other jobs, apart from the runs' pool);
+ * the reply, of content type `type`, follows when it is done. */
+static void queue_job(server *d, struct lws *wsi, http_pss *pss, http_job *j, const char *type) {
   if (uv_queue_work(&d->loop, &j->work, job_work, job_done) != 0) {
+    const char *what = j->kind == JOB_REPORT ? "report" : "export";
     free(j->name);
     free(j);
-    reply_text(pss, 500, "cannot queue the export");
+    reply_text(pss, 500, "cannot queue the %s", what);
     return;
   }
   d->jobs++;
   j->wsi = wsi;
   j->pss = pss;
   pss->job = j;
-  pss->type = export_types[spec->format];
+  pss->type = type;
+}
+
+/* Starts writing spec off the loop; the reply follows when it is done. */
+static void start_export(server *d, struct lws *wsi, http_pss *pss, const run *r,
+                         const export_spec *spec) {
+  http_job *j = new_job(d, pss, JOB_EXPORT, r->name);
+  if (!j) return;
+  j->spec = *spec;
+  j->spec.run = r->id;
+  j->spec.name = j->name;
+  queue_job(d, wsi, pss, j, export_types[spec->format]);
 }
 
 /* An iteration given in a query: decimal digits only, 0 to INT_MAX. */
@@ -410,19 +490,91 @@ static bool export_query(struct lws *wsi, http_pss *pss, const run *r, export_sp
   return true;
 }
 
-/* Content-Disposition of an export: NAME-iT.ext, NAME's bytes outside
- * [A-Za-z0-9._-] (and a leading dot) as '_'. */
-static void export_disposition(http_pss *pss, const run *r, const export_spec *spec) {
-  char name[201];
+/* A name fit for a file name in Content-Disposition: at most 200 bytes, those
+ * outside [A-Za-z0-9._-] (and a leading dot) as '_'. */
+static void file_name(char out[201], const char *name) {
   size_t n = 0;
-  for (const char *c = r->name; *c && n + 1 < sizeof name; c++) {
+  for (const char *c = name; *c && n < 200; c++) {
     bool keep = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
                 (*c >= '0' && *c <= '9') || *c == '-' || *c == '_' || (*c == '.' && n > 0);
-    name[n++] = keep ? *c : '_';
+    out[n++] = keep ? *c : '_';
   }
-  name[n] = '\0';
+  out[n] = '\0';
+}
+
+/* Content-Disposition of an export: NAME-iT.ext (NAME as file_name makes it). */
+static void export_disposition(http_pss *pss, const run *r, const export_spec *spec) {
+  char name[201];
+  file_name(name, r->name);
   snprintf(pss->disposition, sizeof pss->disposition, "attachment; filename=\"%s-i%d.%s\"", name,
            spec->iteration, export_format_extension(spec->format));
+}
+
+/* ---- a sweep's report ----------------------------------------------------------- */
+
+/* The years of a report's query (lws has split it at '&' and URL-decoded each
+ * part): "years=10,20,40", or none for REPORT_DEFAULT_YEARS; false with a 400
+ * reply when it is bad. */
+static bool report_query(struct lws *wsi, http_pss *pss, int years[REPORT_MAX_YEARS],
+                         int *nyears) {
+  char arg[512], given[512], q[80], err[256];
+  if (lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_URI_ARGS) >= (int)sizeof arg) {
+    reply_text(pss, 400, "query: longer than %zu bytes", sizeof arg - 1);
+    return false;
+  }
+  const char *text = REPORT_DEFAULT_YEARS;
+  for (int i = 0; lws_hdr_copy_fragment(wsi, arg, sizeof arg, WSI_TOKEN_HTTP_URI_ARGS, i) >= 0;
+       i++) {
+    if (!arg[0] || strcmp(arg, "/") == 0) continue; /* empty parts, as export_query */
+    char *value = strchr(arg, '=');
+    if (value) *value++ = '\0';
+    if (strcmp(arg, "years") != 0) {
+      reply_text(pss, 400, "%s: unknown parameter (known: years)", shown(q, sizeof q, arg));
+      return false;
+    }
+    if (text == given) {
+      reply_text(pss, 400, "years: given more than once");
+      return false;
+    }
+    snprintf(given, sizeof given, "%s", value ? value : "");
+    text = given;
+  }
+  if (report_parse_years(text, years, nyears, err, sizeof err)) return true;
+  /* the message quotes the query: its control characters go */
+  for (char *c = err; *c; c++)
+    if ((unsigned char)*c < 0x20 || *c == 0x7F) *c = '?';
+  reply_text(pss, 400, "years: %s", err);
+  return false;
+}
+
+/* /api/sweeps/NAME/report.EXT (uri: what follows "/api/sweeps/"): the sweep's
+ * report, written off the loop as `sylva report --sweep NAME` writes it; no reply
+ * when the URI is not of this shape. The store says whether it has the sweep (a
+ * sweep stored after the daemon started too): the job replies 404 when not. */
+static void sweep_report(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
+  static const char *const suffixes[] = {[REPORT_CSV] = "/report.csv",
+                                         [REPORT_HTML] = "/report.html",
+                                         [REPORT_PDF] = "/report.pdf"};
+  size_t lu = strlen(uri);
+  for (int f = REPORT_CSV; f <= REPORT_PDF; f++) {
+    size_t ls = strlen(suffixes[f]);
+    if (lu <= ls || strcmp(uri + lu - ls, suffixes[f]) != 0) continue;
+    int years[REPORT_MAX_YEARS], nyears = 0;
+    if (!report_query(wsi, pss, years, &nyears)) return;
+    /* lws has URL-decoded the path already */
+    char name[1024], safe[201];
+    snprintf(name, sizeof name, "%.*s", (int)(lu - ls), uri);
+    http_job *j = new_job(d, pss, JOB_REPORT, name);
+    if (!j) return;
+    j->format = (report_format)f;
+    memcpy(j->years, years, sizeof years);
+    j->nyears = nyears;
+    file_name(safe, name);
+    snprintf(pss->disposition, sizeof pss->disposition,
+             "attachment; filename=\"%s-report.%s\"", safe, report_extensions[f]);
+    queue_job(d, wsi, pss, j, report_types[f]);
+    return;
+  }
 }
 
 /* The run /api/runs/NAME/<suffix> names (uri: what follows "/api/runs/"), or NULL
@@ -479,6 +631,8 @@ static void route(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
     reply_built(pss, "application/json", runs_json(d, false, NULL));
   } else if (starts(uri, "/api/scenarios/")) {
     scenario_file(d, pss, uri + strlen("/api/scenarios/"));
+  } else if (starts(uri, "/api/sweeps/")) {
+    sweep_report(d, wsi, pss, uri + strlen("/api/sweeps/"));
   } else if (starts(uri, "/api/runs/")) {
     const char *tail = uri + strlen("/api/runs/");
     export_spec spec = {.format = EXPORT_CSV, .sides = sylva_mesh_default_options().sides};

@@ -1,10 +1,12 @@
 /* sylva server: the daemon's HTTP routes: /healthz, /metrics, /api/runs,
- * /api/runs/NAME/stats.csv, /api/runs/NAME/export and /api/scenarios/NAME.
+ * /api/runs/NAME/stats.csv, /api/runs/NAME/export, /api/scenarios/NAME and
+ * /api/sweeps/NAME/report.(csv|html|pdf).
  *
  * Every reply goes out from LWS_CALLBACK_HTTP_WRITEABLE: the headers in one
  * callback, then the body in chunks, from memory or from a file. An export (and
- * stats.csv, its CSV) is written off the loop thread into a tmpfile() by an
- * http_job (the store locks itself). The connection waits
+ * stats.csv, its CSV) and a sweep's report (which regrows worlds for its pictures)
+ * are written off the loop thread into a tmpfile() by an http_job, on libuv's
+ * threadpool under --max-jobs (the store locks itself). The connection waits
  * for it without an lws timeout; a timer closes it when the client leaves. The
  * job may outlive its connection: it is detached when the connection closes
  * (LWS_CALLBACK_HTTP_DROP_PROTOCOL, LWS_CALLBACK_CLOSED_HTTP, also when the
@@ -30,9 +32,9 @@ typedef struct http_pss {
   bool headers_sent;
   bool challenge;      /**< a 401: send WWW-Authenticate: Bearer */
   char *body;          /**< the body in memory (malloc'd), or NULL */
-  FILE *file;          /**< or in a file (an export's tmpfile) */
+  FILE *file;          /**< or in a file (an export's or report's tmpfile) */
   size_t len, off;     /**< body length and how much went out */
-  http_job *job;       /**< the export being written for this transaction */
+  http_job *job;       /**< the export or report being written for this transaction */
 } http_pss;
 
 /** The callback of the "http" protocol. */

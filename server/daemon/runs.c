@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include "edit.h"
+#include "sweep_store.h"
 #include "sylva/protocol.h"
 #include "sylva/status.h"
 
@@ -758,6 +759,8 @@ static void run_free(run *r) {
   sylva_world_destroy(r->w);
   pthread_mutex_destroy(&r->lock);
   free(r->name);
+  free(r->sweep);
+  free(r->axes);
   free(r);
 }
 
@@ -769,6 +772,24 @@ static void run_remove(run *r) {
       break;
     }
   run_free(r);
+}
+
+/* store_each_sweep_run's callback: gives the listed run its place in its sweep. */
+static int note_sweep_run(const store_sweep_run *sr, void *ctx) {
+  run *r = run_find(ctx, sr->run);
+  if (!r) return 0;
+  free(r->sweep);
+  free(r->axes);
+  r->sweep = strdup(sr->sweep ? sr->sweep : "");
+  r->axes = sr->axes ? strdup(sr->axes) : NULL;
+  r->position = sr->position;
+  /* out of memory: the run is listed as of no sweep, rather than with half a place */
+  if (!r->sweep || (sr->axes && !r->axes)) {
+    free(r->sweep);
+    free(r->axes);
+    r->sweep = r->axes = NULL;
+  }
+  return 0;
 }
 
 int runs_load(server *d) {
@@ -792,6 +813,10 @@ int runs_load(server *d) {
     r->conflicts = (run_conflicts){sr->reports_conflicts, sr->zone_nodes, sr->zone_pairs};
   }
   store_runs_free(stored, n);
+  /* the runs of sweeps carry their place in the run list; without it they are still
+   * runs like any other, so a failure to read it is logged and not fatal */
+  if (store_each_sweep_run(d->st, NULL, note_sweep_run, d))
+    server_log(NULL, "the runs' places in their sweeps: %s", store_error(d->st));
   /* the growing runs load now, as many as the budget holds; the others when a client
    * needs them */
   char why[256];
@@ -832,7 +857,9 @@ char *runs_json(server *d, bool message, const char *ref) {
   for (run *r = d->runs; r; r = r->next, i++)
     list[i] = (sylva_run_summary){.run = r->id, .name = r->name, .status = r->status,
                                   .nodes = r->nodes, .iteration = r->iteration,
-                                  .stems = r->stems, .loading = r->loading};
+                                  .stems = r->stems, .loading = r->loading,
+                                  .sweep = r->sweep, .position = r->position,
+                                  .axes = r->axes};
   char *text = message ? sylva_msg_runs(list, n, ref) : sylva_runs_json(list, n);
   free(list);
   return text;

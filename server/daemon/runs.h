@@ -75,6 +75,11 @@ struct run {
   int64_t nodes;
   bool finished;    /**< the growth equations ended every stem */
   run_conflicts conflicts;
+  /* its place in a sweep of the store (sweep_store.h), as of the daemon's start:
+   * sweep NULL for a run of no sweep */
+  char *sweep;
+  int position;
+  char *axes;       /**< the store's compact JSON object, axis to value */
   size_t estimate;  /**< its share of the memory budget (runs_estimate) */
   bool busy;        /**< a task is queued or running */
   bool stop_after;  /**< stop requested while busy */

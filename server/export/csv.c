@@ -6,8 +6,7 @@
 
 #include "sylva/encode.h"
 
-/* RFC 4180: quote a field that holds a comma, a quote or a line break. */
-static void csv_text(FILE *f, const char *s) {
+void csv_write_text(FILE *f, const char *s) {
   if (!strpbrk(s, ",\"\r\n")) {
     fputs(s, f);
     return;
@@ -38,7 +37,7 @@ static int csv_row(const store_stats_row *r, void *ctx) {
   const csv_run *c = ctx;
   FILE *f = c->f;
   fprintf(f, "%d,", r->iteration);
-  csv_text(f, r->plant);
+  csv_write_text(f, r->plant);
   fprintf(f, ",%d,", r->plant_stem);
   csv_number(f, r->height, 4);
   fputc(',', f);
@@ -53,9 +52,9 @@ static int csv_row(const store_stats_row *r, void *ctx) {
   /* conflicts: empty where the run does not report them */
   if (r->pruned >= 0) fprintf(f, "%lld", (long long)r->pruned);
   fputc(',', f);
-  if (r->zones) csv_text(f, r->zones);
+  if (r->zones) csv_write_text(f, r->zones);
   fputc(',', f);
-  if (r->clearance) csv_text(f, r->clearance);
+  if (r->clearance) csv_write_text(f, r->clearance);
   /* years: empty where the run's lines lack the field or have null */
   if (c->years || c->start_year) {
     fputc(',', f);

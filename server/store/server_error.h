@@ -30,4 +30,14 @@ typedef enum server_error {
 /** The exit status of the binary for err: 0, 1 (runtime failure) or 2 (bad input). */
 int server_exit_status(int err);
 
+#include <stddef.h>
+
+/** Writes the message into err (when err and errlen) and returns status: an error
+ *  said and returned in one statement. */
+int server_fail(char *err, size_t errlen, int status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
 #endif

@@ -11,18 +11,14 @@
 #include <time.h>
 
 #include "command_log.h"
+#include "store_impl.h"
 #include "sylva/encode.h"
 #include "sylva/snapshot.h"
 
-struct store {
-  sqlite3 *db;
-  char *path;
-  pthread_mutex_t lock; /* recursive: one caller at a time on the one connection */
-};
-
 /* The last failure of this thread's store calls (as errno is), so that a message
  * read after a call is that call's, whatever other threads do meanwhile. */
-static _Thread_local char last_error[512];
+_Thread_local char store__last_error[STORE_ERROR_MAX];
+#define last_error store__last_error
 
 const char *store_error(const store *st) {
   (void)st;
@@ -30,13 +26,7 @@ const char *store_error(const store *st) {
 }
 const char *store_open_error(void) { return last_error; }
 
-/* Records "PATH: what: SQLite's reason" and returns SERVER_EFAIL. */
-static int fail(store *st, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-static int fail(store *st, const char *fmt, ...) {
+int store__fail(store *st, const char *fmt, ...) {
   char what[384];
   va_list ap;
   va_start(ap, fmt);
@@ -50,8 +40,7 @@ static int fail(store *st, const char *fmt, ...) {
   return SERVER_EFAIL;
 }
 
-/* Runs SQL; on failure records "PATH: what: reason". */
-static int exec(store *st, const char *sql, const char *what) {
+int store__exec(store *st, const char *sql, const char *what) {
   char *msg = NULL;
   if (sqlite3_exec(st->db, sql, NULL, NULL, &msg) != SQLITE_OK) {
     snprintf(last_error, sizeof last_error, "%s: %s: %s", st->path, what,
@@ -70,9 +59,9 @@ static int prepare_run(store *st, const char *sql, int64_t run, int n, sqlite3_s
   return SERVER_OK;
 }
 
-static void rollback(store *st) { sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL); }
+void store__rollback(store *st) { sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL); }
 
-static void utc_now(char out[32]) {
+void store__utc_now(char out[32]) {
   time_t t = time(NULL);
   struct tm tm;
   gmtime_r(&t, &tm);
@@ -140,48 +129,63 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "ALTER TABLE stats ADD COLUMN age INTEGER;"
     "ALTER TABLE stats ADD COLUMN crown_height REAL;"
     "ALTER TABLE runs ADD COLUMN start_year INTEGER;",
+    /* 3 -> 4: sweeps (docs/store.md): each sweep's plan, and every swept run's place
+     * in it, its position in the plan's product and its value on each axis */
+    "CREATE TABLE sweeps ("
+    "  name TEXT PRIMARY KEY,"
+    "  plan TEXT NOT NULL);"
+    "CREATE TABLE sweep_runs ("
+    "  run INTEGER PRIMARY KEY REFERENCES runs(id) ON DELETE CASCADE,"
+    "  sweep TEXT NOT NULL REFERENCES sweeps(name),"
+    "  position INTEGER NOT NULL CHECK (position >= 0),"
+    "  UNIQUE (sweep, position));"
+    "CREATE TABLE run_axes ("
+    "  run INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,"
+    "  axis TEXT NOT NULL,"
+    "  value TEXT NOT NULL,"
+    "  PRIMARY KEY (run, axis));",
 };
 
 static int migrate(store *st) {
   if (sqlite3_exec(st->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
     if ((sqlite3_errcode(st->db) & 0xff) == SQLITE_NOTADB) {
-      fail(st, "not a sylva store (not an SQLite database)");
+      store__fail(st, "not a sylva store (not an SQLite database)");
       return SERVER_EINPUT;
     }
-    return fail(st, "cannot open the store");
+    return store__fail(st, "cannot open the store");
   }
   bool ok1, ok2, ok3;
   int64_t app = pragma_int(st, "PRAGMA application_id", &ok1);
   int64_t version = pragma_int(st, "PRAGMA user_version", &ok2);
   int64_t objects = pragma_int(st, "SELECT count(*) FROM sqlite_schema", &ok3);
   if (!ok1 || !ok2 || !ok3) {
-    rollback(st);
-    fail(st, "not a sylva store (cannot read it as an SQLite database)");
+    store__rollback(st);
+    store__fail(st, "not a sylva store (cannot read it as an SQLite database)");
     return SERVER_EINPUT;
   }
   if (app != STORE_APPLICATION_ID && (app != 0 || objects > 0)) {
-    rollback(st);
-    fail(st, "not a sylva store (an SQLite file of another program, application_id 0x%llx)",
+    store__rollback(st);
+    store__fail(st, "not a sylva store (an SQLite file of another program, application_id 0x%llx)",
          (unsigned long long)app);
     return SERVER_EINPUT;
   }
   if (version > STORE_SCHEMA_VERSION) {
-    rollback(st);
-    fail(st, "written by a newer sylva (schema %lld; this build knows up to %d)",
+    store__rollback(st);
+    store__fail(st, "written by a newer sylva (schema %lld; this build knows up to %d)",
          (long long)version, STORE_SCHEMA_VERSION);
     return SERVER_EINPUT;
   }
   for (int64_t v = version; v < STORE_SCHEMA_VERSION; v++) {
-    if (exec(st, migrations[v], "migrating the schema")) {
-      rollback(st);
+    if (store__exec(st, migrations[v], "migrating the schema")) {
+      store__rollback(st);
       return SERVER_EFAIL;
     }
   }
   char sql[96];
   snprintf(sql, sizeof sql, "PRAGMA application_id = %d; PRAGMA user_version = %d",
            STORE_APPLICATION_ID, STORE_SCHEMA_VERSION);
-  if (exec(st, sql, "migrating the schema") || exec(st, "COMMIT", "migrating the schema")) {
-    rollback(st);
+  if (store__exec(st, sql, "migrating the schema") || store__exec(st, "COMMIT", "migrating the schema")) {
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   return SERVER_OK;
@@ -213,9 +217,9 @@ int store_open(const char *path, bool create, store **out) {
   /* WAL with full syncs: a commit that returned survives a crash of the program
    * and of the machine; foreign keys keep runs and their rows together. */
   int rc = migrate(st);
-  if (rc || exec(st, "PRAGMA journal_mode = WAL", "opening the store") ||
-      exec(st, "PRAGMA synchronous = FULL", "opening the store") ||
-      exec(st, "PRAGMA foreign_keys = ON", "opening the store")) {
+  if (rc || store__exec(st, "PRAGMA journal_mode = WAL", "opening the store") ||
+      store__exec(st, "PRAGMA synchronous = FULL", "opening the store") ||
+      store__exec(st, "PRAGMA foreign_keys = ON", "opening the store")) {
         store_close(st);
     return rc == SERVER_EINPUT ? SERVER_EINPUT : SERVER_EFAIL;
   }
@@ -240,7 +244,7 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   int it = sylva_world_iteration(w);
   if (snapshot) {
     int rc = sylva_snapshot_save(w, &img, &size);
-    if (rc) return fail(st, "snapshot of iteration %d: %s", it, sylva_strerror(rc));
+    if (rc) return store__fail(st, "snapshot of iteration %d: %s", it, sylva_strerror(rc));
   }
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
@@ -248,7 +252,7 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
                          " VALUES (?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     free(img);
-    return fail(st, "storing iteration %d", it);
+    return store__fail(st, "storing iteration %d", it);
   }
   sqlite3_bind_int64(q, 1, run);
   sqlite3_bind_int(q, 2, it);
@@ -262,7 +266,7 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
   free(img);
-  if (rc != SQLITE_DONE) return fail(st, "storing iteration %d", it);
+  if (rc != SQLITE_DONE) return store__fail(st, "storing iteration %d", it);
   return SERVER_OK;
 }
 
@@ -270,10 +274,10 @@ static int create_run_unlocked(store *st, const char *name, const char *scenario
                                uint64_t seed, int iterations, int snapshot_every,
                                const sylva_world *w, int64_t *run) {
   char now[32];
-  utc_now(now);
+  store__utc_now(now);
   char what[320];
   snprintf(what, sizeof what, "creating run \"%s\"", name);
-  if (exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
+  if (store__exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO runs (name, scenario, seed, iterations, snapshot_every,"
@@ -281,8 +285,8 @@ static int create_run_unlocked(store *st, const char *name, const char *scenario
                          " VALUES (?1, ?2, ?3, ?4, ?5, 'running', NULL, ?6, ?7,"
                          " json_extract(CASE WHEN json_valid(?2) THEN ?2 END, '$.start_year'))",
                          -1, &q, NULL) != SQLITE_OK) {
-    rollback(st);
-    return fail(st, "creating run \"%s\"", name);
+    store__rollback(st);
+    return store__fail(st, "creating run \"%s\"", name);
   }
   sqlite3_bind_text(q, 1, name, -1, SQLITE_STATIC);
   sqlite3_bind_text(q, 2, scenario_json, -1, SQLITE_STATIC);
@@ -294,24 +298,24 @@ static int create_run_unlocked(store *st, const char *name, const char *scenario
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
   if (rc == SQLITE_CONSTRAINT_UNIQUE) {
-    rollback(st);
+    store__rollback(st);
     snprintf(last_error, sizeof last_error,
              "%s: a run named \"%s\" exists already (continue it with 'sylva resume', or "
              "choose another --name)", st->path, name);
     return SERVER_EINPUT;
   }
   if (rc != SQLITE_DONE) {
-    fail(st, "creating run \"%s\"", name);
-    rollback(st);
+    store__fail(st, "creating run \"%s\"", name);
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   *run = sqlite3_last_insert_rowid(st->db);
   if (insert_iteration(st, *run, w, true)) {
-    rollback(st);
+    store__rollback(st);
     return SERVER_EFAIL;
   }
-  if (exec(st, "COMMIT", what)) {
-    rollback(st);
+  if (store__exec(st, "COMMIT", what)) {
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   return SERVER_OK;
@@ -392,7 +396,7 @@ static int find_run_unlocked(store *st, const char *name, store_run *out, bool *
   *found = false;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, RUN_COLUMNS " WHERE r.name = ?", -1, &q, NULL) != SQLITE_OK)
-    return fail(st, "looking up run \"%s\"", name);
+    return store__fail(st, "looking up run \"%s\"", name);
   sqlite3_bind_text(q, 1, name, -1, SQLITE_STATIC);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW) {
@@ -405,7 +409,7 @@ static int find_run_unlocked(store *st, const char *name, store_run *out, bool *
     *found = true;
   }
   sqlite3_finalize(q);
-  if (rc != SQLITE_ROW && rc != SQLITE_DONE) return fail(st, "looking up run \"%s\"", name);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) return store__fail(st, "looking up run \"%s\"", name);
   return SERVER_OK;
 }
 
@@ -414,7 +418,7 @@ static int list_runs_unlocked(store *st, store_run **out, size_t *count) {
   *count = 0;
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, RUN_COLUMNS " ORDER BY r.id", -1, &q, NULL) != SQLITE_OK)
-    return fail(st, "listing runs");
+    return store__fail(st, "listing runs");
   size_t n = 0, cap = 0;
   store_run *runs = NULL;
   int rc;
@@ -438,7 +442,7 @@ static int list_runs_unlocked(store *st, store_run **out, size_t *count) {
       snprintf(last_error, sizeof last_error, "%s: out of memory", st->path);
       return SERVER_EFAIL;
     }
-    return fail(st, "listing runs");
+    return store__fail(st, "listing runs");
   }
   *out = runs;
   *count = n;
@@ -459,7 +463,7 @@ static int run_calendar_unlocked(store *st, int64_t run, int *start_year, bool *
   if (sqlite3_prepare_v2(st->db,
                          "SELECT r.start_year, " SCENARIO_YEARS " FROM runs r WHERE r.id = ?", -1,
                          &q, NULL) != SQLITE_OK)
-    return fail(st, "reading a run's start year");
+    return store__fail(st, "reading a run's start year");
   sqlite3_bind_int64(q, 1, run);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW) {
@@ -467,22 +471,22 @@ static int run_calendar_unlocked(store *st, int64_t run, int *start_year, bool *
     if (years) *years = sqlite3_column_int(q, 1) != 0;
   }
   sqlite3_finalize(q);
-  return rc == SQLITE_ROW ? SERVER_OK : fail(st, "reading a run's start year");
+  return rc == SQLITE_ROW ? SERVER_OK : store__fail(st, "reading a run's start year");
 }
 
 static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
                                    const sylva_journal *j, bool snapshot) {
   int it = j->iteration;
   char now[32], what[64];
-  utc_now(now);
+  store__utc_now(now);
   snprintf(what, sizeof what, "storing iteration %d", it);
   /* zone entries are dated as the run's lines date them: in years from its start year */
   int start_year = 0;
   if (sylva_world_reports_conflicts(w) && run_calendar_unlocked(st, run, &start_year, NULL))
     return SERVER_EFAIL;
-  if (exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
+  if (store__exec(st, "BEGIN IMMEDIATE", what)) return SERVER_EFAIL;
   if (insert_iteration(st, run, w, snapshot)) {
-    rollback(st);
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   sqlite3_stmt *q;
@@ -492,8 +496,8 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
                          " zones, clearance, age, crown_height)"
                          " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
-    fail(st, "storing iteration %d", it);
-    rollback(st);
+    store__fail(st, "storing iteration %d", it);
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   for (size_t k = 0; k < j->stem_count; k++) {
@@ -533,26 +537,26 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
     free(zones);
     free(clearance);
     if (!ok || sqlite3_step(q) != SQLITE_DONE) {
-      fail(st, "storing iteration %d", it);
+      store__fail(st, "storing iteration %d", it);
       sqlite3_finalize(q);
-      rollback(st);
+      store__rollback(st);
       return SERVER_EFAIL;
     }
   }
   sqlite3_finalize(q);
   if (sqlite3_prepare_v2(st->db, "UPDATE runs SET updated = ? WHERE id = ?", -1, &q, NULL) !=
       SQLITE_OK) {
-    fail(st, "storing iteration %d", it);
-    rollback(st);
+    store__fail(st, "storing iteration %d", it);
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   sqlite3_bind_text(q, 1, now, -1, SQLITE_STATIC);
   sqlite3_bind_int64(q, 2, run);
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
-  if (rc != SQLITE_DONE || exec(st, "COMMIT", what)) {
-    if (rc != SQLITE_DONE) fail(st, "storing iteration %d", it);
-    rollback(st);
+  if (rc != SQLITE_DONE || store__exec(st, "COMMIT", what)) {
+    if (rc != SQLITE_DONE) store__fail(st, "storing iteration %d", it);
+    store__rollback(st);
     return SERVER_EFAIL;
   }
   return SERVER_OK;
@@ -567,13 +571,13 @@ int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_jo
 static int set_status_unlocked(store *st, int64_t run, sylva_run_status status, const char *reason,
                                int iterations) {
   char now[32];
-  utc_now(now);
+  store__utc_now(now);
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "UPDATE runs SET status = ?, reason = ?, updated = ?,"
                          " iterations = CASE WHEN ? > 0 THEN ? ELSE iterations END WHERE id = ?",
                          -1, &q, NULL) != SQLITE_OK)
-    return fail(st, "setting the status of a run");
+    return store__fail(st, "setting the status of a run");
   sqlite3_bind_text(q, 1, sylva_run_status_name(status), -1, SQLITE_STATIC);
   if (reason)
     sqlite3_bind_text(q, 2, reason, -1, SQLITE_STATIC);
@@ -585,7 +589,7 @@ static int set_status_unlocked(store *st, int64_t run, sylva_run_status status, 
   sqlite3_bind_int64(q, 6, run);
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
-  return rc == SQLITE_DONE ? 0 : fail(st, "setting the status of a run");
+  return rc == SQLITE_DONE ? 0 : store__fail(st, "setting the status of a run");
 }
 
 static int iteration_hash_unlocked(store *st, int64_t run, int iteration, uint64_t *hash,
@@ -594,14 +598,14 @@ static int iteration_hash_unlocked(store *st, int64_t run, int iteration, uint64
   sqlite3_stmt *q;
   if (prepare_run(st, "SELECT hash FROM iterations WHERE run = ? AND iteration = ?",
                   run, iteration, &q))
-    return fail(st, "reading iteration %d", iteration);
+    return store__fail(st, "reading iteration %d", iteration);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW) {
     *hash = (uint64_t)sqlite3_column_int64(q, 0);
     *found = true;
   }
   sqlite3_finalize(q);
-  return rc == SQLITE_ROW || rc == SQLITE_DONE ? 0 : fail(st, "reading iteration %d", iteration);
+  return rc == SQLITE_ROW || rc == SQLITE_DONE ? 0 : store__fail(st, "reading iteration %d", iteration);
 }
 
 static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(const char *msg),
@@ -612,7 +616,7 @@ static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(cons
                       " WHERE run = ? AND iteration <= ? AND snapshot IS NOT NULL"
                       " ORDER BY iteration DESC",
                   run, at, &q))
-    return fail(st, "reading snapshots");
+    return store__fail(st, "reading snapshots");
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     int it = sqlite3_column_int(q, 0);
@@ -653,7 +657,7 @@ static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(cons
     }
   }
   sqlite3_finalize(q);
-  if (rc != SQLITE_DONE) return fail(st, "reading snapshots");
+  if (rc != SQLITE_DONE) return store__fail(st, "reading snapshots");
   snprintf(last_error, sizeof last_error, "%s: no good snapshot at or before iteration %d",
            st->path, at);
   return SERVER_EFAIL;
@@ -682,7 +686,7 @@ static int replay_commands(store *st, int64_t run, int it, sylva_world **w) {
   if (prepare_run(st, "SELECT seq, command FROM commands WHERE run = ? AND iteration = ?"
                       " ORDER BY seq",
                   run, it, &q))
-    return fail(st, "reading the command log");
+    return store__fail(st, "reading the command log");
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     const char *json = (const char *)sqlite3_column_text(q, 1);
@@ -695,7 +699,7 @@ static int replay_commands(store *st, int64_t run, int it, sylva_world **w) {
     }
   }
   sqlite3_finalize(q);
-  return rc == SQLITE_DONE ? SERVER_OK : fail(st, "reading the command log");
+  return rc == SQLITE_DONE ? SERVER_OK : store__fail(st, "reading the command log");
 }
 
 static int apply_edit_unlocked(store *st, int64_t run, const sylva_world *w, const edit *e) {
@@ -703,14 +707,14 @@ static int apply_edit_unlocked(store *st, int64_t run, const sylva_world *w, con
   char what[64];
   snprintf(what, sizeof what, "storing an edit after iteration %d", it);
   char *record = command_log_encode(e);
-  if (!record) return fail(st, "%s: out of memory", what);
+  if (!record) return store__fail(st, "%s: out of memory", what);
   uint8_t *img;
   size_t size;
   int rc = sylva_snapshot_save(w, &img, &size);
-  if (rc || exec(st, "BEGIN IMMEDIATE", what)) {
+  if (rc || store__exec(st, "BEGIN IMMEDIATE", what)) {
     free(record);
     free(img);
-    return rc ? fail(st, "%s: %s", what, sylva_strerror(rc)) : SERVER_EFAIL;
+    return rc ? store__fail(st, "%s: %s", what, sylva_strerror(rc)) : SERVER_EFAIL;
   }
   sqlite3_stmt *q;
   rc = sqlite3_prepare_v2(st->db,
@@ -728,9 +732,9 @@ static int apply_edit_unlocked(store *st, int64_t run, const sylva_world *w, con
   }
   free(img);
   if (rc != SQLITE_DONE || sqlite3_changes(st->db) != 1 ||
-      log_command_unlocked(st, run, it, record, NULL) || exec(st, "COMMIT", what)) {
-    if (rc != SQLITE_DONE) fail(st, "%s", what);
-    rollback(st);
+      log_command_unlocked(st, run, it, record, NULL) || store__exec(st, "COMMIT", what)) {
+    if (rc != SQLITE_DONE) store__fail(st, "%s", what);
+    store__rollback(st);
     free(record);
     return SERVER_EFAIL;
   }
@@ -777,12 +781,12 @@ static int run_scenario_unlocked(store *st, int64_t run, char **json) {
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, "SELECT scenario FROM runs WHERE id = ?", -1, &q, NULL) !=
       SQLITE_OK)
-    return fail(st, "reading a run's scenario");
+    return store__fail(st, "reading a run's scenario");
   sqlite3_bind_int64(q, 1, run);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW) *json = dup_column(q, 0);
   sqlite3_finalize(q);
-  if (rc != SQLITE_ROW) return fail(st, "reading a run's scenario");
+  if (rc != SQLITE_ROW) return store__fail(st, "reading a run's scenario");
   if (!*json) {
     snprintf(last_error, sizeof last_error, "%s: out of memory", st->path);
     return SERVER_EFAIL;
@@ -802,7 +806,7 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
                       " age, crown_height FROM stats"
                       " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
                   run, to, &q))
-    return fail(st, "reading stats");
+    return store__fail(st, "reading stats");
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     store_stats_row r = {
@@ -833,7 +837,7 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
     }
   }
   sqlite3_finalize(q);
-  return rc == SQLITE_DONE ? 0 : fail(st, "reading stats");
+  return rc == SQLITE_DONE ? 0 : store__fail(st, "reading stats");
 }
 
 static int each_age_unlocked(store *st,
@@ -845,7 +849,7 @@ static int each_age_unlocked(store *st,
                          " s.iteration = (SELECT max(iteration) FROM stats t WHERE t.run = r.id)"
                          " WHERE s.plant_stem = 0 AND s.age IS NOT NULL ORDER BY r.id, s.stem",
                          -1, &q, NULL) != SQLITE_OK)
-    return fail(st, "reading ages");
+    return store__fail(st, "reading ages");
   int rc;
   while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
     const char *plant = (const char *)sqlite3_column_text(q, 1);
@@ -856,7 +860,7 @@ static int each_age_unlocked(store *st,
     }
   }
   sqlite3_finalize(q);
-  return rc == SQLITE_DONE ? 0 : fail(st, "reading ages");
+  return rc == SQLITE_DONE ? 0 : store__fail(st, "reading ages");
 }
 
 /* ---- commands ------------------------------------------------------------------ */
@@ -864,47 +868,35 @@ static int each_age_unlocked(store *st,
 static int log_command_unlocked(store *st, int64_t run, int iteration, const char *command_json,
                                 int64_t *seq) {
   char now[32];
-  utc_now(now);
+  store__utc_now(now);
   sqlite3_stmt *q;
   if (prepare_run(st, "INSERT INTO commands (run, seq, iteration, command, created)"
                       " VALUES (?1, (SELECT coalesce(max(seq), 0) + 1 FROM commands"
                       " WHERE run = ?1), ?2, ?3, ?4) RETURNING seq",
                   run, iteration, &q))
-    return fail(st, "logging a command");
+    return store__fail(st, "logging a command");
   sqlite3_bind_text(q, 3, command_json, -1, SQLITE_STATIC);
   sqlite3_bind_text(q, 4, now, -1, SQLITE_STATIC);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW && seq) *seq = sqlite3_column_int64(q, 0);
   if (rc == SQLITE_ROW) rc = sqlite3_step(q);
   sqlite3_finalize(q);
-  return rc == SQLITE_DONE ? 0 : fail(st, "logging a command");
+  return rc == SQLITE_DONE ? 0 : store__fail(st, "logging a command");
 }
 
 static int command_count_unlocked(store *st, int64_t run, int64_t *count) {
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db, "SELECT count(*) FROM commands WHERE run = ?", -1, &q, NULL) !=
       SQLITE_OK)
-    return fail(st, "counting commands");
+    return store__fail(st, "counting commands");
   sqlite3_bind_int64(q, 1, run);
   int rc = sqlite3_step(q);
   if (rc == SQLITE_ROW) *count = sqlite3_column_int64(q, 0);
   sqlite3_finalize(q);
-  return rc == SQLITE_ROW ? 0 : fail(st, "counting commands");
+  return rc == SQLITE_ROW ? 0 : store__fail(st, "counting commands");
 }
 
-/* ---- the entry points: one caller at a time --------------------------------------- */
-
-/* The store is used from several threads (the daemon's loop and its workers), on
- * one SQLite connection: each entry point holds the store's lock for its own
- * statements and transaction, and no longer. Regrowing a world (store_world_at)
- * holds it only for each read. */
-#define LOCKED(st, call)                  \
-  do {                                    \
-    pthread_mutex_lock(&(st)->lock);      \
-    int locked_rc_ = (call);              \
-    pthread_mutex_unlock(&(st)->lock);    \
-    return locked_rc_;                    \
-  } while (0)
+/* ---- the entry points: one caller at a time (LOCKED, store_impl.h) ------------------- */
 
 int store_create_run(store *st, const char *name, const char *scenario_json, uint64_t seed,
                      int iterations, int snapshot_every, const sylva_world *w, int64_t *run) {

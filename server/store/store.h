@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 3
+#define STORE_SCHEMA_VERSION 4
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 

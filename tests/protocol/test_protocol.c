@@ -919,9 +919,9 @@ static void test_encode_status(void) {
 /* runs, and the same list alone: names escaped (a missing one empty), big node counts. */
 static void test_encode_runs(void) {
   sylva_run_summary runs[] = {
-      {1, "wall", SYLVA_RUN_RUNNING, 4, 5, 1234, false},
-      {2, "tab\there \xe2\x9c\x93", SYLVA_RUN_FINISHED, 40, 1, 9000000000LL, false},
-      {3, NULL, SYLVA_RUN_PAUSED, 0, 0, 0, true},
+      {1, "wall", SYLVA_RUN_RUNNING, 4, 5, 1234, false, NULL, 0, NULL},
+      {2, "tab\there \xe2\x9c\x93", SYLVA_RUN_FINISHED, 40, 1, 9000000000LL, false, NULL, 0, NULL},
+      {3, NULL, SYLVA_RUN_PAUSED, 0, 0, 0, true, NULL, 0, NULL},
   };
   char *text = sylva_msg_runs(runs, 3, "\"L\"");
   cJSON *j = VALID_JSON(text);
@@ -952,6 +952,35 @@ static void test_encode_runs(void) {
   free(text);
   text = sylva_msg_runs(NULL, 0, NULL);
   CHECK_STR(text, "{\"type\":\"runs\",\"runs\":[]}");
+  free(text);
+}
+
+/* runs of a sweep: their sweep, position and axes after the other fields, the axes
+ * written again member by member (escaped; a member that is not a string, or a text
+ * that is not an object, left out). */
+static void test_encode_sweep_runs(void) {
+  sylva_run_summary runs[] = {
+      {1, "a", SYLVA_RUN_FINISHED, 10, 5, 70, false, "street \"species\"", 1,
+       "{\"species/street-tree\":\"utdb:NoEast:GIBI\",\"seed\":\"1\",\"variant\":\"as built\"}"},
+      {2, "b", SYLVA_RUN_PAUSED, 0, 1, 3, false, "s", 0,
+       "{\"seed\":\"2\",\"n\":3,\"tab\":\"a\\tb\"}"},
+      {3, "c", SYLVA_RUN_PAUSED, 0, 1, 3, false, "s", 2, "[\"not an object\"]"},
+      {4, "d", SYLVA_RUN_PAUSED, 0, 1, 3, false, "s", 3, NULL},
+  };
+  char *text = sylva_runs_json(runs, 4);
+  CHECK_STR(text,
+            "[{\"run\":1,\"name\":\"a\",\"status\":\"finished\",\"iteration\":10,\"stems\":5,"
+            "\"nodes\":70,\"sweep\":\"street \\\"species\\\"\",\"position\":1,\"axes\":{"
+            "\"species/street-tree\":\"utdb:NoEast:GIBI\",\"seed\":\"1\","
+            "\"variant\":\"as built\"}},"
+            "{\"run\":2,\"name\":\"b\",\"status\":\"paused\",\"iteration\":0,\"stems\":1,"
+            "\"nodes\":3,\"sweep\":\"s\",\"position\":0,\"axes\":{\"seed\":\"2\","
+            "\"tab\":\"a\\tb\"}},"
+            "{\"run\":3,\"name\":\"c\",\"status\":\"paused\",\"iteration\":0,\"stems\":1,"
+            "\"nodes\":3,\"sweep\":\"s\",\"position\":2},"
+            "{\"run\":4,\"name\":\"d\",\"status\":\"paused\",\"iteration\":0,\"stems\":1,"
+            "\"nodes\":3,\"sweep\":\"s\",\"position\":3}]");
+  cJSON_Delete(VALID_JSON(text));
   free(text);
 }
 
@@ -1585,7 +1614,8 @@ int main(int argc, char **argv) {
       CHECK_TEST(invalid_keeps_ref), CHECK_TEST(invalid_error_buffer), CHECK_TEST(invalid_long_key),
       CHECK_TEST(depth), CHECK_TEST(encode_welcome), CHECK_TEST(encode_error),
       CHECK_TEST(encode_parse_error), CHECK_TEST(encode_created), CHECK_TEST(encode_status),
-      CHECK_TEST(encode_runs), CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
+      CHECK_TEST(encode_runs), CHECK_TEST(encode_sweep_runs),
+      CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
       CHECK_TEST(deltas), CHECK_TEST(later_snapshot), CHECK_TEST(years_messages),
       CHECK_TEST(light_slice_board),
       CHECK_TEST(light_slice_top), CHECK_TEST(light_slice_layers), CHECK_TEST(light_slice_padding)};

@@ -272,9 +272,11 @@ static int first_row(const store_stats_row *r, void *ctx) {
   return 0;
 }
 
-/* The columns schema 3 added, dropped: a store of schema 2 again. */
+/* The tables schema 4 added and the columns schema 3 added, dropped: a store of
+ * schema 2 again. */
 #define BACK_TO_SCHEMA_2                                                                  \
-  "ALTER TABLE stats DROP COLUMN age; ALTER TABLE stats DROP COLUMN crown_height;"        \
+  "DROP TABLE run_axes; DROP TABLE sweep_runs; DROP TABLE sweeps;"                         \
+  " ALTER TABLE stats DROP COLUMN age; ALTER TABLE stats DROP COLUMN crown_height;"        \
   " ALTER TABLE runs DROP COLUMN start_year; PRAGMA user_version = 2;"
 
 /* A store of schema 1 (before conflicts) is migrated in place: its rows stay, and

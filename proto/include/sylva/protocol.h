@@ -165,10 +165,16 @@ typedef struct sylva_run_summary {
   int stems;
   int64_t nodes;
   bool loading; /**< still being restored from the store ("loading": true) */
+  const char *sweep; /**< the sweep the run is part of, or NULL (then no sweep fields) */
+  int position;      /**< its position in the sweep's product of axes */
+  const char *axes;  /**< its place on the sweep's axes: a JSON object of strings (the
+                          store's text), or NULL; written member by member, so that a
+                          text that is not such an object gives no "axes" */
 } sylva_run_summary;
 
 /** {"type":"runs","runs":[{"run":1,"name":"..","status":"running","iteration":4,
- *  "stems":5,"nodes":1234}],"ref":...} */
+ *  "stems":5,"nodes":1234,"sweep":"..","position":0,"axes":{"seed":"1"}}],"ref":...};
+ *  the sweep fields only for a swept run. */
 char *sylva_msg_runs(const sylva_run_summary *runs, size_t n, const char *ref);
 
 /** Just the array of sylva_msg_runs() ([{"run":1,...}]), for GET /api/runs. */

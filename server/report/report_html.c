@@ -1,0 +1,230 @@
+/* The report as one self-contained HTML page: the summary table, each species drawn
+ * at each reported year, the plots and the first-conflict chart, every picture a PNG
+ * inlined as a data: URI (base64 by libwebsockets, which the daemon links already). */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <libwebsockets.h>
+
+#include "report.h"
+#include "report_draw.h"
+
+#define PLOT_WIDTH 1000
+#define PLOT_HEIGHT 440
+
+/* Text with the characters HTML gives a meaning escaped. */
+static void put_text(FILE *f, const char *s) {
+  for (; *s; s++) {
+    switch (*s) {
+    case '&': fputs("&amp;", f); break;
+    case '<': fputs("&lt;", f); break;
+    case '>': fputs("&gt;", f); break;
+    case '"': fputs("&quot;", f); break;
+    default: fputc(*s, f);
+    }
+  }
+}
+
+/* An <img> with the PNG inline. */
+static int put_png(FILE *f, const report_png *p, const char *alt, char *err, size_t errlen) {
+  if (p->len > (size_t)INT_MAX / 2) {
+    snprintf(err, errlen, "a picture of %zu bytes is too large to inline", p->len);
+    return SERVER_EFAIL;
+  }
+  /* libwebsockets wants room for a whole group and the terminator at each step */
+  size_t cap = (p->len + 2) / 3 * 4 + 8;
+  char *b64 = malloc(cap);
+  if (!b64) {
+    snprintf(err, errlen, "out of memory");
+    return SERVER_ENOMEM;
+  }
+  int n = lws_b64_encode_string((const char *)p->data, (int)p->len, b64, (int)cap);
+  if (n < 0) {
+    free(b64);
+    snprintf(err, errlen, "encoding a picture as base64 failed");
+    return SERVER_EFAIL;
+  }
+  fprintf(f, "<img width=\"%d\" height=\"%d\" alt=\"", p->width, p->height);
+  put_text(f, alt);
+  fputs("\" src=\"data:image/png;base64,", f);
+  fwrite(b64, 1, (size_t)n, f);
+  fputs("\">", f);
+  free(b64);
+  return SERVER_OK;
+}
+
+static const char *const measure_heads[REPORT_MEASURES] = {"height (m)", "dbh (m)",
+                                                           "crown diameter (m)",
+                                                           "crown height (m)"};
+
+static void put_summary(FILE *f, const report *r) {
+  fputs("<table class=\"summary\">\n<thead><tr><th>axis</th><th>value</th><th>species</th>"
+        "<th>years</th><th>stems</th>",
+        f);
+  for (int m = 0; m < REPORT_MEASURES; m++) fprintf(f, "<th>%s</th>", measure_heads[m]);
+  for (int z = 0; z < r->nzones; z++) {
+    fputs("<th>first conflict: ", f);
+    put_text(f, r->zones[z]);
+    fputs("</th>", f);
+  }
+  fputs("</tr></thead>\n<tbody>\n", f);
+  char cell[160];
+  for (size_t i = 0; i < r->ngroups; i++) {
+    const report_group *g = &r->groups[i];
+    fputs("<tr><td>", f);
+    put_text(f, report_group_axis(r, g));
+    fputs("</td><td>", f);
+    put_text(f, g->value);
+    fputs("</td><td>", f);
+    put_text(f, r->species[g->species].label);
+    report_format_year(cell, sizeof cell, r, g->year);
+    fprintf(f, "</td><td>%s</td><td>%d</td>", cell, g->n);
+    for (int m = 0; m < REPORT_MEASURES; m++) {
+      report_format_stat(cell, sizeof cell, &g->measure[m], g->n);
+      fprintf(f, "<td>%s</td>", cell);
+    }
+    for (int z = 0; z < r->nzones; z++) {
+      report_format_first(cell, sizeof cell, &g->first[z], g->n);
+      fprintf(f, "<td>%s</td>", cell);
+    }
+    fputs("</tr>\n", f);
+  }
+  fputs("</tbody></table>\n", f);
+}
+
+static int put_pictures(FILE *f, store *st, const report *r, const report_draw_options *o,
+                        char *err, size_t errlen) {
+  fputs("<table class=\"pictures\">\n<tr><th>species</th>", f);
+  char cell[64];
+  for (int y = 0; y < r->nyears; y++) {
+    report_format_year(cell, sizeof cell, r, y);
+    fprintf(f, "<th>year %s</th>", cell);
+  }
+  fputs("</tr>\n", f);
+  for (int s = 0; s < r->nspecies; s++) {
+    fputs("<tr><th>", f);
+    put_text(f, r->species[s].label);
+    fputs("<br><small>", f);
+    put_text(f, r->runs[r->species[s].picture_run].name);
+    fputs("</small></th>", f);
+    for (int y = 0; y < r->nyears; y++) {
+      fputs("<td>", f);
+      if (report_has_picture(r, s, y)) {
+        report_png p;
+        int rc = report_picture(st, r, s, y, o, &p, err, errlen);
+        if (rc) return rc;
+        char alt[300];
+        snprintf(alt, sizeof alt, "%s at year %d", r->species[s].label, r->years[y]);
+        rc = put_png(f, &p, alt, err, errlen);
+        report_png_free(&p);
+        if (rc) return rc;
+      } else {
+        fputs("not grown so far", f);
+      }
+      fputs("</td>", f);
+    }
+    fputs("</tr>\n", f);
+  }
+  fputs("</table>\n", f);
+  return SERVER_OK;
+}
+
+static int put_figure(FILE *f, const report *r, int m, int h, const char *alt, char *err,
+                      size_t errlen) {
+  report_png p;
+  int rc = report_figure_png(r, m, PLOT_WIDTH, h, &p, err, errlen);
+  if (!rc) rc = put_png(f, &p, alt, err, errlen);
+  report_png_free(&p);
+  fputs("\n", f);
+  return rc;
+}
+
+static void put_runs(FILE *f, const report *r) {
+  fputs("<table class=\"runs\">\n<thead><tr><th>run</th>", f);
+  for (int a = 0; a < r->naxes; a++) {
+    fputs("<th>", f);
+    put_text(f, r->axes[a]);
+    fputs("</th>", f);
+  }
+  fputs("<th>last iteration</th></tr></thead>\n<tbody>\n", f);
+  for (int i = 0; i < r->nruns; i++) {
+    fputs("<tr><td>", f);
+    put_text(f, r->runs[i].name);
+    fputs("</td>", f);
+    for (int a = 0; a < r->naxes; a++) {
+      fputs("<td>", f);
+      put_text(f, r->runs[i].values[a]);
+      fputs("</td>", f);
+    }
+    fprintf(f, "<td>%d</td></tr>\n", r->runs[i].last_iteration);
+  }
+  fputs("</tbody></table>\n", f);
+}
+
+int report_write_html(FILE *f, store *st, const report *r, const report_draw_options *o,
+                      char *err, size_t errlen) {
+  const char *what = r->sweep ? r->sweep : "the runs of the store";
+  fputs("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>sylva "
+        "report: ",
+        f);
+  put_text(f, what);
+  fputs("</title>\n<style>\n"
+        "body { font-family: sans-serif; margin: 2em; color: #222; }\n"
+        "table { border-collapse: collapse; margin: 1em 0; }\n"
+        "th, td { border: 1px solid #bbb; padding: 0.25em 0.5em; text-align: left; "
+        "vertical-align: top; }\n"
+        "table.summary td { white-space: nowrap; font-variant-numeric: tabular-nums; }\n"
+        "table.pictures img { max-width: 520px; height: auto; }\n"
+        "img { max-width: 100%; height: auto; }\n"
+        "p.note { color: #555; max-width: 60em; }\n"
+        "</style>\n</head>\n<body>\n<h1>sylva report: ",
+        f);
+  put_text(f, what);
+  fputs("</h1>\n<p>Store <code>", f);
+  put_text(f, r->db);
+  fprintf(f, "</code>: %d run%s; reported years:", r->nruns, r->nruns == 1 ? "" : "s");
+  char cell[64];
+  for (int y = 0; y < r->nyears; y++) {
+    report_format_year(cell, sizeof cell, r, y);
+    fprintf(f, "%s %s", y ? "," : "", cell);
+  }
+  fputs(" (years since planting, the stats of that iteration).</p>\n", f);
+
+  fputs("<h2>Summary</h2>\n<p class=\"note\">Per axis value, the seeds (and plants) pooled: "
+        "median (minimum–maximum) over the stems, in metres as stored; \"k of n\" where only k "
+        "of the n stems have a value. First conflict: the stored first year in each zone "
+        "(calendar years with a start year) of the stems that met it by that year.</p>\n",
+        f);
+  put_summary(f, r);
+  if (!r->ngroups)
+    fputs("<p>No run has reached any of the reported years.</p>\n", f);
+
+  fputs("<h2>Pictures</h2>\n<p class=\"note\">Each species in the first run that grows it, "
+        "at each reported year.</p>\n",
+        f);
+  int rc = put_pictures(f, st, r, o, err, errlen);
+  if (!rc) {
+    fputs("<h2>Growth</h2>\n", f);
+    rc = put_figure(f, r, REPORT_HEIGHT, PLOT_HEIGHT, "height over the years", err, errlen);
+  }
+  if (!rc)
+    rc = put_figure(f, r, REPORT_CROWN_DIAMETER, PLOT_HEIGHT, "crown diameter over the years",
+                    err, errlen);
+  if (!rc) {
+    fputs("<h2>First conflicts</h2>\n", f);
+    rc = put_figure(f, r, -1, (int)report_conflicts_height(r), "first conflicts", err, errlen);
+  }
+  if (!rc) {
+    fputs("<h2>Runs</h2>\n", f);
+    put_runs(f, r);
+    fputs("</body>\n</html>\n", f);
+    if (fflush(f) || ferror(f)) {
+      snprintf(err, errlen, "%s", strerror(errno ? errno : EIO));
+      rc = SERVER_EWRITE;
+    }
+  }
+  return rc;
+}

@@ -1,0 +1,495 @@
+"""`sylva report` through the real binary (Python 3 standard library only).
+
+meson runs `python3 test_report.py SYLVA_EXE SCENARIOS_DIR PART`, PART:
+  sweep   a small sweep (two species, two seeds, two variants of the pruned street,
+          12 iterations): every CSV value equals the stats table read here with
+          sqlite3 (pruned summed here), the rows are exactly the stored ones at the
+          reached years; the HTML summary's numbers equal medians and ranges
+          recomputed here from the table, its pictures are inlined PNGs, one per
+          species and reached year; the PDF has the pages and the summary's text;
+  plain   a store without sweeps (a pruned street and a shrub of ten stems): no axis
+          columns, a `stem` column, species by scenario key, the same checks, one
+          summary group per species;
+  errors  bad input (no --db, no such store, no such sweep, several sweeps, bad
+          --years, bad -o): exit 2, a message naming it, no file written and an
+          existing one untouched; years no run reached: a warning, header only.
+"""
+import base64
+import html.parser
+import json
+import os
+import re
+import sqlite3
+import statistics
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "store"))
+from store_common import Checks, Env, crash_text  # noqa: E402
+
+ITERATIONS = 12
+YEARS = [5, 10, 12, 20]  # 20 is never reached
+MEASURES = [("height", "height"), ("dbh", "dbh"), ("crown_diameter", "crown_width"),
+            ("crown_height", "crown_height")]
+
+
+# ---- what the store holds, read here ----------------------------------------------
+
+def store_runs(db, sweep):
+    """[(id, name, start_year or 0, {axis: value})] in the report's order."""
+    con = sqlite3.connect(db)
+    try:
+        if sweep:
+            runs = con.execute("SELECT r.id, r.name, r.start_year FROM sweep_runs w JOIN runs r"
+                               " ON r.id = w.run WHERE w.sweep = ? ORDER BY w.position",
+                               (sweep,)).fetchall()
+        else:
+            runs = con.execute("SELECT id, name, start_year FROM runs ORDER BY id").fetchall()
+        out = []
+        for rid, name, start in runs:
+            axes = dict(con.execute("SELECT axis, value FROM run_axes WHERE run = ?"
+                                    " ORDER BY rowid", (rid,)).fetchall())
+            out.append((rid, name, start or 0, axes))
+        return out
+    finally:
+        con.close()
+
+
+def expected_rows(db, sweep, years):
+    """The report's rows as the stats table gives them: dicts of the stored values."""
+    con = sqlite3.connect(db)
+    rows = []
+    try:
+        for rid, name, start, axes in store_runs(db, sweep):
+            scen = json.loads(con.execute("SELECT scenario FROM runs WHERE id = ?",
+                                          (rid,)).fetchone()[0])
+            keys = {p["id"]: p["species"] for p in scen["plants"]}
+            for y in years:
+                for (stem, plant, plant_stem, age, height, dbh, cw, ch, zones, clearance,
+                     pruned) in con.execute(
+                        "SELECT stem, plant, plant_stem, age, height, dbh, crown_width,"
+                        " crown_height, zones, clearance, pruned FROM stats"
+                        " WHERE run = ? AND iteration = ? ORDER BY stem", (rid, y)):
+                    total = con.execute("SELECT SUM(pruned) FROM stats WHERE run = ? AND"
+                                        " stem = ? AND iteration <= ?",
+                                        (rid, stem, y)).fetchone()[0]
+                    key = keys[plant]
+                    species = axes.get("species/" + key, key)
+                    rows.append({"run": name, "axes": axes, "plant": plant, "stem": plant_stem,
+                                 "species": species, "key": key, "age": age,
+                                 "year": start + y, "iteration": y, "height": height,
+                                 "dbh": dbh, "crown_width": cw, "crown_height": ch,
+                                 "zones": json.loads(zones) if zones else None,
+                                 "clearance": json.loads(clearance) if clearance else None,
+                                 "pruned": total if pruned is not None else None})
+    finally:
+        con.close()
+    return rows
+
+
+# ---- the CSV ------------------------------------------------------------------------
+
+def read_csv(path):
+    import csv
+    with open(path, newline="", encoding="utf-8") as f:
+        data = list(csv.reader(f))
+    return data[0], data[1:]
+
+
+def number(field):
+    return None if field == "" else float(field)
+
+
+def check_csv(c, path, expect, axes, multi_stem):
+    header, rows = read_csv(path)
+    zones = [h[len("first_"):] for h in header if h.startswith("first_")]
+    obstacles = [h[len("clearance_"):] for h in header if h.startswith("clearance_")]
+    want_head = (["run"] + axes + ["plant"] + (["stem"] if multi_stem else [])
+                 + ["species", "age", "year", "height", "dbh", "crown_diameter",
+                    "crown_height"])
+    c.check(header[:len(want_head)] == want_head, "CSV header starts " + ",".join(want_head),
+            header)
+    c.check("leaf_area" not in header, "no leaf_area column (it is not stored)")
+    c.check(len(rows) == len(expect), "CSV has one row per stored stem and reached year",
+            "%d rows, %d expected" % (len(rows), len(expect)))
+    bad = []
+    for i, (row, e) in enumerate(zip(rows, expect)):
+        f = dict(zip(header, row))
+        got = [f["run"]] + [f[a] for a in axes] + [f["plant"], f["species"]]
+        want = [e["run"]] + [e["axes"][a] for a in axes] + [e["plant"], e["species"]]
+        if multi_stem and int(f["stem"]) != e["stem"]:
+            bad.append((i, "stem", f["stem"], e["stem"]))
+        if got != want:
+            bad.append((i, "names", got, want))
+        if number(f["age"]) != e["age"]:
+            bad.append((i, "age", f["age"], e["age"]))
+        if int(f["year"]) != e["year"]:
+            bad.append((i, "year", f["year"], e["year"]))
+        for col, key in MEASURES:
+            if number(f[col]) != e[key]:
+                bad.append((i, col, f[col], e[key]))
+        for z in zones:
+            want = (e["zones"] or {}).get(z, {}).get("first")
+            if number(f["first_" + z]) != want:
+                bad.append((i, "first_" + z, f["first_" + z], want))
+        for o in obstacles:
+            want = (e["clearance"] or {}).get(o)
+            if number(f["clearance_" + o]) != want:
+                bad.append((i, "clearance_" + o, f["clearance_" + o], want))
+        if "pruned" in f and number(f["pruned"]) != e["pruned"]:
+            bad.append((i, "pruned", f["pruned"], e["pruned"]))
+    c.check(not bad, "every CSV value equals the stored stats", bad[:10])
+    return header, rows, zones
+
+
+# ---- the summary, recomputed ------------------------------------------------------------
+
+def expected_groups(rows, axes, zones, years):
+    """[(axis, value, species, year, n, {measure: stat}, {zone: stat})], in the report's
+    order: axes but seed, values as they first appear, species as they first appear."""
+    group_axes = [a for a in axes if a != "seed"] or [None]
+    species = []
+    for r in rows:
+        if r["species"] not in species:
+            species.append(r["species"])
+    out = []
+    for a in group_axes:
+        values = []
+        for r in rows:
+            v = r["axes"][a] if a else "all runs"
+            if v not in values:
+                values.append(v)
+        for v in values:
+            for s in species:
+                for y in years:
+                    g = [r for r in rows if r["iteration"] == y and r["species"] == s
+                         and (a is None or r["axes"][a] == v)
+                         and (a is None or not a.startswith("species/")
+                              or r["key"] == a[len("species/"):])]
+                    if not g:
+                        continue
+                    meas = {}
+                    for _, key in MEASURES:
+                        vals = [r[key] for r in g if r[key] is not None]
+                        meas[key] = stat(vals)
+                    firsts = {}
+                    for z in zones:
+                        vals = [r["zones"][z]["first"] for r in g
+                                if r["zones"] and z in r["zones"]]
+                        firsts[z] = stat(vals)
+                    out.append((a or "all runs", v, s, y, len(g), meas, firsts))
+    return out
+
+
+def stat(vals):
+    if not vals:
+        return (0, None, None, None)
+    return (len(vals), statistics.median(vals), min(vals), max(vals))
+
+
+class Tables(html.parser.HTMLParser):
+    """Every <table>'s class and rows of cell texts."""
+
+    def __init__(self):
+        super().__init__()
+        self.tables, self.cell, self.row = [], None, None
+        self.imgs, self.open = [], []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "table":
+            self.tables.append((a.get("class"), []))
+            self.open.append(self.tables[-1])
+        elif tag == "tr":
+            self.row = []
+        elif tag in ("td", "th"):
+            self.cell = ""
+        elif tag == "img":
+            self.imgs.append((self.open[-1][0] if self.open else None, a))
+
+    def handle_endtag(self, tag):
+        if tag == "table" and self.open:
+            self.open.pop()
+        elif tag in ("td", "th") and self.row is not None:
+            self.row.append(self.cell.strip())
+            self.cell = None
+        elif tag == "tr" and self.open:
+            self.open[-1][1].append(self.row)
+            self.row = None
+
+    def handle_data(self, data):
+        if self.cell is not None:
+            self.cell += data
+
+
+STAT = re.compile(r"^(-?\d+\.\d{3}) \((-?\d+\.\d{3})–(-?\d+\.\d{3})\)(?:, (\d+) of (\d+))?$")
+FIRST = re.compile(r"^(\S+) \((\S+)–(\S+)\), (\d+) of (\d+)$")
+NEVER = re.compile(r"^never, 0 of (\d+)$")
+
+
+def close3(shown, value):
+    """A number shown with three decimals against the value it rounds."""
+    return abs(float(shown) - value) <= 0.0005 + 1e-9
+
+
+def check_summary(c, page, groups, zones):
+    p = Tables()
+    p.feed(page)
+    summary = [rows for cls, rows in p.tables if cls == "summary"]
+    if not c.check(len(summary) == 1, "the HTML has one summary table"):
+        return p
+    head, body = summary[0][0], summary[0][1:]
+    c.check(head[:9] == ["axis", "value", "species", "years", "stems", "height (m)", "dbh (m)",
+                         "crown diameter (m)", "crown height (m)"]
+            and head[9:] == ["first conflict: " + z for z in zones],
+            "summary header", head)
+    c.check(len(body) == len(groups), "one summary line per axis value, species and year",
+            "%d lines, %d expected" % (len(body), len(groups)))
+    bad = []
+    for i, (cells, g) in enumerate(zip(body, groups)):
+        axis, value, species, year, n, meas, firsts = g
+        if cells[:3] != [axis, value, species] or int(cells[3].split()[0]) != year \
+                or int(cells[4]) != n:
+            bad.append((i, "keys", cells[:5], g[:5]))
+            continue
+        for k, (_, key) in enumerate(MEASURES):
+            cnt, med, lo, hi = meas[key]
+            cell = cells[5 + k]
+            if cnt == 0:
+                if cell != "–":
+                    bad.append((i, key, cell, "–"))
+                continue
+            m = STAT.match(cell)
+            if not m or not (close3(m.group(1), med) and close3(m.group(2), lo)
+                             and close3(m.group(3), hi)) \
+                    or (cnt < n) != (m.group(4) is not None) \
+                    or (m.group(4) and (int(m.group(4)), int(m.group(5))) != (cnt, n)):
+                bad.append((i, key, cell, (med, lo, hi, cnt, n)))
+        for k, z in enumerate(zones):
+            cnt, med, lo, hi = firsts[z]
+            cell = cells[9 + k]
+            if cnt == 0:
+                m = NEVER.match(cell)
+                if not m or int(m.group(1)) != n:
+                    bad.append((i, z, cell, "never"))
+                continue
+            m = FIRST.match(cell)
+            if not m or [float(m.group(j)) for j in (1, 2, 3)] != [med, lo, hi] \
+                    or (int(m.group(4)), int(m.group(5))) != (cnt, n):
+                bad.append((i, z, cell, (med, lo, hi, cnt, n)))
+    c.check(not bad, "every summary number equals the median, minimum and maximum "
+            "recomputed from the stats table", bad[:10])
+    return p
+
+
+def check_images(c, p, pictures):
+    pics = [a for cls, a in p.imgs if cls == "pictures"]
+    c.check(len(pics) == pictures, "one picture per species and reached year",
+            "%d pictures, %d expected" % (len(pics), pictures))
+    c.check(len(p.imgs) == pictures + 3, "pictures, two plots and the conflict chart",
+            len(p.imgs))
+    bad = []
+    for _, a in p.imgs:
+        src = a.get("src", "")
+        if not src.startswith("data:image/png;base64,"):
+            bad.append(src[:60])
+            continue
+        data = base64.b64decode(src.split(",", 1)[1], validate=True)
+        if data[:8] != b"\x89PNG\r\n\x1a\n" or data[-8:-4] != b"IEND":
+            bad.append("not a whole PNG")
+    c.check(not bad, "every picture is a whole PNG inlined as a data: URI", bad[:5])
+
+
+def check_pdf(c, env, path, groups, min_pages):
+    try:
+        info = subprocess.run(["pdfinfo", path], capture_output=True, text=True,
+                              timeout=120).stdout
+        text = subprocess.run(["pdftotext", "-layout", path, "-"], capture_output=True,
+                              text=True, timeout=120).stdout
+    except OSError:
+        print("pdfinfo/pdftotext missing: PDF contents not checked")
+        return
+    m = re.search(r"Pages:\s+(\d+)", info)
+    c.check(m and int(m.group(1)) >= min_pages, "the PDF has at least %d pages" % min_pages,
+            info)
+    flat = re.sub(r"\s+", " ", text)
+    missing = []
+    for g in groups:
+        med, lo, hi = g[5]["height"][1:]
+        cell = "%.3f (%.3f–%.3f)" % (med, lo, hi)
+        if cell not in flat:
+            missing.append(cell)
+    c.check(not missing, "the PDF's summary shows every height cell", missing[:5])
+
+
+def report(env, c, *args):
+    rc, out, err = env.sylva("report", *args)
+    c.check(crash_text(rc, err) is None, "no crash: report " + " ".join(map(str, args)), err)
+    return rc, err
+
+
+# ---- parts ------------------------------------------------------------------------
+
+def make_sweep(env, name, species, seeds, variants, iterations, db):
+    plan = {"format": "sylva.sweep/1", "name": name,
+            "scenario": env.scenario("street-pruned.json"),
+            "axes": {"species": {"street-tree": species}, "seed": seeds,
+                     "variants": variants}}
+    path = env.path(name.replace(" ", "-") + ".json")
+    with open(path, "w") as f:
+        json.dump(plan, f)
+    rc, _, err = env.sylva("sweep", path, "--db", db, "--iterations", iterations,
+                           "--jobs", "2")
+    if rc != 0:
+        raise RuntimeError("sweep failed (%s): %s" % (rc, err))
+
+
+def part_sweep(env, c):
+    db = env.path("sweep.db")
+    make_sweep(env, "street species", ["utdb:NoEast:PLAC", "utdb:NoEast:GIBI"], [1, 2],
+               {"as built": [], "no awning": [{"op": "remove", "path": "/obstacles/2"}]},
+               ITERATIONS, db)
+    years = ",".join(map(str, YEARS))
+    expect = expected_rows(db, "street species", YEARS)
+    axes = ["species/street-tree", "seed", "variant"]
+    out = env.path("r.csv")
+    rc, err = report(env, c, "--db", db, "--years", years, "-o", out)
+    c.check(rc == 0, "report -o .csv exits 0", err)
+    header, rows, zones = check_csv(c, out, expect, axes, False)
+    c.check(zones == ["road", "keep-clear-south", "keep-clear-north"],
+            "a first_ column per zone, in scenario order", zones)
+    c.check([h for h in header if h.startswith("clearance_")]
+            == ["clearance_facade-south", "clearance_facade-north", "clearance_awning"],
+            "a clearance_ column per solid obstacle", header)
+    c.check(header[-1] == "pruned", "the pruned column ends the header", header)
+    c.check(any(r[-1] not in ("", "0") for r in rows), "some stem was pruned by then")
+    c.check(any(r[header.index("clearance_awning")] == "" for r in rows
+                if "no awning" in r[0]), "no clearance to the awning where it was removed")
+    c.check(not any(int(r[header.index("year")]) == 2027 + 20 for r in rows),
+            "no row for a year no run reached")
+
+    groups = expected_groups(expect, axes, zones, [y for y in YEARS if y <= ITERATIONS])
+    c.check(len(groups) == 2 * 3 + 2 * 2 * 3, "groups: species x years, variants x species "
+            "x years", len(groups))
+    page = env.path("r.html")
+    rc, err = report(env, c, "--db", db, "--years", years, "-o", page)
+    c.check(rc == 0, "report -o .html exits 0", err)
+    with open(page, encoding="utf-8") as f:
+        text = f.read()
+    c.check(not re.search(r"(src|href)=\"(https?:|//|file:)", text),
+            "the page links to nothing outside itself")
+    p = check_summary(c, text, groups, zones)
+    check_images(c, p, pictures=2 * 3)
+
+    pdf = env.path("r.pdf")
+    rc, err = report(env, c, "--db", db, "--sweep", "street species", "--years", years,
+                     "-o", pdf)
+    c.check(rc == 0, "report -o .pdf exits 0", err)
+    check_pdf(c, env, pdf, groups, min_pages=1 + 1 + 3)
+
+    # the default years: 10 only (20 and 40 not reached)
+    rc, err = report(env, c, "--db", db, "-o", env.path("d.csv"))
+    _, drows = read_csv(env.path("d.csv"))
+    c.check(rc == 0 and len(drows) == len(expected_rows(db, "street species", [10, 20, 40])),
+            "default years 10,20,40: the rows of year 10", len(drows))
+
+
+def part_plain(env, c):
+    db = env.path("plain.db")
+    for scen, n in (("street-pruned.json", 8), ("shrub.json", 4)):
+        rc, _, err = env.sylva("run", env.scenario(scen), "--iterations", n, "--db", db,
+                               "--quiet-progress")
+        if rc != 0:
+            raise RuntimeError("run failed (%s): %s" % (rc, err))
+    years = [2, 4, 8]
+    expect = expected_rows(db, None, years)
+    out = env.path("p.csv")
+    rc, err = report(env, c, "--db", db, "--years", "8,2,4,2", "-o", out)
+    c.check(rc == 0, "report of a store without sweeps exits 0", err)
+    header, rows, zones = check_csv(c, out, expect, [], True)
+    c.check(header[:4] == ["run", "plant", "stem", "species"], "no axis columns, a stem column",
+            header)
+    species = sorted({r[header.index("species")] for r in rows})
+    c.check(species == ["shrub", "street-tree"], "species by scenario key", species)
+    c.check(any(r[-1] not in ("", "0") for r in rows), "pruned nodes summed by year 8")
+    groups = expected_groups(expect, [], zones, years)
+    page = env.path("p.html")
+    rc, err = report(env, c, "--db", db, "--years", "2,4,8", "-o", page)
+    c.check(rc == 0, "HTML of a store without sweeps exits 0", err)
+    with open(page, encoding="utf-8") as f:
+        p = check_summary(c, f.read(), groups, zones)
+    # the shrub's run reaches 2 and 4, the street's 2, 4 and 8
+    check_images(c, p, pictures=3 + 2)
+    pdf = env.path("p.pdf")
+    rc, err = report(env, c, "--db", db, "--years", "2,4,8", "-o", pdf)
+    c.check(rc == 0, "PDF of a store without sweeps exits 0", err)
+    check_pdf(c, env, pdf, groups, min_pages=5)
+
+
+def part_errors(env, c):
+    db = env.path("e.db")
+    make_sweep(env, "one", ["utdb:NoEast:PLAC"], [1], {"as built": []}, 2, db)
+    two = env.path("two.db")
+    make_sweep(env, "one", ["utdb:NoEast:PLAC"], [1], {"as built": []}, 2, two)
+    make_sweep(env, "other", ["utdb:NoEast:GIBI"], [1], {"as built": []}, 2, two)
+    out = env.path("bad.csv")
+    kept = env.path("kept.csv")
+    with open(kept, "w") as f:
+        f.write("before\n")
+    cases = [
+        ([], "--db FILE is required"),
+        (["--db", env.path("none.db")], "none.db"),
+        (["--db", db, "--sweep", "nope"], 'no sweep named "nope"'),
+        (["--db", two], "choose one with --sweep"),
+        (["--db", db, "--years", "ten"], "'ten' is not a whole number"),
+        (["--db", db, "--years", "-5"], "'-5' is not a whole number"),
+        (["--db", db, "--years", ""], "empty list"),
+        (["--db", db, "--years", "10,,20"], "an empty year"),
+        (["--db", db, "--years", "1.5"], "'1.5' is not a whole number"),
+        (["--db", db, "--years", "0"], "'0' is not from 1"),
+    ]
+    for args, msg in cases:
+        for target in (out, kept):
+            rc, err = report(env, c, *(args + ["-o", target]))
+            c.check(rc == 2 and msg in err, "exit 2 naming it: %s" % args, (rc, err))
+            c.check(not os.path.exists(out) and not os.path.exists(out + ".tmp"),
+                    "nothing written: %s" % args)
+            with open(kept) as f:
+                c.check(f.read() == "before\n", "an existing output untouched: %s" % args)
+    for name in ("bad.txt", "bad", "bad.csv.gz"):
+        rc, err = report(env, c, "--db", db, "-o", env.path(name))
+        c.check(rc == 2 and "does not end in .csv, .html or .pdf" in err,
+                "exit 2 for -o %s" % name, (rc, err))
+        c.check(not os.path.exists(env.path(name)), "nothing written for -o %s" % name)
+    rc, err = report(env, c, "--db", db)
+    c.check(rc == 2 and "-o OUT is required" in err, "exit 2 without -o", err)
+    # several sweeps: naming one works
+    rc, err = report(env, c, "--db", two, "--sweep", "other", "--years", "1,2", "-o", out)
+    c.check(rc == 0, "--sweep picks one of several sweeps", err)
+    if rc == 0:
+        _, rows = read_csv(out)
+        c.check(len(rows) == 2 * 5 and all("utdb:NoEast:GIBI" in r for r in rows),
+                "only that sweep's runs", rows[:2])
+        os.remove(out)
+    # years no run reached: a warning and the header only
+    rc, err = report(env, c, "--db", db, "--years", "50", "-o", out)
+    c.check(rc == 0 and "warning" in err and "no run has reached" in err,
+            "unreached years: exit 0 with a warning", (rc, err))
+    if rc == 0:
+        header, rows = read_csv(out)
+        c.check(header[0] == "run" and rows == [], "unreached years: the header only", rows)
+
+
+def main():
+    env = Env(sys.argv[:3])
+    part = sys.argv[3] if len(sys.argv) > 3 else "sweep"
+    c = Checks()
+    try:
+        {"sweep": part_sweep, "plain": part_plain, "errors": part_errors}[part](env, c)
+    finally:
+        env.cleanup()
+    c.finish()
+
+
+if __name__ == "__main__":
+    main()
