@@ -1,6 +1,8 @@
 """`sylva report` through the real binary (Python 3 standard library only).
 
 meson runs `python3 test_report.py SYLVA_EXE SCENARIOS_DIR PART`, PART:
+  ready   the ready plan scenarios/street-species.json swept (6 iterations): the CSV
+          and the HTML summary equal the stored stats;
   sweep   a small sweep (two species, two seeds, two variants of the pruned street,
           12 iterations): every CSV value equals the stats table read here with
           sqlite3 (pruned summed here), the rows are exactly the stored ones at the
@@ -394,6 +396,33 @@ def part_sweep(env, c):
             "default years 10,20,40: the rows of year 10", len(drows))
 
 
+def part_ready(env, c):
+    """The ready plan scenarios/street-species.json (30 runs, 6 iterations each): the
+    CSV and the HTML summary equal the stored stats."""
+    db = env.path("ready.db")
+    rc, _, err = env.sylva("sweep", env.scenario("street-species.json"), "--db", db,
+                           "--iterations", 6, "--jobs", "2")
+    c.check(rc == 0, "the ready plan sweeps", err)
+    years = [3, 6]
+    expect = expected_rows(db, "street species", years)
+    c.check(len(expect) == 30 * 5 * len(years), "30 runs x 5 trees x 2 years stored",
+            len(expect))
+    axes = ["species/street-tree", "seed", "variant"]
+    out = env.path("ready.csv")
+    rc, err = report(env, c, "--db", db, "--years", "3,6", "-o", out)
+    c.check(rc == 0, "report of the ready plan -o .csv exits 0", err)
+    _, _, zones = check_csv(c, out, expect, axes, False)
+    groups = expected_groups(expect, axes, zones, years)
+    c.check(len(groups) == 5 * 2 + 2 * 5 * 2, "groups: species x years, variants x species "
+            "x years", len(groups))
+    page = env.path("ready.html")
+    rc, err = report(env, c, "--db", db, "--years", "3,6", "-o", page)
+    c.check(rc == 0, "report of the ready plan -o .html exits 0", err)
+    with open(page, encoding="utf-8") as f:
+        p = check_summary(c, f.read(), groups, zones)
+    check_images(c, p, pictures=5 * 2)
+
+
 def part_plain(env, c):
     db = env.path("plain.db")
     for scen, n in (("street-pruned.json", 8), ("shrub.json", 4)):
@@ -485,7 +514,8 @@ def main():
     part = sys.argv[3] if len(sys.argv) > 3 else "sweep"
     c = Checks()
     try:
-        {"sweep": part_sweep, "plain": part_plain, "errors": part_errors}[part](env, c)
+        {"sweep": part_sweep, "ready": part_ready, "plain": part_plain,
+         "errors": part_errors}[part](env, c)
     finally:
         env.cleanup()
     c.finish()
