@@ -881,6 +881,8 @@ static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {
   out->y = s->y[slot];
   out->z = s->z[slot];
   out->radius = s->radius[slot];
+  const sylva_species_def *d = &w->species[st->species].def;
+  out->leaves = sylva__leaf_age(s, d, slot, w->iteration + 1) >= 0 ? d->leaf_density : 0;
 }
 
 /* The nodes born at T and the radius changes of nodes still alive (room reserved). */

@@ -210,6 +210,11 @@ static inline int sylva__leaf_age(const sylva__skeleton *s, const sylva_species_
   return d->years && s->axis_child[i] < 0 ? 1 : -1;
 }
 
+/** The one-sided leaf area one leaf-bearing node of species d carries, m^2. */
+static inline double sylva__node_leaf_area(const sylva_species_def *d) {
+  return (double)d->leaf_density * SYLVA_LEAF_FILL * d->leaf_size * d->leaf_size;
+}
+
 /** Does a node born at world iteration birth bear leaves at iteration T? It does
  *  for its first leaf_age iterations (docs/model.md, "Light"): only then does it
  *  collect light, and only then may its lateral bud sprout. */
@@ -278,6 +283,9 @@ void sylva__stats(sylva_world *w, int iteration);
 /** Measures of a stem just planted (its vertical initial trunk), without a pass
  *  over the other stems' nodes. */
 void sylva__stats_planted(sylva_world *w, int stem);
+/** Every stem's leaf_area from its leaf-bearing nodes now (a world read from an image,
+ *  whose records do not hold it). */
+void sylva__stats_leaf_area(sylva_world *w);
 /** Adds a node: occupancy and skeleton; returns slot or a negative status. */
 int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const double p[3],
                         int32_t stem, int iteration);

@@ -122,6 +122,8 @@ typedef struct sylva_node_info {
   int32_t plant, stem; /**< plant id, stem index within the plant */
   int32_t birth;       /**< birth iteration (0 for the initial trunk) */
   float x, y, z, radius;
+  int32_t leaves;      /**< leaves it carries: its species' leaf_density when it bears
+                            leaves (as the stats count them), else 0 */
 } sylva_node_info;
 
 /** A radius that changed in an iteration. */
@@ -136,6 +138,8 @@ typedef struct sylva_stem_stats {
   double height, dbh, crown_width, crown_base, light;
   double crown_height; /**< height - crown_base (NaN with crown_base) */
   int32_t age;         /**< years since planting (species with years), else -1 */
+  double leaf_area;    /**< m^2, one-sided: leaf-bearing nodes x leaf_density x
+                            SYLVA_LEAF_FILL x leaf_size^2 (docs/model.md, "Foliage") */
   int64_t nodes, shed;
   int64_t pruned; /**< nodes pruned at this iteration (by schedule or edit) */
   int cap;
