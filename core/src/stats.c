@@ -179,4 +179,10 @@ void sylva__stats_leaf_area(sylva_world *w) {
   }
   for (int k = 0; k < w->stem_count; k++)
     w->stems[k].stats.leaf_area *= sylva__node_leaf_area(&w->species[w->stems[k].species].def);
+  /* the leaves as the last journal gave them: the next one lists what changes */
+  for (size_t i = 0; i < s->count; i++) {
+    const sylva__stem *st = &w->stems[s->stem[i]];
+    const sylva_species_def *d = &w->species[st->species].def;
+    w->nodes.leaves[i] = (uint16_t)(leafy(s, d, i, w->iteration) ? d->leaf_density : 0);
+  }
 }

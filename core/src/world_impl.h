@@ -166,6 +166,7 @@ struct sylva_world {
   int conflicts_from;                      /* conflicts: the first stem of the reserve */
   SYLVA__VEC(int32_t) pruned_ids;          /* sylva_world_prune: the subtrees' roots */
   SYLVA__VEC(sylva_node_info) added;
+  SYLVA__VEC(sylva_leaf_change) leaf_changes;
   SYLVA__VEC(sylva_radius_change) radii;
   SYLVA__VEC(int32_t) shed;
   SYLVA__VEC(sylva_stem_stats) stats;
@@ -283,8 +284,8 @@ void sylva__stats(sylva_world *w, int iteration);
 /** Measures of a stem just planted (its vertical initial trunk), without a pass
  *  over the other stems' nodes. */
 void sylva__stats_planted(sylva_world *w, int stem);
-/** Every stem's leaf_area from its leaf-bearing nodes now (a world read from an image,
- *  whose records do not hold it). */
+/** Every stem's leaf_area from its leaf-bearing nodes now, and every node's leaves as
+ *  the last journal reported them (a world read from an image, which holds neither). */
 void sylva__stats_leaf_area(sylva_world *w);
 /** Adds a node: occupancy and skeleton; returns slot or a negative status. */
 int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const double p[3],

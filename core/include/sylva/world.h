@@ -170,11 +170,23 @@ typedef struct sylva_conflicts {
   const sylva_clearance_stat *clearances; size_t clearance_count;
 } sylva_conflicts;
 
+/** A node whose leaves changed: the leaves it carries now (0: it bears none). */
+typedef struct sylva_leaf_change {
+  int32_t id;
+  int32_t leaves;
+} sylva_leaf_change;
+
 /** What one iteration changed; valid until the next step or destroy. */
 typedef struct sylva_journal {
   int iteration;
   const sylva_node_info *added; size_t added_count;
   const sylva_radius_change *radii; size_t radii_count;
+  const sylva_leaf_change *leaves; size_t leaves_count; /**< live nodes whose leaves
+                                                             (sylva_node_info.leaves)
+                                                             differ from the last
+                                                             journal's, the nodes born
+                                                             in this step with leaves
+                                                             too; in id order */
   const int32_t *shed; size_t shed_count;        /**< roots of removed subtrees (shed or pruned) */
   const sylva_stem_stats *stats; size_t stem_count;
   const int32_t *order;                           /**< stem order of phase 4 (global stem indices) */
