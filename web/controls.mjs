@@ -5,7 +5,8 @@
 import { $ } from './dom.mjs';
 import { controlsDisabled, exportHref, stepCount } from './helpers.mjs';
 
-const EXPORTS = [['export-skeleton', 'skeleton'], ['export-obj', 'obj'], ['export-csv', 'csv']];
+const EXPORTS = [['export-skeleton', 'skeleton'], ['export-obj', 'obj'], ['export-glb', 'glb'],
+  ['export-csv', 'csv']];
 
 export class ControlsPanel {
   // onStatus(msg): the daemon's `status` reply to a control; open({run, name}):

@@ -1,6 +1,7 @@
 // Live plots of every stem against iteration (or against the calendar year, in a
-// run with a start year): height, DBH, crown width, internodes and the growth cap
-// c(T), and in a run of species in years the crown diameter and crown height too.
+// run with a start year): height, DBH, crown width, leaf area (docs/model.md,
+// "Foliage"), internodes and the growth cap c(T), and in a run of species in years
+// the crown diameter and crown height too.
 // One point per iteration and stem, from the run's stored stats (stats.csv,
 // parsed by helpers.mjs) and then from each delta's stats.
 import uPlot from 'uplot';
@@ -14,6 +15,7 @@ export const MEASURES = [
   { key: 'crown_width', title: 'Crown width (m)' },
   { key: 'crown_diameter', title: 'Crown diameter (m)', years: true },
   { key: 'crown_height', title: 'Crown height (m)', years: true },
+  { key: 'leaf_area', title: 'Leaf area (m²)' },
   { key: 'nodes', title: 'Internodes' },
   { key: 'cap', title: 'Growth cap c(T)' },
 ];

@@ -7,7 +7,7 @@
 
 #define SYLVA__SKELETON_FIELDS(X)                                                          \
   X(id) X(x) X(y) X(z) X(radius) X(parent) X(axis_child) X(lateral_child) X(birth) X(stem) \
-  X(depth) X(flags)
+  X(depth) X(flags) X(leaves)
 
 void sylva__skeleton_free(sylva__skeleton *s) {
 #define SYLVA__FREE(f) sylva__free(s->f);
@@ -54,6 +54,7 @@ int32_t sylva__skeleton_append(sylva__skeleton *s, int32_t id, int32_t parent, f
   s->stem[i] = stem;
   s->depth[i] = depth;
   s->flags[i] = (uint8_t)(flags | SYLVA__NODE_ALIVE);
+  s->leaves[i] = 0;
   s->live++;
   return (int32_t)i;
 }

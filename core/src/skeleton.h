@@ -29,10 +29,11 @@ typedef struct sylva__skeleton {
   int32_t *parent, *axis_child, *lateral_child; /* slots, -1 for none */
   int32_t *birth, *stem, *depth;
   uint8_t *flags;
+  uint16_t *leaves; /* the leaves last reported in a journal (not in snapshots) */
 } sylva__skeleton;
 
 /** Bytes held per slot. */
-#define SYLVA__NODE_BYTES (4 * 10 + 1)
+#define SYLVA__NODE_BYTES (4 * 10 + 1 + 2)
 
 void sylva__skeleton_free(sylva__skeleton *s);
 /** Makes room for n more slots. */

@@ -13,6 +13,7 @@ static void stats_reset(sylva__stem *st) {
   o->nodes = 0;
   o->age = -1;
   o->crown_height = NAN;
+  o->leaf_area = 0.0;
   o->finished = st->finished;
   st->ext[0] = st->ext[2] = INFINITY;
   st->ext[1] = st->ext[3] = st->ext[4] = -INFINITY;
@@ -129,6 +130,7 @@ void sylva__stats(sylva_world *w, int iteration) {
     set_crown_base(st, crown_base_of(z + from, to - from, s->z[st->root_slot], st->ext[4],
                                      w->crown_bins.data));
     st->stats.age = stem_age(w, st, iteration);
+    st->stats.leaf_area = (double)(to - from) * sylva__node_leaf_area(&w->species[st->species].def);
     st->stats.light = w->q[st->root_slot];
     int local = sylva__stem_local(st, iteration);
     st->stats.cap = local >= 1 ? sylva__species_cap(&w->species[st->species], local) : 0;
@@ -163,4 +165,24 @@ void sylva__stats_planted(sylva_world *w, int stem) {
   stats_shape(w, st);
   set_crown_base(st, crown_base_of(z, leaves, s->z[st->root_slot], st->ext[4], w->crown_bins.data));
   st->stats.age = stem_age(w, st, w->iteration);
+  st->stats.leaf_area = (double)leaves * sylva__node_leaf_area(&sp->def);
+}
+
+void sylva__stats_leaf_area(sylva_world *w) {
+  const sylva__skeleton *s = &w->nodes;
+  /* counted first, then multiplied, as sylva__stats does: the same bits */
+  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.leaf_area = 0.0;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    sylva__stem *st = &w->stems[s->stem[i]];
+    if (leafy(s, &w->species[st->species].def, i, w->iteration)) st->stats.leaf_area += 1.0;
+  }
+  for (int k = 0; k < w->stem_count; k++)
+    w->stems[k].stats.leaf_area *= sylva__node_leaf_area(&w->species[w->stems[k].species].def);
+  /* the leaves as the last journal gave them: the next one lists what changes */
+  for (size_t i = 0; i < s->count; i++) {
+    const sylva__stem *st = &w->stems[s->stem[i]];
+    const sylva_species_def *d = &w->species[st->species].def;
+    w->nodes.leaves[i] = (uint16_t)(leafy(s, d, i, w->iteration) ? d->leaf_density : 0);
+  }
 }

@@ -96,6 +96,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->work_light.data);
   sylva__free(w->shoot.data);
   sylva__free(w->added.data);
+  sylva__free(w->leaf_changes.data);
   sylva__free(w->radii.data);
   sylva__free(w->shed.data);
   sylva__free(w->stats.data);
@@ -863,6 +864,7 @@ static int reserve_rest(sylva_world *w) {
   if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
       SYLVA__VEC_RESERVE(w->shed, count) ||
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
+      SYLVA__VEC_RESERVE(w->leaf_changes, count) ||
       SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) ||
       SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) || sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
@@ -881,16 +883,28 @@ static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {
   out->y = s->y[slot];
   out->z = s->z[slot];
   out->radius = s->radius[slot];
+  const sylva_species_def *d = &w->species[st->species].def;
+  out->leaves = sylva__leaf_age(s, d, slot, w->iteration + 1) >= 0 ? d->leaf_density : 0;
 }
 
-/* The nodes born at T and the radius changes of nodes still alive (room reserved). */
+/* The nodes born at T, the nodes whose leaves changed and the radius changes of
+ * nodes still alive (room reserved). */
 static void collect_journal(sylva_world *w, int T) {
   sylva__skeleton *s = &w->nodes;
   w->added.len = 0;
+  w->leaf_changes.len = 0;
   for (size_t i = 0; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->birth[i] != T) continue;
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    sylva_node_info info;
+    node_info(w, i, &info);
+    if (info.leaves != (int32_t)s->leaves[i]) {
+      SYLVA_ASSERT(w->leaf_changes.len < w->leaf_changes.cap);
+      w->leaf_changes.data[w->leaf_changes.len++] = (sylva_leaf_change){info.id, info.leaves};
+      s->leaves[i] = (uint16_t)info.leaves;
+    }
+    if (s->birth[i] != T) continue;
     SYLVA_ASSERT(w->added.len < w->added.cap);
-    node_info(w, i, &w->added.data[w->added.len++]);
+    w->added.data[w->added.len++] = info;
   }
   /* radii changes of nodes shed later in the same iteration are dropped */
   size_t k = 0;
@@ -1005,6 +1019,8 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
   j->added_count = w->added.len;
   j->radii = w->radii.data;
   j->radii_count = w->radii.len;
+  j->leaves = w->leaf_changes.data;
+  j->leaves_count = w->leaf_changes.len;
   j->shed = w->shed.data;
   j->shed_count = w->shed.len;
   j->stats = w->stats.data;
@@ -1140,6 +1156,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
   out->other = w->scratch_cap * (3 * sizeof(double) + 2 * sizeof(int32_t)) +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
+               w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +
                w->cells.cap * sizeof(sylva__keyed) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +

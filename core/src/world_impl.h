@@ -166,6 +166,7 @@ struct sylva_world {
   int conflicts_from;                      /* conflicts: the first stem of the reserve */
   SYLVA__VEC(int32_t) pruned_ids;          /* sylva_world_prune: the subtrees' roots */
   SYLVA__VEC(sylva_node_info) added;
+  SYLVA__VEC(sylva_leaf_change) leaf_changes;
   SYLVA__VEC(sylva_radius_change) radii;
   SYLVA__VEC(int32_t) shed;
   SYLVA__VEC(sylva_stem_stats) stats;
@@ -208,6 +209,11 @@ static inline int sylva__leaf_age(const sylva__skeleton *s, const sylva_species_
   int age = T - s->birth[i];
   if (age <= d->leaf_age) return age;
   return d->years && s->axis_child[i] < 0 ? 1 : -1;
+}
+
+/** The one-sided leaf area one leaf-bearing node of species d carries, m^2. */
+static inline double sylva__node_leaf_area(const sylva_species_def *d) {
+  return (double)d->leaf_density * SYLVA_LEAF_FILL * d->leaf_size * d->leaf_size;
 }
 
 /** Does a node born at world iteration birth bear leaves at iteration T? It does
@@ -278,6 +284,9 @@ void sylva__stats(sylva_world *w, int iteration);
 /** Measures of a stem just planted (its vertical initial trunk), without a pass
  *  over the other stems' nodes. */
 void sylva__stats_planted(sylva_world *w, int stem);
+/** Every stem's leaf_area from its leaf-bearing nodes now, and every node's leaves as
+ *  the last journal reported them (a world read from an image, which holds neither). */
+void sylva__stats_leaf_area(sylva_world *w);
 /** Adds a node: occupancy and skeleton; returns slot or a negative status. */
 int32_t sylva__add_node(sylva_world *w, int32_t parent, bool lateral, const double p[3],
                         int32_t stem, int iteration);

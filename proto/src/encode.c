@@ -148,6 +148,8 @@ void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_s
     put_key(b, false, "crown_height", compact);
     sylva__strbuf_fixed(b, s->crown_height, 4);
   }
+  put_key(b, false, "leaf_area", compact); /* m^2 (docs/model.md, "Foliage") */
+  sylva__strbuf_fixed(b, s->leaf_area, 4);
   put_key(b, false, "nodes", compact);
   sylva__strbuf_printf(b, "%" PRId64, s->nodes);
   put_key(b, false, "shed", compact);

@@ -1,10 +1,12 @@
-/* The species library built into the binary (sylva/library.h). The text is parsed
+/* The species library built into the binary (sylva/library.h), with the foliage of
+ * data/species/foliage.csv added to its species (docs/species.md, "Foliage"). The text is parsed
  * at each lookup: it is small, and a parse per scenario keeps the library free of
  * shared state between the daemon's threads. */
 #include "sylva/library.h"
 
 #include <cjson/cJSON.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "scenario_parts.h"
@@ -12,6 +14,8 @@
 
 extern const char sylva__library_json[];
 extern const size_t sylva__library_json_len;
+extern const char sylva__foliage_csv[];
+extern const size_t sylva__foliage_csv_len;
 
 const char *sylva_library_text(size_t *len) {
   if (len) *len = sylva__library_json_len;
@@ -25,6 +29,44 @@ static const cJSON *library_species(cJSON **doc) {
   return cJSON_IsArray(list) ? list : NULL;
 }
 
+const char *sylva_library_foliage_text(size_t *len) {
+  if (len) *len = sylva__foliage_csv_len;
+  return sylva__foliage_csv;
+}
+
+/* Adds the foliage table's row for `code` to a library species object as its
+ * leaf_size, leaf_density and leaf_colour, to be checked as any scenario's keys are
+ * (docs/species.md, "Foliage"). A code without a row keeps the defaults. The
+ * table's rows are `code,kind,leaf_size,leaf_density,leaf_colour,source`; no field
+ * before the source holds a comma or a quote. 0, or SYLVA_ENOMEM. */
+static int add_foliage(cJSON *species, const char *code) {
+  const char *line = strchr(sylva__foliage_csv, '\n'); /* past the header */
+  size_t code_len = strlen(code);
+  for (; line; line = strchr(line, '\n')) {
+    line++;
+    if (strncmp(line, code, code_len) != 0 || line[code_len] != ',') continue;
+    const char *f[5]; /* the starts of code, kind, size, density, colour */
+    f[0] = line;
+    for (int i = 1; i < 5; i++) {
+      size_t k = strcspn(f[i - 1], ",\n");
+      if (f[i - 1][k] != ',') return SYLVA_OK; /* a short row: the test suite catches it */
+      f[i] = f[i - 1] + k + 1;
+    }
+    char colour[8] = "";
+    size_t colour_len = strcspn(f[4], ",\n");
+    if (colour_len < sizeof colour) memcpy(colour, f[4], colour_len), colour[colour_len] = '\0';
+    cJSON_DeleteItemFromObjectCaseSensitive(species, "leaf_size");
+    cJSON_DeleteItemFromObjectCaseSensitive(species, "leaf_density");
+    cJSON_DeleteItemFromObjectCaseSensitive(species, "leaf_colour");
+    if (!cJSON_AddNumberToObject(species, "leaf_size", strtod(f[2], NULL)) ||
+        !cJSON_AddNumberToObject(species, "leaf_density", strtod(f[3], NULL)) ||
+        !cJSON_AddStringToObject(species, "leaf_colour", colour))
+      return SYLVA_ENOMEM;
+    return SYLVA_OK;
+  }
+  return SYLVA_OK;
+}
+
 int sylva_library_find(const char *name, sylva_species_def *out) {
   cJSON *doc;
   const cJSON *list = library_species(&doc);
@@ -34,8 +76,13 @@ int sylva_library_find(const char *name, sylva_species_def *out) {
   cJSON_ArrayForEach(e, list) {
     const cJSON *n = cJSON_GetObjectItemCaseSensitive(e, "name");
     if (!cJSON_IsString(n) || strcmp(n->valuestring, name) != 0) continue;
+    const cJSON *code = cJSON_GetObjectItemCaseSensitive(e, "code");
+    cJSON *species = cJSON_GetObjectItemCaseSensitive(e, "species");
+    rc = cJSON_IsString(code) && cJSON_IsObject(species) ? add_foliage(species, code->valuestring)
+                                                          : SYLVA_OK;
+    if (rc) break;
     sylva_species_def d;
-    rc = sylva__species_from_json(cJSON_GetObjectItemCaseSensitive(e, "species"), &d);
+    rc = sylva__species_from_json(species, &d);
     if (!rc && out) *out = d;
     break;
   }

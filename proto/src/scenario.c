@@ -4,6 +4,7 @@
 #include "sylva/scenario.h"
 
 #include <cjson/cJSON.h>
+#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -340,6 +341,24 @@ static const char *const species_keys[] = {"preset", "growth", "allocation", "tr
 #undef MARKER_FIELD
 #undef SPECIES_KEY
 
+/* The one field written as a string: a colour "#rrggbb" (0xRRGGBB in the def). */
+static bool is_colour(const species_field *f) { return strcmp(f->key, "leaf_colour") == 0; }
+
+static int want_colour(sylva__parser *p, const cJSON *item, double *v) {
+  const char *s = "";
+  int rc = sylva__want_string(p, item, &s);
+  if (rc) return rc;
+  bool ok = strlen(s) == 7 && s[0] == '#';
+  for (int i = 1; ok && i < 7; i++) ok = isxdigit((unsigned char)s[i]) != 0;
+  if (!ok) {
+    char q[80];
+    return sylva__fail(p, "must be a colour \"#rrggbb\" (six hex digits), got %s",
+                       sylva__quote(q, s));
+  }
+  *v = (double)strtol(s + 1, NULL, 16);
+  return 0;
+}
+
 static int set_fields(sylva__parser *p, const cJSON *obj, const species_field *fields, size_t count,
                       sylva_species_def *def) {
   for (size_t i = 0; i < count; i++) {
@@ -347,8 +366,9 @@ static int set_fields(sylva__parser *p, const cJSON *obj, const species_field *f
     if (!item) continue;
     size_t old = sylva__ptr_push(p, fields[i].key);
     double v = 0;
-    int rc = fields[i].integer ? sylva__want_integer(p, item, fields[i].r.lo, fields[i].r.hi, &v)
-                               : want_real(p, item, fields[i].r, &v);
+    int rc = is_colour(&fields[i])   ? want_colour(p, item, &v)
+             : fields[i].integer ? sylva__want_integer(p, item, fields[i].r.lo, fields[i].r.hi, &v)
+                                 : want_real(p, item, fields[i].r, &v);
     sylva__ptr_pop(p, old);
     if (rc) return rc;
     char *at = (char *)def + fields[i].offset;
@@ -1135,7 +1155,9 @@ static void put_species(sylva__strbuf *b, const sylva_species_def *d) {
     /* at their defaults, the IGM species keep the canonical bytes they had */
     if (f->scaled && (f->integer ? iv == f->dflt : dv == f->dflt)) continue;
     sylva__strbuf_printf(b, ", \"%s\": ", f->key);
-    if (f->integer)
+    if (is_colour(f))
+      sylva__strbuf_printf(b, "\"#%06x\"", (unsigned)iv);
+    else if (f->integer)
       sylva__strbuf_printf(b, "%d", iv);
     else
       sylva__strbuf_shortest(b, dv);

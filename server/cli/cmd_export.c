@@ -1,5 +1,5 @@
-/* `sylva export`: a stored iteration as a skeleton (JSON), a mesh (OBJ, PLY), or the
- * stats of every iteration (CSV). */
+/* `sylva export`: a stored iteration as a skeleton (JSON), a mesh (OBJ, PLY), a
+ * scene with leaves (binary glTF), or the stats of every iteration (CSV). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,10 +18,11 @@ static const cli_option export_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (required)"},
     [OPT_NAME] = {"name", 0, "NAME", "the run (required)"},
     [OPT_ITERATION] = {"iteration", 0, "T", "the stored iteration (default: the last)"},
-    [OPT_FORMAT] = {"format", 0, "F", "skeleton, obj, ply or csv (required)"},
+    [OPT_FORMAT] = {"format", 0, "F", "skeleton, obj, ply, csv or glb (required)"},
     [OPT_OUT] = {"output", 'o', "OUT", "the file to write, '-' for stdout (required)"},
-    [OPT_SIDES] = {"sides", 0, "N", "obj, ply: sides of each branch cylinder (3 to 64, default 8)"},
-    [OPT_OBSTACLES] = {"obstacles", 0, NULL, "obj, ply: include the obstacles as boxes"},
+    [OPT_SIDES] = {"sides", 0, "N",
+                   "obj, ply, glb: sides of each branch cylinder (3 to 64, default 8)"},
+    [OPT_OBSTACLES] = {"obstacles", 0, NULL, "obj, ply, glb: include the obstacles as boxes"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
 
@@ -37,6 +38,9 @@ static void export_usage(FILE *f) {
         "            light,cap,finished,pruned,zones,clearance, and in a run in years\n"
         "            or from a start year age,year,crown_diameter,crown_height (empty\n"
         "            where a measure is null or the run has none)\n"
+        "  glb       binary glTF 2.0: per stem a node <plant>/<stem> with its bark\n"
+        "            (material bark) and its leaf cards (material leaves, textured);\n"
+        "            metres, y up; obstacles on request\n"
         "An iteration between two snapshots is regrown from the earlier one.\n"
         "\n"
         "Options:\n",

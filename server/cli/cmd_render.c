@@ -1,5 +1,6 @@
 /* `sylva render`: a stored iteration, or a scenario grown to its end, drawn as
- * front, side and top views into a PNG, SVG or PDF file (render.h). */
+ * front, side and top views, with or without leaves, into a PNG, SVG or PDF file
+ * (render.h). */
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -18,8 +19,8 @@
 #include "render.h"
 #include "sylva/scenario.h"
 
-enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_SEED, OPT_ITERATIONS, OPT_VIEW, OPT_WIDTH, OPT_OUT,
-       OPT_HELP, OPT_COUNT };
+enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_SEED, OPT_ITERATIONS, OPT_VIEW, OPT_WIDTH,
+       OPT_NO_LEAVES, OPT_OUT, OPT_HELP, OPT_COUNT };
 
 static const cli_option render_cli_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store holding the run"},
@@ -29,14 +30,16 @@ static const cli_option render_cli_options[OPT_COUNT] = {
     [OPT_ITERATIONS] = {"iterations", 0, "N", "SCENARIO: override its limit (1 to 100000)"},
     [OPT_VIEW] = {"view", 0, "V", "front, side, top or all (default all)"},
     [OPT_WIDTH] = {"width", 0, "PX", "picture width, 400 to 16384 (default 500 per view)"},
+    [OPT_NO_LEAVES] = {"no-leaves", 0, NULL, "draw the branches only, without the leaves"},
     [OPT_OUT] = {"output", 'o', "OUT", "the file to write: OUT.png, OUT.svg or OUT.pdf (required)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
 
 static void render_usage(FILE *f) {
-  fputs("Usage: sylva render --db FILE --name NAME [--iteration T] [--view V] [--width PX] -o OUT\n"
+  fputs("Usage: sylva render --db FILE --name NAME [--iteration T] [--view V] [--width PX]\n"
+        "                    [--no-leaves] -o OUT\n"
         "       sylva render SCENARIO.json [--seed N] [--iterations N] [--view V] [--width PX]\n"
-        "                    -o OUT\n"
+        "                    [--no-leaves] -o OUT\n"
         "\n"
         "Draws a stored iteration of a run, or a scenario grown until every stem has\n"
         "finished or its iteration limit, as orthographic views of the world's box:\n"
@@ -45,9 +48,11 @@ static void render_usage(FILE *f) {
         "  top    x-y, seen from above (x to the right, y up)\n"
         "  all    the three side by side (the default)\n"
         "Internodes are lines as wide as their diameter (at least half a pixel), one\n"
-        "colour per plant; obstacles are translucent grey boxes; front and side show\n"
-        "the ground. Each view has scales in metres (equal on both axes), and a title\n"
-        "line names the run, the iteration and the live nodes.\n"
+        "colour per plant. Over them every leaf is an ellipse (at least a pixel) in\n"
+        "its species' leaf_colour, darker the more it is seen edge-on; --no-leaves\n"
+        "draws the branches only. Obstacles are translucent grey boxes; front and side\n"
+        "show the ground. Each view has scales in metres (equal on both axes), and a\n"
+        "title line names the run, the iteration and the live nodes.\n"
         "The format follows OUT's extension: .png, .svg or .pdf (SVG and PDF are\n"
         "vector pictures, one point per pixel). OUT is written to OUT.tmp, then renamed.\n"
         "\n"
@@ -100,6 +105,7 @@ static int parse_args(int argc, char **argv, render_args *a) {
         return CLI_EXIT_USAGE;
       a->ro.width = (int)width;
       break;
+    case OPT_NO_LEAVES: a->ro.no_leaves = true; break;
     case OPT_OUT: a->out = arg; break;
     default:
       render_usage(stdout);

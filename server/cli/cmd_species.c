@@ -141,6 +141,7 @@ static int show_utdb(const char *key, bool json) {
     cJSON_AddNumberToObject(d, "dbh", z.dbh_cm / 100.0);
     cJSON_AddNumberToObject(d, "crown_diameter", z.crown_dia_m);
     cJSON_AddNumberToObject(d, "crown_height", z.crown_ht_m);
+    if (isfinite(z.leaf_area_m2)) cJSON_AddNumberToObject(d, "leaf_area", z.leaf_area_m2);
   }
   char *text = json ? cJSON_PrintUnformatted(o) : NULL;
   if (json) {

@@ -22,7 +22,7 @@ static void usage(FILE *f) {
         "                          continue a stored run\n"
         "  runs --db FILE          list the stored runs\n"
         "  export --db FILE --name NAME --format F -o OUT\n"
-        "                          a stored iteration as skeleton, obj, ply or csv\n"
+        "                          a stored iteration as skeleton, obj, ply, csv or glb\n"
         "  render (--db FILE --name NAME | SCENARIO.json) -o OUT.png|svg|pdf\n"
         "                          front, side and top views of a stored iteration or\n"
         "                          of a scenario grown to its end\n"

@@ -46,7 +46,8 @@ struct http_job {
 
 static const char *const export_types[] = {
     [EXPORT_SKELETON] = "application/json", [EXPORT_OBJ] = "text/plain; charset=utf-8",
-    [EXPORT_PLY] = "application/octet-stream", [EXPORT_CSV] = "text/csv"};
+    [EXPORT_PLY] = "application/octet-stream", [EXPORT_CSV] = "text/csv",
+    [EXPORT_GLB] = "model/gltf-binary"};
 
 /* A report's content type and file extension, by format. */
 static const char *const report_types[] = {[REPORT_CSV] = "text/csv",

@@ -55,6 +55,8 @@ static int csv_row(const store_stats_row *r, void *ctx) {
   if (r->zones) csv_write_text(f, r->zones);
   fputc(',', f);
   if (r->clearance) csv_write_text(f, r->clearance);
+  fputc(',', f);
+  csv_number(f, r->leaf_area, 4); /* empty in rows stored before schema 5 */
   /* years: empty where the run's lines lack the field or have null */
   if (c->years || c->start_year) {
     fputc(',', f);
@@ -74,7 +76,7 @@ int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
   csv_run c = {f, 0, false};
   if (store_run_calendar(st, run, &c.start_year, &c.years)) return SERVER_EFAIL;
   fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished,"
-        "pruned,zones,clearance",
+        "pruned,zones,clearance,leaf_area",
         f);
   /* only in runs with years or a start year: the others keep the columns they had */
   fputs(c.years || c.start_year ? ",age,year,crown_diameter,crown_height\n" : "\n", f);

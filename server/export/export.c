@@ -5,16 +5,17 @@
 #include <string.h>
 
 #include "csv.h"
+#include "gltf.h"
 #include "mesh.h"
 #include "sylva/encode.h"
 #include "sylva/status.h"
 
 static const char *const format_names[] = {
     [EXPORT_SKELETON] = "skeleton", [EXPORT_OBJ] = "obj", [EXPORT_PLY] = "ply",
-    [EXPORT_CSV] = "csv"};
+    [EXPORT_CSV] = "csv", [EXPORT_GLB] = "glb"};
 static const char *const format_extensions[] = {
     [EXPORT_SKELETON] = "json", [EXPORT_OBJ] = "obj", [EXPORT_PLY] = "ply",
-    [EXPORT_CSV] = "csv"};
+    [EXPORT_CSV] = "csv", [EXPORT_GLB] = "glb"};
 
 bool export_format_parse(const char *name, export_format *out) {
   for (size_t k = 0; k < sizeof format_names / sizeof format_names[0]; k++)
@@ -60,10 +61,17 @@ int export_write(FILE *f, store *st, const export_spec *spec, void (*warn)(const
     sylva_mesh_options mo = sylva_mesh_default_options();
     mo.sides = spec->sides;
     mo.obstacles = spec->obstacles;
-    int m = sylva_mesh_write(f, w, spec->format == EXPORT_OBJ ? SYLVA_MESH_OBJ : SYLVA_MESH_PLY,
-                             &mo);
+    int m = spec->format == EXPORT_GLB
+                ? gltf_write(f, w, &mo)
+                : sylva_mesh_write(f, w,
+                                   spec->format == EXPORT_OBJ ? SYLVA_MESH_OBJ : SYLVA_MESH_PLY,
+                                   &mo);
     if (m == SYLVA_MESH_EWRITE) {
       rc = write_failed(err, errlen);
+    } else if (m == SYLVA_ETOOBIG && spec->format == EXPORT_GLB) {
+      snprintf(err, errlen, "run \"%s\": the scene is larger than the 4 GiB a GLB file holds",
+               spec->name);
+      rc = SERVER_EFAIL;
     } else if (m) {
       snprintf(err, errlen, "%s", sylva_strerror(m));
       rc = m == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EFAIL;

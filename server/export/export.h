@@ -1,5 +1,5 @@
 /* sylva server: a stored iteration of a run written as a skeleton (JSON), a mesh
- * of its branches (OBJ, PLY), or the per-stem stats of every iteration up to it
+ * of its branches (OBJ, PLY), a scene of its branches and leaves (binary glTF), or the per-stem stats of every iteration up to it
  * (CSV). `sylva export` and the daemon's GET /api/runs/NAME/export both write
  * with export_write, so they give the same bytes. */
 #ifndef SYLVA_SERVER_EXPORT_H
@@ -13,15 +13,21 @@
 #include "store.h"
 
 /** The formats. */
-typedef enum export_format { EXPORT_SKELETON, EXPORT_OBJ, EXPORT_PLY, EXPORT_CSV } export_format;
+typedef enum export_format {
+  EXPORT_SKELETON,
+  EXPORT_OBJ,
+  EXPORT_PLY,
+  EXPORT_CSV,
+  EXPORT_GLB
+} export_format;
 
 /** The format names, for messages. */
-#define EXPORT_FORMAT_NAMES "skeleton, obj, ply or csv"
+#define EXPORT_FORMAT_NAMES "skeleton, obj, ply, csv or glb"
 
-/** The format called `name` ("skeleton", "obj", "ply" or "csv"); false for none. */
+/** The format called `name` ("skeleton", "obj", "ply", "csv" or "glb"); false for none. */
 bool export_format_parse(const char *name, export_format *out);
 
-/** The extension of its files, without the dot ("json", "obj", "ply", "csv"). */
+/** The extension of its files, without the dot ("json", "obj", "ply", "csv", "glb"). */
 const char *export_format_extension(export_format format);
 
 /** What to write. */
@@ -30,8 +36,8 @@ typedef struct export_spec {
   const char *name;     /**< the run's name, for messages */
   int iteration;        /**< a stored iteration, 0 to the run's last */
   export_format format;
-  int sides;            /**< obj, ply: vertices per branch ring (mesh.h) */
-  bool obstacles;       /**< obj, ply: also the obstacle boxes */
+  int sides;            /**< obj, ply, glb: vertices per branch ring (mesh.h) */
+  bool obstacles;       /**< obj, ply, glb: also the obstacle boxes */
 } export_spec;
 
 /** Writes spec to f (flushed, not closed): the world is restored from the store

@@ -3,8 +3,9 @@
  * Two passes over the live nodes. The plan pass maps parent ids to node indices
  * (ids increase and parents come first, so a binary search over the ids seen so
  * far), marks each node's first child and sorts the nodes by stem (counting sort,
- * stable, so id order holds within a stem). The write pass streams ring after ring;
- * it keeps one frame (u, t) per node so children can carry their parent's frame. */
+ * stable, so id order holds within a stem). The geometry pass (sylva_mesh_branches,
+ * which the glTF export shares) gives ring after ring, stem by stem; it keeps one
+ * frame (u, t) per node so children can carry their parent's frame. */
 #include "mesh.h"
 
 #include <assert.h>
@@ -193,17 +194,200 @@ static void transport(const double u0[3], const double t0[3], const double t1[3]
   if (!normalize3(u1)) first_perpendicular(t1, u1);
 }
 
+/* ---- the branch geometry, stem by stem (shared by OBJ, PLY and glTF) ---- */
+
+struct sylva_mesh_branches {
+  const sylva_world *w;
+  mesh_plan p;
+  int sides;
+  double (*frame)[6]; /* per node: u (0..2), t (3..5) */
+  double cosk[SYLVA_MESH_MAX_SIDES], sink[SYLVA_MESH_MAX_SIDES];
+};
+
+int sylva_mesh_branches_create(const sylva_world *w, int sides, sylva_mesh_branches **out) {
+  *out = NULL;
+  if (sides < SYLVA_MESH_MIN_SIDES || sides > SYLVA_MESH_MAX_SIDES) return SYLVA_EINVAL;
+  sylva_mesh_branches *b = calloc(1, sizeof *b);
+  if (!b) return SYLVA_ENOMEM;
+  int rc = plan_build(w, &b->p);
+  if (rc < 0) {
+    free(b);
+    return rc;
+  }
+  b->frame = malloc((b->p.n ? b->p.n : 1) * sizeof *b->frame);
+  if (!b->frame) {
+    plan_free(&b->p);
+    free(b);
+    return SYLVA_ENOMEM;
+  }
+  b->w = w;
+  b->sides = sides;
+  for (int j = 0; j < sides; j++) {
+    double a = MESH_TAU * j / sides;
+    b->cosk[j] = cos(a);
+    b->sink[j] = sin(a);
+  }
+  *out = b;
+  return 0;
+}
+
+void sylva_mesh_branches_destroy(sylva_mesh_branches *b) {
+  if (!b) return;
+  free(b->frame);
+  plan_free(&b->p);
+  free(b);
+}
+
+/* The first ring of stem s (rings are numbered in layout order, stem by stem), or
+ * the total for a stem without geometry at the end. */
+static size_t stem_first_ring(const mesh_plan *p, int s) {
+  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
+    int32_t r = p->ring[p->order[k]];
+    if (r >= 0) return (size_t)r;
+  }
+  return 0;
+}
+
+void sylva_mesh_branches_stem(const sylva_mesh_branches *b, int s, size_t *first,
+                              size_t *vertices, size_t *triangles) {
+  const mesh_plan *p = &b->p;
+  size_t n = (size_t)b->sides, rings = 0, internodes = 0, caps = 0;
+  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
+    size_t i = (size_t)p->order[k];
+    if (p->ring[i] < 0) continue;
+    rings++;
+    if (p->parent[i] >= 0) internodes++;
+    if ((p->parent[i] >= 0) != (p->first_child[i] >= 0)) caps++;
+  }
+  *first = rings ? n * stem_first_ring(p, s) : 0;
+  *vertices = n * rings;
+  *triangles = 2 * n * internodes + (n - 2) * caps;
+}
+
+const int32_t *sylva_mesh_branches_stem_nodes(const sylva_mesh_branches *b, int s,
+                                              size_t *count) {
+  *count = b->p.stem_start[s + 1] - b->p.stem_start[s];
+  return b->p.order + b->p.stem_start[s];
+}
+
+int32_t sylva_mesh_branches_parent(const sylva_mesh_branches *b, size_t i) {
+  assert(i < b->p.n);
+  return b->p.parent[i];
+}
+
+static void node_position(const sylva_node_info *info, double pos[3]) {
+  pos[0] = info->x;
+  pos[1] = info->y;
+  pos[2] = info->z;
+}
+
+/* Computes node i's frame from its parent's (or from scratch for a root). */
+static void node_frame(sylva_mesh_branches *b, size_t i, const sylva_node_info *info) {
+  const mesh_plan *p = &b->p;
+  double *u = b->frame[i], *t = b->frame[i] + 3;
+  double pos[3], other[3];
+  sylva_node_info o;
+  node_position(info, pos);
+  if (p->parent[i] < 0) {
+    sylva_world_node_at(b->w, (size_t)p->first_child[i], &o);
+    node_position(&o, other);
+    for (int a = 0; a < 3; a++) t[a] = other[a] - pos[a];
+    if (!normalize3(t)) {
+      /* no direction to the child: the stem starts upright */
+      t[0] = 0;
+      t[1] = 0;
+      t[2] = 1;
+    }
+    first_perpendicular(t, u);
+    return;
+  }
+  const double *pu = b->frame[p->parent[i]], *pt = b->frame[p->parent[i]] + 3;
+  sylva_world_node_at(b->w, (size_t)p->parent[i], &o);
+  node_position(&o, other);
+  for (int a = 0; a < 3; a++) t[a] = pos[a] - other[a];
+  if (!normalize3(t)) memcpy(t, pt, 3 * sizeof *t); /* a zero-length internode */
+  transport(pu, pt, t, u);
+}
+
+bool sylva_mesh_branches_vertices(sylva_mesh_branches *b, int s,
+                                  bool (*vertex)(void *ctx, const double pos[3],
+                                                 const double normal[3]),
+                                  void *ctx) {
+  const mesh_plan *p = &b->p;
+  sylva_node_info info;
+  /* a stem's parents come before their children, so every frame is carried from
+   * one computed in this same pass */
+  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
+    size_t i = (size_t)p->order[k];
+    if (p->ring[i] < 0) continue;
+    sylva_world_node_at(b->w, i, &info);
+    node_frame(b, i, &info);
+    const double *u = b->frame[i], *t = b->frame[i] + 3;
+    double v[3], pos[3], r = info.radius;
+    cross3(t, u, v);
+    node_position(&info, pos);
+    for (int j = 0; j < b->sides; j++) {
+      double q[3], nrm[3];
+      for (int a = 0; a < 3; a++) {
+        nrm[a] = b->cosk[j] * u[a] + b->sink[j] * v[a];
+        q[a] = pos[a] + r * nrm[a];
+      }
+      if (!vertex(ctx, q, nrm)) return false;
+    }
+  }
+  return true;
+}
+
+bool sylva_mesh_branches_triangles(const sylva_mesh_branches *b, int s,
+                                   bool (*triangle)(void *ctx, size_t a, size_t b, size_t c),
+                                   void *ctx) {
+  const mesh_plan *p = &b->p;
+  size_t n = (size_t)b->sides, base = n * stem_first_ring(p, s);
+  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
+    size_t i = (size_t)p->order[k];
+    if (p->ring[i] < 0) continue;
+    size_t c = (size_t)p->ring[i] * n - base;
+    int32_t parent = p->parent[i];
+    if (parent >= 0) {
+      size_t r = (size_t)p->ring[parent] * n - base;
+      for (size_t j = 0; j < n; j++) {
+        size_t j1 = (j + 1) % n;
+        if (!triangle(ctx, r + j, r + j1, c + j1) || !triangle(ctx, r + j, c + j1, c + j))
+          return false;
+      }
+    }
+    if (parent >= 0 && p->first_child[i] < 0) {
+      for (size_t j = 1; j + 1 < n; j++)
+        if (!triangle(ctx, c, c + j, c + j + 1)) return false;
+    } else if (parent < 0) {
+      for (size_t j = 1; j + 1 < n; j++)
+        if (!triangle(ctx, c, c + j + 1, c + j)) return false;
+    }
+  }
+  return true;
+}
+
+/* ---- obstacle boxes ---- */
+
+const int sylva_mesh_box_quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                        {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+
+void sylva_mesh_box_corner(const sylva_obstacle_def *o, int v, double q[3]) {
+  for (int a = 0; a < 3; a++) q[a] = (v >> a) & 1 ? o->max[a] : o->min[a];
+}
+
+/* ---- OBJ and PLY ---- */
+
 /* The state of one write. */
 typedef struct mesh_writer {
   FILE *out;
   const sylva_world *w;
-  const mesh_plan *p;
+  sylva_mesh_branches *b;
   sylva_mesh_format format;
-  int sides;
   bool obstacles;
-  double (*frame)[6]; /* per node: u (0..2), t (3..5) */
-  double cosk[SYLVA_MESH_MAX_SIDES], sink[SYLVA_MESH_MAX_SIDES];
   size_t box_base; /* global index of the first obstacle vertex */
+  size_t base;     /* global index of the current stem's first vertex */
+  int stem;        /* the current stem: the PLY face property */
 } mesh_writer;
 
 static bool stream_ok(const mesh_writer *mw) { return !ferror(mw->out); }
@@ -216,40 +400,6 @@ static void name_token(const char *label, char out[SYLVA_LABEL_MAX]) {
     out[i] = c <= ' ' || c == 0x7f ? '_' : (char)c;
   }
   out[i] = '\0';
-}
-
-static void node_position(const sylva_node_info *info, double pos[3]) {
-  pos[0] = info->x;
-  pos[1] = info->y;
-  pos[2] = info->z;
-}
-
-/* Computes node i's frame from its parent's (or from scratch for a root). */
-static void node_frame(mesh_writer *mw, size_t i, const sylva_node_info *info) {
-  const mesh_plan *p = mw->p;
-  double *u = mw->frame[i], *t = mw->frame[i] + 3;
-  double pos[3], other[3];
-  sylva_node_info o;
-  node_position(info, pos);
-  if (p->parent[i] < 0) {
-    sylva_world_node_at(mw->w, (size_t)p->first_child[i], &o);
-    node_position(&o, other);
-    for (int a = 0; a < 3; a++) t[a] = other[a] - pos[a];
-    if (!normalize3(t)) {
-      /* no direction to the child: the stem starts upright */
-      t[0] = 0;
-      t[1] = 0;
-      t[2] = 1;
-    }
-    first_perpendicular(t, u);
-    return;
-  }
-  const double *pu = mw->frame[p->parent[i]], *pt = mw->frame[p->parent[i]] + 3;
-  sylva_world_node_at(mw->w, (size_t)p->parent[i], &o);
-  node_position(&o, other);
-  for (int a = 0; a < 3; a++) t[a] = pos[a] - other[a];
-  if (!normalize3(t)) memcpy(t, pt, 3 * sizeof *t); /* a zero-length internode */
-  transport(pu, pt, t, u);
 }
 
 static void write_vertex(mesh_writer *mw, const double v[3]) {
@@ -265,59 +415,24 @@ static void write_face(mesh_writer *mw, size_t a, size_t b, size_t c, int stem) 
     fprintf(mw->out, "3 %zu %zu %zu %d\n", a, b, c, stem);
 }
 
-/* The rings of stem s. */
-static bool write_stem_vertices(mesh_writer *mw, int s) {
-  const mesh_plan *p = mw->p;
-  sylva_node_info info;
-  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
-    size_t i = (size_t)p->order[k];
-    if (p->ring[i] < 0) continue;
-    sylva_world_node_at(mw->w, i, &info);
-    node_frame(mw, i, &info);
-    const double *u = mw->frame[i], *t = mw->frame[i] + 3;
-    double v[3], pos[3], r = info.radius;
-    cross3(t, u, v);
-    node_position(&info, pos);
-    for (int j = 0; j < mw->sides; j++) {
-      double q[3];
-      for (int a = 0; a < 3; a++) q[a] = pos[a] + r * (mw->cosk[j] * u[a] + mw->sink[j] * v[a]);
-      write_vertex(mw, q);
-    }
-    if (!stream_ok(mw)) return false;
-  }
-  return true;
+static bool stem_vertex(void *ctx, const double pos[3], const double normal[3]) {
+  (void)normal;
+  mesh_writer *mw = ctx;
+  write_vertex(mw, pos);
+  return stream_ok(mw);
 }
 
-/* The faces of stem s: per node, its internode's side, then its cap. */
+static bool stem_face(void *ctx, size_t a, size_t b, size_t c) {
+  mesh_writer *mw = ctx;
+  write_face(mw, mw->base + a, mw->base + b, mw->base + c, mw->stem);
+  return stream_ok(mw);
+}
+
 static bool write_stem_faces(mesh_writer *mw, int s) {
-  const mesh_plan *p = mw->p;
-  size_t n = (size_t)mw->sides;
-  for (size_t k = p->stem_start[s]; k < p->stem_start[s + 1]; k++) {
-    size_t i = (size_t)p->order[k];
-    if (p->ring[i] < 0) continue;
-    size_t c = (size_t)p->ring[i] * n;
-    int32_t parent = p->parent[i];
-    if (parent >= 0) {
-      size_t b = (size_t)p->ring[parent] * n;
-      for (size_t j = 0; j < n; j++) {
-        size_t j1 = (j + 1) % n;
-        write_face(mw, b + j, b + j1, c + j1, s);
-        write_face(mw, b + j, c + j1, c + j, s);
-      }
-    }
-    if (parent >= 0 && p->first_child[i] < 0) {
-      for (size_t j = 1; j + 1 < n; j++) write_face(mw, c, c + j, c + j + 1, s);
-    } else if (parent < 0) {
-      for (size_t j = 1; j + 1 < n; j++) write_face(mw, c, c + j + 1, c + j, s);
-    }
-    if (!stream_ok(mw)) return false;
-  }
-  return true;
-}
-
-/* Corner v of a box: bit 0 picks max x, bit 1 max y, bit 2 max z. */
-static void box_corner(const sylva_obstacle_def *o, int v, double q[3]) {
-  for (int a = 0; a < 3; a++) q[a] = (v >> a) & 1 ? o->max[a] : o->min[a];
+  size_t vertices, triangles;
+  sylva_mesh_branches_stem(mw->b, s, &mw->base, &vertices, &triangles);
+  mw->stem = s;
+  return sylva_mesh_branches_triangles(mw->b, s, stem_face, mw);
 }
 
 static void write_box_vertices(mesh_writer *mw, int i) {
@@ -325,18 +440,16 @@ static void write_box_vertices(mesh_writer *mw, int i) {
   sylva_world_obstacle_at(mw->w, i, NULL, &o);
   for (int v = 0; v < 8; v++) {
     double q[3];
-    box_corner(&o, v, q);
+    sylva_mesh_box_corner(&o, v, q);
     write_vertex(mw, q);
   }
 }
 
 static void write_box_faces(mesh_writer *mw, int i) {
-  /* each side as a quad, counter-clockwise seen from outside: -x +x -y +y -z +z */
-  static const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                                  {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  /* each side as a quad, counter-clockwise seen from outside */
   size_t b = mw->box_base + 8 * (size_t)i;
   for (int f = 0; f < 6; f++) {
-    const int *q = quads[f];
+    const int *q = sylva_mesh_box_quads[f];
     write_face(mw, b + (size_t)q[0], b + (size_t)q[1], b + (size_t)q[2], -1 - i);
     write_face(mw, b + (size_t)q[0], b + (size_t)q[2], b + (size_t)q[3], -1 - i);
   }
@@ -354,7 +467,6 @@ static int stem_plant(const sylva_world *w, int s, int *stem) {
   *stem = s - sylva_world_stem_index(w, lo, 0);
   return lo;
 }
-
 static void stem_name(const sylva_world *w, int s, char *buf, size_t size) {
   int stem, plant = stem_plant(w, s, &stem);
   char label[SYLVA_LABEL_MAX];
@@ -372,7 +484,7 @@ static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
             "# sylva mesh export: branches as generalized cylinders, one object per stem\n"
             "# iteration %d, %d stems, %d sides, %d obstacles; metres, z up, triangles\n"
             "# vertices %zu, faces %zu\n",
-            sylva_world_iteration(w), mw->p->stems, mw->sides, boxes, vertices, faces);
+            sylva_world_iteration(w), mw->b->p.stems, mw->b->sides, boxes, vertices, faces);
     return;
   }
   fprintf(out,
@@ -381,8 +493,8 @@ static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
           "comment sylva mesh export: branches as generalized cylinders\n"
           "comment iteration %d, %d stems, %d sides, %d obstacles; metres, z up\n"
           "comment face property stem: global stem index, or -1 - i for obstacle i\n",
-          sylva_world_iteration(w), mw->p->stems, mw->sides, boxes);
-  for (int s = 0; s < mw->p->stems; s++) {
+          sylva_world_iteration(w), mw->b->p.stems, mw->b->sides, boxes);
+  for (int s = 0; s < mw->b->p.stems; s++) {
     stem_name(w, s, name, sizeof name);
     fprintf(out, "comment stem %d %s\n", s, name);
   }
@@ -406,18 +518,19 @@ static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
 }
 
 static bool write_body(mesh_writer *mw) {
-  const mesh_plan *p = mw->p;
+  int stems = mw->b->p.stems;
   int boxes = mw->obstacles ? sylva_world_obstacle_count(mw->w) : 0;
   char name[SYLVA_LABEL_MAX + 16];
+  size_t first, vertices, triangles;
   if (mw->format == SYLVA_MESH_OBJ) {
-    for (int s = 0; s < p->stems; s++) {
-      if (p->stem_start[s] == p->stem_start[s + 1]) continue;
+    for (int s = 0; s < stems; s++) {
       /* a stem of a lone root has no geometry and no object */
-      size_t first = (size_t)p->order[p->stem_start[s]];
-      if (p->ring[first] < 0) continue;
+      sylva_mesh_branches_stem(mw->b, s, &first, &vertices, &triangles);
+      if (!vertices) continue;
       stem_name(mw->w, s, name, sizeof name);
       fprintf(mw->out, "o %s\n", name);
-      if (!write_stem_vertices(mw, s) || !write_stem_faces(mw, s)) return false;
+      if (!sylva_mesh_branches_vertices(mw->b, s, stem_vertex, mw) || !write_stem_faces(mw, s))
+        return false;
     }
     for (int i = 0; i < boxes; i++) {
       sylva_obstacle_def o;
@@ -430,10 +543,10 @@ static bool write_body(mesh_writer *mw) {
     }
     return true;
   }
-  for (int s = 0; s < p->stems; s++)
-    if (!write_stem_vertices(mw, s)) return false;
+  for (int s = 0; s < stems; s++)
+    if (!sylva_mesh_branches_vertices(mw->b, s, stem_vertex, mw)) return false;
   for (int i = 0; i < boxes; i++) write_box_vertices(mw, i);
-  for (int s = 0; s < p->stems; s++)
+  for (int s = 0; s < stems; s++)
     if (!write_stem_faces(mw, s)) return false;
   for (int i = 0; i < boxes; i++) write_box_faces(mw, i);
   return stream_ok(mw);
@@ -444,33 +557,22 @@ int sylva_mesh_write(FILE *out, const sylva_world *w, sylva_mesh_format format,
   sylva_mesh_options defaults = sylva_mesh_default_options();
   if (!opt) opt = &defaults;
   if (!options_ok(format, opt)) return SYLVA_EINVAL;
-  mesh_plan p;
-  int rc = plan_build(w, &p);
+  sylva_mesh_branches *b;
+  int rc = sylva_mesh_branches_create(w, opt->sides, &b);
   if (rc < 0) return rc;
   size_t vertices, faces;
-  plan_counts(&p, w, opt, &vertices, &faces);
+  plan_counts(&b->p, w, opt, &vertices, &faces);
   if (format == SYLVA_MESH_PLY && vertices > (size_t)INT32_MAX) {
-    plan_free(&p);
+    sylva_mesh_branches_destroy(b);
     return SYLVA_ETOOBIG;
   }
-  mesh_writer mw = {.out = out, .w = w, .p = &p, .format = format, .sides = opt->sides,
-                    .obstacles = opt->obstacles, .box_base = (size_t)opt->sides * p.rings};
-  mw.frame = malloc((p.n ? p.n : 1) * sizeof *mw.frame);
-  if (!mw.frame) {
-    plan_free(&p);
-    return SYLVA_ENOMEM;
-  }
-  for (int j = 0; j < opt->sides; j++) {
-    double a = MESH_TAU * j / opt->sides;
-    mw.cosk[j] = cos(a);
-    mw.sink[j] = sin(a);
-  }
+  mesh_writer mw = {.out = out, .w = w, .b = b, .format = format, .obstacles = opt->obstacles,
+                    .box_base = (size_t)opt->sides * b->p.rings};
   write_header(&mw, vertices, faces);
   bool ok = stream_ok(&mw) && write_body(&mw);
   ok = fflush(out) == 0 && ok;
   int saved = errno;
-  free(mw.frame);
-  plan_free(&p);
+  sylva_mesh_branches_destroy(b);
   errno = saved;
   return ok ? 0 : SYLVA_MESH_EWRITE;
 }

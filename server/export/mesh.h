@@ -36,6 +36,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "sylva/world.h"
@@ -76,5 +77,53 @@ int sylva_mesh_write(FILE *out, const sylva_world *w, sylva_mesh_format format,
  *  options, or SYLVA_ENOMEM; on failure both counts are 0. */
 int sylva_mesh_count(const sylva_world *w, sylva_mesh_format format,
                      const sylva_mesh_options *opt, size_t *vertices, size_t *faces);
+
+/** The branch geometry of a world as sylva_mesh_write lays it out, stem by stem,
+ *  for writers of other formats (the glTF export): the rings and triangles above,
+ *  with the outward unit normal of each ring vertex (from its ring's frame: the
+ *  radial direction, so a tapered cylinder shades smoothly). Holds the world
+ *  (const) and one frame per node; the world must not change while it lives. */
+typedef struct sylva_mesh_branches sylva_mesh_branches;
+
+/** Plans the branches of w with `sides` vertices per ring. Returns 0 with *out
+ *  set; SYLVA_EINVAL for sides outside SYLVA_MESH_MIN_SIDES..SYLVA_MESH_MAX_SIDES,
+ *  SYLVA_ENOMEM (*out NULL). */
+int sylva_mesh_branches_create(const sylva_world *w, int sides, sylva_mesh_branches **out);
+
+/** Frees b (NULL is fine). */
+void sylva_mesh_branches_destroy(sylva_mesh_branches *b);
+
+/** Stem s's share of the layout: its first vertex (global index), its vertices and
+ *  its triangles; a stem without geometry has 0 of both. */
+void sylva_mesh_branches_stem(const sylva_mesh_branches *b, int s, size_t *first,
+                              size_t *vertices, size_t *triangles);
+
+/** The node indices (for sylva_world_node_at) of stem s in id order, *count of
+ *  them, and the node index of node i's parent (-1 for a root). */
+const int32_t *sylva_mesh_branches_stem_nodes(const sylva_mesh_branches *b, int s,
+                                              size_t *count);
+int32_t sylva_mesh_branches_parent(const sylva_mesh_branches *b, size_t i);
+
+/** Calls vertex(ctx, position, normal) for each vertex of stem s in layout order
+ *  (world metres, z up; the normal is a unit vector). Stops at the first false
+ *  from vertex and returns false; true when all were given. */
+bool sylva_mesh_branches_vertices(sylva_mesh_branches *b, int s,
+                                  bool (*vertex)(void *ctx, const double pos[3],
+                                                 const double normal[3]),
+                                  void *ctx);
+
+/** Calls triangle(ctx, a, b, c) for each triangle of stem s in layout order, with
+ *  vertex indices relative to the stem's first vertex, counter-clockwise seen from
+ *  outside. Stops at the first false and returns false; true when all were given. */
+bool sylva_mesh_branches_triangles(const sylva_mesh_branches *b, int s,
+                                   bool (*triangle)(void *ctx, size_t a, size_t b, size_t c),
+                                   void *ctx);
+
+/** Corner v (0..7) of an obstacle's box: bit 0 picks max x, bit 1 max y, bit 2 max z. */
+void sylva_mesh_box_corner(const sylva_obstacle_def *o, int v, double q[3]);
+
+/** The six sides of a box as quads of corners, counter-clockwise seen from outside,
+ *  in the order -x, +x, -y, +y, -z, +z. */
+extern const int sylva_mesh_box_quads[6][4];
 
 #endif

@@ -2,7 +2,8 @@
  *
  * The internodes are gathered once (each with its parent's position, found by a
  * binary search over the ids: parents come first in id order), sorted by radius,
- * then stroked once per panel. */
+ * then stroked once per panel. The leaf cards are placed once (foliage.h) as the
+ * nodes are gathered, then sorted far to near and filled once per panel. */
 #include "render.h"
 
 #include <cairo-pdf.h>
@@ -15,6 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+
+#include "foliage.h"
 
 #define RENDER_PI 3.14159265358979323846
 
@@ -47,16 +50,18 @@ bool render_format_from_path(const char *path, render_format *out) {
   return false;
 }
 
-/* One projection: the world axes drawn to the right (u) and up (v), and names. */
+/* One projection: the world axes drawn to the right (u) and up (v), the line of
+ * sight along axis `sight` in the direction `look` (+1 or -1), and names. */
 typedef struct view_def {
-  int u, v;
+  int u, v, sight;
+  double look;
   const char *title, *u_label, *v_label;
 } view_def;
 
 static const view_def views[3] = {
-    [RENDER_FRONT] = {0, 2, "front: x-z, looking along +y", "x (m)", "z (m)"},
-    [RENDER_SIDE] = {1, 2, "side: y-z, looking along -x", "y (m)", "z (m)"},
-    [RENDER_TOP] = {0, 1, "top: x-y, seen from above", "x (m)", "y (m)"},
+    [RENDER_FRONT] = {0, 2, 1, 1.0, "front: x-z, looking along +y", "x (m)", "z (m)"},
+    [RENDER_SIDE] = {1, 2, 0, -1.0, "side: y-z, looking along -x", "y (m)", "z (m)"},
+    [RENDER_TOP] = {0, 1, 2, -1.0, "top: x-y, seen from above", "x (m)", "y (m)"},
 };
 
 /* An internode: from its parent's position to its node's. */
@@ -77,17 +82,89 @@ static int compare_segments(const void *a, const void *b) {
   return (s->id > t->id) - (s->id < t->id);
 }
 
-/* The internodes of w, thinnest first; NULL when out of memory. */
-static segment *gather_segments(const sylva_world *w, size_t *count) {
-  size_t n = sylva_world_node_count(w);
+/* A leaf card to draw: where it is, its colour (the species' leaf_colour), and its
+ * distance along the current panel's line of sight (farther is larger). */
+typedef struct leaf_card {
+  foliage_leaf f;
+  double rgb[3];
+  double depth;
+  int32_t id, k;
+} leaf_card;
+
+/* Farthest first, then by node id and leaf: a total order, so every sort of the
+ * same cards gives the same sequence. */
+static int compare_leaves(const void *a, const void *b) {
+  const leaf_card *s = a, *t = b;
+  if (s->depth != t->depth) return s->depth > t->depth ? -1 : 1;
+  if (s->id != t->id) return s->id < t->id ? -1 : 1;
+  return (s->k > t->k) - (s->k < t->k);
+}
+
+/* What a world's panels draw: its internodes, thinnest first, and its leaf cards. */
+typedef struct scene {
+  segment *segs;
+  size_t count;
+  leaf_card *leaves;
+  size_t leaf_count;
+} scene;
+
+static void scene_free(scene *sc) {
+  free(sc->segs);
+  free(sc->leaves);
+}
+
+/* The leaves of the live nodes of w, counted; false when their number overflows. */
+static bool count_leaves(const sylva_world *w, size_t n, size_t *total) {
+  size_t sum = 0;
+  sylva_node_info info;
+  for (size_t i = 0; i < n; i++) {
+    sylva_world_node_at(w, i, &info);
+    if (info.leaves <= 0) continue;
+    if ((size_t)info.leaves > SIZE_MAX / sizeof(leaf_card) - sum) return false;
+    sum += (size_t)info.leaves;
+  }
+  *total = sum;
+  return true;
+}
+
+/* Appends the cards of a node bearing leaves; parent NULL for a root. */
+static void place_leaves(const sylva_world *w, const sylva_node_info *info, const float *parent,
+                         const float *node, scene *sc) {
+  const sylva_species_def *def =
+      sylva_world_species(w, sylva_world_plant_species(w, info->plant));
+  if (!def) return;
+  double p[3], q[3], rgb[3];
+  for (int a = 0; a < 3; a++) {
+    p[a] = parent ? parent[a] : 0.0;
+    q[a] = node[a];
+  }
+  foliage_rgb(def->leaf_colour, rgb);
+  for (int k = 0; k < info->leaves; k++) {
+    leaf_card *c = &sc->leaves[sc->leaf_count++];
+    foliage_place(parent ? p : NULL, q, k, info->leaves, def->leaf_size, &c->f);
+    memcpy(c->rgb, rgb, sizeof c->rgb);
+    c->depth = 0.0;
+    c->id = info->id;
+    c->k = k;
+  }
+}
+
+/* The internodes of w, thinnest first, and with leaves its leaf cards; false when
+ * out of memory (sc then holds nothing). */
+static bool gather(const sylva_world *w, bool leaves, scene *sc) {
+  memset(sc, 0, sizeof *sc);
+  size_t n = sylva_world_node_count(w), total = 0;
+  if (leaves && !count_leaves(w, n, &total)) return false;
   int32_t *ids = malloc((n ? n : 1) * sizeof *ids);
   float(*pos)[3] = malloc((n ? n : 1) * sizeof *pos);
-  segment *segs = malloc((n ? n : 1) * sizeof *segs);
-  if (!ids || !pos || !segs) {
+  sc->segs = malloc((n ? n : 1) * sizeof *sc->segs);
+  sc->leaves = malloc((total ? total : 1) * sizeof *sc->leaves);
+  if (!ids || !pos || !sc->segs || !sc->leaves) {
     free(ids);
     free(pos);
-    free(segs);
-    return NULL;
+    scene_free(sc);
+    memset(sc, 0, sizeof *sc);
+    return false;
   }
   size_t m = 0;
   sylva_node_info info;
@@ -97,11 +174,13 @@ static segment *gather_segments(const sylva_world *w, size_t *count) {
     pos[i][0] = info.x;
     pos[i][1] = info.y;
     pos[i][2] = info.z;
-    if (info.parent < 0) continue;
     /* a live node's parent is live and comes before it in id order */
-    const int32_t *p = bsearch(&info.parent, ids, i, sizeof *ids, compare_ids);
+    const int32_t *p =
+        info.parent < 0 ? NULL : bsearch(&info.parent, ids, i, sizeof *ids, compare_ids);
+    if (leaves && info.leaves > 0 && (p || info.parent < 0))
+      place_leaves(w, &info, p ? pos[p - ids] : NULL, pos[i], sc);
     if (!p) continue;
-    segment *s = &segs[m++];
+    segment *s = &sc->segs[m++];
     memcpy(s->from, pos[p - ids], sizeof s->from);
     memcpy(s->to, pos[i], sizeof s->to);
     s->radius = info.radius;
@@ -110,9 +189,9 @@ static segment *gather_segments(const sylva_world *w, size_t *count) {
   }
   free(ids);
   free(pos);
-  qsort(segs, m, sizeof *segs, compare_segments);
-  *count = m;
-  return segs;
+  qsort(sc->segs, m, sizeof *sc->segs, compare_segments);
+  sc->count = m;
+  return true;
 }
 
 /* The placement of the panels in the picture. */
@@ -219,6 +298,53 @@ static void draw_segments(cairo_t *cr, const segment *segs, size_t count, const 
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
 }
 
+/* Fills one leaf's blade: the ellipse inscribed in its card, projected. The card's
+ * half-edges along and across map to the picture's columns c0 and c1 of M; the
+ * blade is M applied to the unit circle, whose semi-axes are the square roots of
+ * the eigenvalues of M M^T, the major one at angle theta. Each semi-axis is at
+ * least half of RENDER_MIN_LEAF, so a card seen edge-on or smaller than a pixel
+ * still shows (and the matrix cairo gets is never singular). */
+static void fill_leaf(cairo_t *cr, const leaf_card *c, const panel *p) {
+  const view_def *v = p->v;
+  double h = 0.5 * c->f.edge * p->l->scale;
+  double c0[2] = {h * c->f.along[v->u], -h * c->f.along[v->v]};
+  double c1[2] = {h * c->f.across[v->u], -h * c->f.across[v->v]};
+  double a00 = c0[0] * c0[0] + c1[0] * c1[0], a11 = c0[1] * c0[1] + c1[1] * c1[1];
+  double a01 = c0[0] * c0[1] + c1[0] * c1[1];
+  double mean = 0.5 * (a00 + a11), spread = hypot(0.5 * (a00 - a11), a01);
+  double major = sqrt(mean + spread), minor = sqrt(fmax(mean - spread, 0.0));
+  double least = 0.5 * RENDER_MIN_LEAF;
+  if (major < least) major = least;
+  if (minor < least) minor = least;
+  double theta = 0.5 * atan2(2.0 * a01, a00 - a11);
+  double ct = cos(theta), st = sin(theta);
+  /* the card's normal against the line of sight: cards facing the viewer are the
+   * leaf colour, cards seen edge-on RENDER_LEAF_SHADE of it */
+  const double *a = c->f.along, *b = c->f.across;
+  double normal[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]};
+  double shade = RENDER_LEAF_SHADE + (1.0 - RENDER_LEAF_SHADE) * fabs(normal[v->sight]);
+  cairo_matrix_t saved, m;
+  cairo_get_matrix(cr, &saved);
+  cairo_matrix_init(&m, major * ct, major * st, -minor * st, minor * ct,
+                    panel_x(p, c->f.centre[v->u]), panel_y(p, c->f.centre[v->v]));
+  cairo_transform(cr, &m);
+  cairo_new_sub_path(cr);
+  cairo_arc(cr, 0.0, 0.0, 1.0, 0.0, 2.0 * RENDER_PI);
+  cairo_set_matrix(cr, &saved);
+  cairo_set_source_rgb(cr, shade * c->rgb[0], shade * c->rgb[1], shade * c->rgb[2]);
+  cairo_fill(cr);
+}
+
+/* The leaf cards, sorted far to near along the panel's line of sight (so nearer
+ * leaves cover farther ones), each filled over what is drawn already. */
+static void draw_leaves(leaf_card *leaves, size_t count, cairo_t *cr, const panel *p) {
+  for (size_t i = 0; i < count; i++)
+    leaves[i].depth = p->v->look * leaves[i].f.centre[p->v->sight];
+  qsort(leaves, count, sizeof *leaves, compare_leaves);
+  for (size_t i = 0; i < count; i++) fill_leaf(cr, &leaves[i], p);
+}
+
 /* The smallest step of 1, 2 or 5 x 10^k metres at least `least` metres long. */
 static double tick_step(double least) {
   double step = pow(10.0, floor(log10(least)));
@@ -285,8 +411,7 @@ static void draw_axis(cairo_t *cr, const panel *p, int axis) {
   }
 }
 
-static void draw_panel(cairo_t *cr, const sylva_world *w, const segment *segs, size_t count,
-                       const panel *p) {
+static void draw_panel(cairo_t *cr, const sylva_world *w, scene *sc, const panel *p) {
   const sylva_world_def *def = sylva_world_get_def(w);
   double x0 = panel_x(p, p->l->lo[p->k][0]), x1 = panel_x(p, p->l->hi[p->k][0]);
   double y0 = panel_y(p, p->l->hi[p->k][1]), y1 = panel_y(p, p->l->lo[p->k][1]);
@@ -294,7 +419,8 @@ static void draw_panel(cairo_t *cr, const sylva_world *w, const segment *segs, s
   cairo_rectangle(cr, x0, y0, x1 - x0, y1 - y0);
   cairo_clip(cr);
   draw_obstacles(cr, w, p);
-  draw_segments(cr, segs, count, p);
+  draw_segments(cr, sc->segs, sc->count, p);
+  draw_leaves(sc->leaves, sc->leaf_count, cr, p);
   cairo_restore(cr);
 
   cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
@@ -379,12 +505,12 @@ static void title_text(const sylva_world *w, const render_options *o, char *out,
 }
 
 static void draw(cairo_t *cr, const sylva_world *w, const render_options *o, const layout *l,
-                 const segment *segs, size_t count) {
+                 scene *sc) {
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_paint(cr);
   for (int k = 0; k < l->panels; k++) {
     panel p = {.l = l, .v = &views[l->view[k]], .k = k};
-    draw_panel(cr, w, segs, count, &p);
+    draw_panel(cr, w, sc, &p);
   }
   char title[1024];
   title_text(w, o, title, sizeof title);
@@ -436,19 +562,18 @@ int render_write(FILE *f, const sylva_world *w, const render_options *o, char *e
     snprintf(err, errlen, "a width of %d leaves no room for the views", l.width);
     return SERVER_EINPUT;
   }
-  size_t count = 0;
-  segment *segs = gather_segments(w, &count);
-  if (!segs) {
+  scene sc;
+  if (!gather(w, !o->no_leaves, &sc)) {
     snprintf(err, errlen, "out of memory");
     return SERVER_ENOMEM;
   }
   sink out = {.f = f, .error = 0};
   cairo_surface_t *surface = create_surface(o, &l, &out);
   cairo_t *cr = cairo_create(surface);
-  draw(cr, w, o, &l, segs, count);
+  draw(cr, w, o, &l, &sc);
   cairo_status_t status = cairo_status(cr);
   cairo_destroy(cr);
-  free(segs);
+  scene_free(&sc);
   if (status == CAIRO_STATUS_SUCCESS && o->format == RENDER_PNG)
     status = cairo_surface_write_to_png_stream(surface, sink_write, &out);
   cairo_surface_finish(surface);

@@ -19,6 +19,17 @@
  *     cycled by plant id). Thin internodes are drawn first and thick ones last
  *     (by radius, then id), so trunks stay visible; branches are drawn over the
  *     obstacles, never hidden by them;
+ *   - unless render_options.no_leaves, over the branches, every leaf card of every
+ *     node bearing leaves (sylva_node_info.leaves, placed by foliage_place with its
+ *     plant's species' leaf_size) as its blade: the ellipse inscribed in the card,
+ *     projected like everything else (an ellipse with the projections of the card's
+ *     along and across half-edges as conjugate semi-diameters; each semi-axis at
+ *     least RENDER_MIN_LEAF / 2, so a leaf under a pixel or seen edge-on still
+ *     shows), filled without an outline in the species' leaf_colour times
+ *     RENDER_LEAF_SHADE + (1 - RENDER_LEAF_SHADE) * |normal . line of sight| (the
+ *     normal along x across; a card facing the viewer has the full colour). The
+ *     cards are drawn far to near along the line of sight (then by node id and
+ *     leaf), so near leaves cover far ones;
  *   - the frame of the world's box and, in front and side, over it the ground
  *     line at z = the world's min z (the ground; 0 in the ready scenarios).
  * Around each panel: its title above, ticks and labels in metres along the bottom
@@ -69,6 +80,7 @@ typedef enum render_view { RENDER_FRONT, RENDER_SIDE, RENDER_TOP, RENDER_ALL } r
 #define RENDER_PANEL_TITLE_HEIGHT 26.0 /**< each panel's title, above it */
 #define RENDER_TICK_SPACING 50.0       /**< least distance between two ticks */
 #define RENDER_MIN_LINE 0.5            /**< thinnest internode */
+#define RENDER_MIN_LEAF 1.0            /**< narrowest leaf blade, either axis */
 #define RENDER_TITLE_AGES 8            /**< plants whose ages the title lists */
 
 /** Widths a picture may have (and the greatest height); the least leaves room
@@ -89,6 +101,8 @@ extern const unsigned render_palette[RENDER_PALETTE_SIZE];
 #define RENDER_OBSTACLE_ALPHA 0.35
 /** Clearance zone fill: amber at RENDER_ZONE_ALPHA, with a dashed outline. */
 #define RENDER_ZONE_ALPHA 0.18
+/** The darkest a leaf gets, as a share of its leaf_colour: a card seen edge-on. */
+#define RENDER_LEAF_SHADE 0.75
 
 /** The view called `name` (front, side, top, all); false for none. */
 bool render_view_parse(const char *name, render_view *out);
@@ -104,6 +118,7 @@ typedef struct render_options {
   int width;        /**< RENDER_MIN_WIDTH..RENDER_MAX_SIZE; 0: RENDER_PANEL_WIDTH per panel */
   const char *name; /**< the run's or scenario's name, for the title */
   int start_year;   /**< the scenario's start_year (0: none): the title's calendar year */
+  bool no_leaves;   /**< the wire skeleton only (`--no-leaves`); false: leaves too */
 } render_options;
 
 /** Draws w as o asks and writes the picture to f (flushed, not closed). Returns

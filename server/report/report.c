@@ -479,7 +479,7 @@ static int add_row(run_pass *p, const store_stats_row *row, const stem_slot *slo
       .run = p->run, .species = slot->species, .key = slot->key, .plant = slot->plant,
       .stem = row->plant_stem, .year = year, .iteration = row->iteration, .age = row->age,
       .height = row->height, .dbh = row->dbh, .crown_diameter = row->crown_width,
-      .crown_height = row->crown_height, .pruned = slot->pruned};
+      .crown_height = row->crown_height, .leaf_area = row->leaf_area, .pruned = slot->pruned};
   (*n)++;
   int rc = parse_pairs(p, row->zones, true, &o->first, &o->nfirst);
   if (!rc) rc = parse_pairs(p, row->clearance, false, &o->clearance, &o->nclearance);

@@ -92,6 +92,7 @@ typedef struct report_row {
   int year;           /**< index into report.years; -1 for a final row */
   int iteration, age; /**< age -1 where not stored */
   double height, dbh, crown_diameter, crown_height; /**< NAN where not stored */
+  double leaf_area;   /**< m^2; NAN where not stored (a store before schema 5) */
   int64_t pruned;     /**< nodes pruned up to this iteration; -1 without conflicts */
   report_kv *first;   /**< zone index and its stored `first` (a calendar year with a
                            start year, else an iteration) */

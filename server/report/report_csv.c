@@ -53,6 +53,7 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
   put_field(f, "dbh", false);
   put_field(f, "crown_diameter", false);
   put_field(f, "crown_height", false);
+  put_field(f, "leaf_area", false);
   for (int z = 0; z < r->nzones; z++) put_named(f, "first_", r->zones[z]);
   for (int o = 0; o < r->nobstacles; o++) put_named(f, "clearance_", r->obstacles[o]);
   if (r->conflicts) put_field(f, "pruned", false);
@@ -72,6 +73,7 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
     put_number(f, row->dbh);
     put_number(f, row->crown_diameter);
     put_number(f, row->crown_height);
+    put_number(f, row->leaf_area);
     for (int z = 0; z < r->nzones; z++) put_number(f, pair_value(row->first, row->nfirst, z));
     for (int o = 0; o < r->nobstacles; o++)
       put_number(f, pair_value(row->clearance, row->nclearance, o));

@@ -144,6 +144,8 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "  axis TEXT NOT NULL,"
     "  value TEXT NOT NULL,"
     "  PRIMARY KEY (run, axis));",
+    /* 4 -> 5: foliage (docs/store.md): each stem's leaf area, NULL in older rows */
+    "ALTER TABLE stats ADD COLUMN leaf_area REAL;",
 };
 
 static int migrate(store *st) {
@@ -493,8 +495,8 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO stats (run, iteration, stem, plant, plant_stem, height, dbh,"
                          " crown_width, crown_base, nodes, shed, light, cap, finished, pruned,"
-                         " zones, clearance, age, crown_height)"
-                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                         " zones, clearance, age, crown_height, leaf_area)"
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     store__fail(st, "storing iteration %d", it);
     store__rollback(st);
@@ -524,6 +526,7 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
     else
       sqlite3_bind_null(q, 18);
     bind_real_or_null(q, 19, s->crown_height);
+    bind_real_or_null(q, 20, s->leaf_area);
     if (sylva_world_reports_conflicts(w)) {
       zones = sylva_encode_stem_conflicts(w, (int)k, false, start_year);
       clearance = sylva_encode_stem_conflicts(w, (int)k, true, start_year);
@@ -803,7 +806,7 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
   sqlite3_stmt *q;
   if (prepare_run(st, "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
                       " crown_base, nodes, shed, light, cap, finished, pruned, zones, clearance,"
-                      " age, crown_height FROM stats"
+                      " age, crown_height, leaf_area FROM stats"
                       " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
                   run, to, &q))
     return store__fail(st, "reading stats");
@@ -828,6 +831,7 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
         .clearance = (const char *)sqlite3_column_text(q, 15),
         .age = sqlite3_column_type(q, 16) == SQLITE_NULL ? -1 : sqlite3_column_int(q, 16),
         .crown_height = column_real(q, 17),
+        .leaf_area = column_real(q, 18),
     };
     if (!r.plant) r.plant = "";
     if (fn(&r, ctx)) {

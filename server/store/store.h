@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 4
+#define STORE_SCHEMA_VERSION 5
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 
@@ -135,6 +135,7 @@ typedef struct store_stats_row {
                                       planting and the seasons since); -1 where null
                                       (a species without years) */
   double crown_height;           /**< NaN where null */
+  double leaf_area;              /**< m^2; NaN where null (rows stored before schema 5) */
 } store_stats_row;
 
 /** Calls fn for every stats row of a run up to iteration `to`, in iteration then

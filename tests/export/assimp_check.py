@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
-"""Reads the meshes of test_mesh back with assimp (Debian's assimp-utils).
+"""Reads the meshes of test_mesh and the scenes of test_gltf back with assimp
+(Debian's assimp-utils).
 
-Runs `test_mesh OUTDIR` (which writes OBJ and PLY files and a manifest,
-expected.tsv, of the vertex and face counts derived from the world's nodes),
-then `assimp info` on every file, and compares what assimp reports:
+Runs `TEST OUTDIR` (test_mesh writes OBJ and PLY files, test_gltf GLB files, each
+with a manifest, expected.tsv, of the vertex and face counts derived from the
+world), then `assimp info` on every file, and compares what assimp reports:
 
 - `assimp info -r` (raw import, no post-processing):
   PLY: exactly the file's vertices and faces, in one mesh;
@@ -15,6 +16,10 @@ then `assimp info` on every file, and compares what assimp reports:
   vertices per mesh equal to the object's own vertices (sides * rings of a stem,
   8 of a box): no two vertices of an object coincide, so joining undoes exactly
   the per-corner split.
+- GLB, raw and default: exactly the file's vertices and faces; one mesh per glTF
+  primitive, named for its glTF mesh (with -K for primitive K of a mesh of
+  several), with its faces and vertices (no two vertices of a primitive agree in
+  position, normal and texture coordinates, so joining changes nothing).
 Every primitive must be a triangle. When assimp is missing the check fails: run
 scripts/bootstrap. Prints every failure, then "N passed, N failed".
 """
@@ -107,6 +112,13 @@ def check_file(chk, path, fmt, vertices, faces, objects):
             continue
         chk.eq("%s (%s) faces" % (name, mode), totals["Faces"], faces)
         chk.eq("%s (%s) primitive types" % (name, mode), primitives, "triangles")
+        if fmt == "glb":
+            chk.eq("%s (%s) vertices" % (name, mode), totals["Vertices"], vertices)
+            chk.eq("%s (%s) meshes" % (name, mode), totals["Meshes"], len(objects))
+            got = [(m[0], m[2], m[1]) for m in meshes]
+            want = [(o[0], o[1], o[2]) for o in objects]
+            chk.eq("%s (%s) meshes (name, faces, vertices)" % (name, mode), got, want)
+            continue
         if fmt == "ply":
             chk.eq("%s (%s) vertices" % (name, mode), totals["Vertices"], vertices)
             chk.eq("%s (%s) meshes" % (name, mode), totals["Meshes"], 1)
@@ -121,7 +133,7 @@ def check_file(chk, path, fmt, vertices, faces, objects):
 
 def main():
     if len(sys.argv) != 2:
-        print("usage: assimp_check.py TEST_MESH", file=sys.stderr)
+        print("usage: assimp_check.py TEST_MESH|TEST_GLTF", file=sys.stderr)
         return 2
     chk = Checker()
     if shutil.which("assimp") is None:

@@ -15,33 +15,17 @@
 #include <string.h>
 
 #include "../check.h"
+#include "export_world.h"
 #include "mesh.h"
 #include "sylva/sylva.h"
 
 /* ---- the world and what the export of it must hold ---- */
 
+/* The world: the tree and the shrub beside a wall. */
 static sylva_world *make_world(int iterations) {
-  sylva_world_def wd = sylva_default_world_def();
-  sylva_world *w;
-  if (sylva_world_create(&wd, &w) < 0) return NULL;
-  sylva_species_def sp = sylva_default_species_def();
-  sp.apical_zone = 0; /* buds break from the start: six iterations already branch */
-  int species = sylva_world_add_species(w, &sp, "x");
-  double tree[1][3] = {{-2.0, 0.0, 0.0}};
-  double shrub[2][3] = {{2.0, 0.0, 0.0}, {2.4, 0.3, 0.0}};
-  /* a label with a space: the OBJ object name must stay one token */
-  sylva_plant_def p1 = {species, "oak", (const double(*)[3])tree, 1, 0, NULL, 0};
-  sylva_plant_def p2 = {species, "hazel bush", (const double(*)[3])shrub, 2, 0, NULL, 0};
-  sylva_obstacle_def wall = {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID};
-  if (species < 0 || sylva_world_add_plant(w, &p1, NULL) < 0 ||
-      sylva_world_add_plant(w, &p2, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {
-    sylva_world_destroy(w);
-    return NULL;
-  }
-  const sylva_journal *j;
-  for (int i = 0; i < iterations; i++)
-    if (sylva_world_step(w, &j) < 0) break;
-  return w;
+  static const sylva_obstacle_def wall = {
+      "wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID};
+  return export_world(0x4a7f35, 0x4a7f35, &wall, 1, iterations);
 }
 
 /* The nodes of a world with their topology, and the ring layout of mesh.h. */
@@ -132,20 +116,10 @@ static void expected_counts(const model *m, int sides, bool boxes, size_t *v, si
 
 /* ---- writing into memory ---- */
 
-typedef struct blob {
-  char *data;
-  size_t size;
-  int rc;
-} blob;
-
 static blob write_blob(const sylva_world *w, sylva_mesh_format format,
                        const sylva_mesh_options *opt) {
-  blob b = {NULL, 0, 0};
-  FILE *f = open_memstream(&b.data, &b.size);
-  if (!f) {
-    fprintf(stderr, "open_memstream failed\n");
-    exit(1);
-  }
+  blob b;
+  FILE *f = blob_open(&b);
   b.rc = sylva_mesh_write(f, w, format, opt);
   fclose(f);
   return b;
@@ -780,17 +754,13 @@ static void test_options(void) {
   free(b.data);
 }
 
+static int write_obj(FILE *f, const void *w) { return sylva_mesh_write(f, w, SYLVA_MESH_OBJ, NULL); }
+
 /* A failed write is SYLVA_MESH_EWRITE with errno kept. */
 static void test_write_error(void) {
-  const sylva_world *w = the_world();
-  /* /dev/full fails every write with ENOSPC once the stream's buffer is flushed */
-  FILE *f = fopen("/dev/full", "w");
-  CHECK(f != NULL);
-  if (!f) return;
-  errno = 0;
-  CHECK_INT(sylva_mesh_write(f, w, SYLVA_MESH_OBJ, NULL), SYLVA_MESH_EWRITE);
-  CHECK_INT(errno, ENOSPC);
-  fclose(f);
+  int err;
+  CHECK_INT(write_to_full(write_obj, the_world(), &err), SYLVA_MESH_EWRITE);
+  CHECK_INT(err, ENOSPC);
 }
 
 /* An empty world exports nothing; with a box, the box alone. */

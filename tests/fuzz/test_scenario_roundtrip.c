@@ -1,6 +1,8 @@
 /* Replays the shipped scenarios through parse -> canonical JSON -> parse, and
  * checks that both forms build the same world and grow it identically; then a
- * few fixed cases of the scenario rules and of the encoders. */
+ * few fixed cases of the scenario rules and of the encoders, and the library's
+ * foliage table. */
+#include <cjson/cJSON.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -12,6 +14,7 @@
 #include "../read_file.h"
 #include "sylva/encode.h"
 #include "sylva/json_check.h"
+#include "sylva/library.h"
 #include "sylva/scenario.h"
 
 /* CHECK with a printf-style message. */
@@ -241,25 +244,38 @@ static void test_done_line(void) {
   free(done);
 }
 
+/* The stats line of the first iteration of s's world (malloc'd; NULL when the world
+ * does not build or step), with its first stem's measures in *first. */
+static char *first_stats_line(sylva_scenario *s, double elapsed_ms, sylva_stem_stats *first) {
+  sylva_world *w = NULL;
+  char err[256] = "";
+  EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
+  if (!w) return NULL;
+  const sylva_journal *j;
+  char *line = NULL;
+  int rc = sylva_world_step(w, &j);
+  EXPECT(rc == 0, "step: %d", rc);
+  if (rc == 0) {
+    line = sylva_encode_stats_line(w, j, elapsed_ms, s->start_year);
+    if (j->stem_count) *first = j->stats[0];
+  }
+  sylva_world_destroy(w);
+  return line;
+}
+
 /* A label with quotes, a backslash and a newline is escaped in the stats line. */
 static void test_odd_label(void) {
   const char *odd = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD
                     ", \"species\": {\"s\": {}}, \"plants\": [{\"id\": \"a\\\"b\\\\c\\nd\", "
                     "\"species\": \"s\", \"roots\": [[0, 0, 0]]}]}";
   sylva_scenario *s = parse_ok("odd label", odd, strlen(odd));
-  sylva_world *w = NULL;
-  char err[256] = "";
-  if (s) EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
-  if (w) {
-    const sylva_journal *j;
-    EXPECT(sylva_world_step(w, &j) == 0, "step");
-    char *line = sylva_encode_stats_line(w, j, 12.46, 0);
-    EXPECT(line && strstr(line, "{\"iteration\": 1, \"elapsed_ms\": 12.5, \"stems\": [{\"plant\": "
-                                "\"a\\\"b\\\\c\\nd\", \"stem\": 0, \"height\": ") == line,
-           "%s", line ? line : "(null)");
-    free(line);
-    sylva_world_destroy(w);
-  }
+  if (!s) return;
+  sylva_stem_stats first;
+  char *line = first_stats_line(s, 12.46, &first);
+  EXPECT(line && strstr(line, "{\"iteration\": 1, \"elapsed_ms\": 12.5, \"stems\": [{\"plant\": "
+                              "\"a\\\"b\\\\c\\nd\", \"stem\": 0, \"height\": ") == line,
+         "%s", line ? line : "(null)");
+  free(line);
   sylva_scenario_free(s);
 }
 
@@ -329,26 +345,109 @@ static void test_years(void) {
              !strstr(oak, "\"years\""),
          "canonical species: %s", json ? json : "(null)");
   free(json);
-  sylva_world *w = NULL;
-  char err[256] = "";
-  EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
-  if (w) {
-    const sylva_journal *j;
-    EXPECT(sylva_world_step(w, &j) == 0, "step");
-    char *line = sylva_encode_stats_line(w, j, 0, s->start_year);
-    EXPECT(line && strstr(line, "{\"iteration\": 1, \"year\": 2028, \"elapsed_ms\": 0, ") == line &&
-               strstr(line, "\"plant\": \"young\", \"stem\": 0, \"age\": 1, \"height\": ") &&
-               strstr(line, "\"plant\": \"old\", \"stem\": 0, \"age\": 4, \"height\": ") &&
-               strstr(line, "\"plant\": \"igm\", \"stem\": 0, \"age\": null, \"height\": "),
-           "%s", line ? line : "(null)");
+  sylva_stem_stats first;
+  char *line = first_stats_line(s, 0, &first);
+  EXPECT(line && strstr(line, "{\"iteration\": 1, \"year\": 2028, \"elapsed_ms\": 0, ") == line &&
+             strstr(line, "\"plant\": \"young\", \"stem\": 0, \"age\": 1, \"height\": ") &&
+             strstr(line, "\"plant\": \"old\", \"stem\": 0, \"age\": 4, \"height\": ") &&
+             strstr(line, "\"plant\": \"igm\", \"stem\": 0, \"age\": null, \"height\": "),
+         "%s", line ? line : "(null)");
+  if (line) {
     char width[SYLVA_FMT_BUFSIZE], want[2 * SYLVA_FMT_BUFSIZE + 64];
-    sylva_fmt_fixed(width, sizeof width, j->stats[0].crown_width, 4);
+    sylva_fmt_fixed(width, sizeof width, first.crown_width, 4);
     snprintf(want, sizeof want, "\"crown_width\": %s, \"crown_diameter\": %s, ", width, width);
-    EXPECT(line && strstr(line, want), "%s in %s", want, line ? line : "(null)");
-    free(line);
-    sylva_world_destroy(w);
+    EXPECT(strstr(line, want), "%s in %s", want, line);
   }
+  free(line);
   sylva_scenario_free(s);
+}
+
+/* Foliage keys: a species' non-default leaf_size, leaf_density and leaf_colour in
+ * its canonical form and read back; a species at the defaults writes none of them;
+ * the stats line's leaf_area is the stem's, with 4 decimals. */
+static void test_foliage(void) {
+  const char *text = "{\"format\": \"sylva.scenario/1\", " MINIMAL_WORLD
+                     ", \"species\": {\"leafy\": {\"preset\": \"igm-fig11\", \"leaf_size\": 0.25,"
+                     " \"leaf_density\": 12, \"leaf_colour\": \"#1A2b3c\"}, \"plain\": {}},"
+                     " \"plants\": [{\"id\": \"t\", \"species\": \"leafy\", \"roots\": [[0, 0, 0]]}]}";
+  sylva_scenario *a = parse_ok("foliage", text, strlen(text));
+  if (!a) return;
+  const sylva_species_def *d = &a->species[0].def;
+  EXPECT(d->leaf_size == 0.25 && d->leaf_density == 12 && d->leaf_colour == 0x1a2b3c,
+         "parsed: %g %d %06x", d->leaf_size, d->leaf_density, (unsigned)d->leaf_colour);
+  char *json = sylva_scenario_json(a);
+  const char *plain = json ? strstr(json, "\"plain\": {") : NULL;
+  EXPECT(json && strstr(json, "\"leaf_size\": 0.25") && strstr(json, "\"leaf_density\": 12") &&
+             strstr(json, "\"leaf_colour\": \"#1a2b3c\"") && plain &&
+             !strstr(plain, "\"leaf_size\"") && !strstr(plain, "\"leaf_density\"") &&
+             !strstr(plain, "\"leaf_colour\""),
+         "canonical: %s", json ? json : "(null)");
+  sylva_scenario *b = json ? parse_ok("canonical foliage", json, strlen(json)) : NULL;
+  char *again = b ? sylva_scenario_json(b) : NULL;
+  if (b) {
+    const sylva_species_def *e = &b->species[0].def;
+    EXPECT(e->leaf_size == d->leaf_size && e->leaf_density == d->leaf_density &&
+               e->leaf_colour == d->leaf_colour && again && strcmp(json, again) == 0,
+           "read back: %g %d %06x", e->leaf_size, e->leaf_density, (unsigned)e->leaf_colour);
+  }
+  free(again);
+  free(json);
+  sylva_scenario_free(b);
+  sylva_stem_stats first;
+  char *line = first_stats_line(a, 0, &first);
+  if (line) {
+    char area[SYLVA_FMT_BUFSIZE], want[SYLVA_FMT_BUFSIZE + 64];
+    sylva_fmt_fixed(area, sizeof area, first.leaf_area, 4);
+    snprintf(want, sizeof want, "\"leaf_area\": %s, \"nodes\": ", area);
+    EXPECT(first.leaf_area > 0 && strstr(line, want), "%s in %s", want, line);
+  }
+  free(line);
+  sylva_scenario_free(a);
+}
+
+/* The library's foliage (data/species/foliage.csv, docs/species.md "Foliage"): one
+ * row per species code of the library and none other, each row's kind broadleaf or
+ * needle (Pinus strobus the needle one), and every library species resolved with
+ * its code's leaf_size, leaf_density and leaf_colour. */
+static void test_library_foliage(void) {
+  const char *csv = sylva_library_foliage_text(NULL);
+  EXPECT(strncmp(csv, "code,kind,leaf_size,leaf_density,leaf_colour,source\n", 52) == 0,
+         "header: %.60s", csv);
+  cJSON *doc = cJSON_Parse(sylva_library_text(NULL));
+  const cJSON *list = cJSON_GetObjectItemCaseSensitive(doc, "species");
+  EXPECT(cJSON_GetArraySize(list) > 0, "the library");
+  int rows = 0, matched = 0;
+  for (const char *line = strchr(csv, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
+    char code[16], kind[16], colour[8];
+    double size;
+    int density, n = 0;
+    EXPECT(sscanf(line + 1, "%15[^,],%15[^,],%lf,%d,%7[^,],%n", code, kind, &size, &density,
+                  colour, &n) == 5 && n > 0 && line[1 + n] != '\n',
+           "row %.60s", line + 1);
+    if (n == 0) continue;
+    rows++;
+    EXPECT(strcmp(kind, strcmp(code, "PIST") == 0 ? "needle" : "broadleaf") == 0, "%s: %s", code,
+           kind);
+    const cJSON *e;
+    int found = 0;
+    cJSON_ArrayForEach(e, list) {
+      const cJSON *c = cJSON_GetObjectItemCaseSensitive(e, "code");
+      const cJSON *name = cJSON_GetObjectItemCaseSensitive(e, "name");
+      if (!cJSON_IsString(c) || strcmp(c->valuestring, code) != 0) continue;
+      found++;
+      sylva_species_def d;
+      EXPECT(cJSON_IsString(name) && sylva_library_find(name->valuestring, &d) == 0, "%s", code);
+      EXPECT(d.leaf_size == size && d.leaf_density == density &&
+                 d.leaf_colour == (int)strtol(colour + 1, NULL, 16),
+             "%s: %g %d %06x, the table %g %d %s", code, d.leaf_size, d.leaf_density,
+             (unsigned)d.leaf_colour, size, density, colour);
+    }
+    EXPECT(found > 0, "%s: not a library code", code);
+    matched += found;
+  }
+  EXPECT(rows > 0 && matched == cJSON_GetArraySize(list), "%d rows cover %d of %d library species",
+         rows, matched, cJSON_GetArraySize(list));
+  cJSON_Delete(doc);
 }
 
 int main(int argc, char **argv) {
@@ -361,7 +460,8 @@ int main(int argc, char **argv) {
       CHECK_TEST(defaults), CHECK_TEST(species_resolution), CHECK_TEST(presets),
       CHECK_TEST(parse_errors), CHECK_TEST(no_plants), CHECK_TEST(fmt_fixed),
       CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label), CHECK_TEST(light),
-      CHECK_TEST(shipped_scenarios), CHECK_TEST(years)};
+      CHECK_TEST(shipped_scenarios), CHECK_TEST(years), CHECK_TEST(foliage),
+      CHECK_TEST(library_foliage)};
   CHECK_RUN(argc, argv, 2, tests);
   return check_summary("scenario-roundtrip");
 }

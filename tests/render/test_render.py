@@ -9,7 +9,12 @@ meson runs `python3 test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR PART`, 
             failed write), a message naming the problem, no output file;
   scenario  the scenario form, grown to its end, equals the stored run's picture;
   years     the title line (read back with `pdftotext`): a run in years from a
-            start year names the calendar year and its plants' ages, others not.
+            start year names the calendar year and its plants' ages, others not;
+  leaves    one tree with magenta leaves (leafy.json) drawn from the front with and
+            without --no-leaves: leaf-coloured pixels, shaded as render.h says, in
+            the crown's box and none in the sky above it or without leaves; the
+            same world gives the same bytes; a world whose nodes bear no leaves
+            gives the skeleton's picture.
 The layout constants and the palette are read from server/export/render.h and
 server/export/render.c, so the pixel test maps metres to pixels as the renderer does.
 """
@@ -312,6 +317,8 @@ def part_errors(env, c):
         (base + ["--seed", 3, "-o", out], 2, "--seed and --iterations need SCENARIO.json"),
         ([env.path("missing.json"), "-o", out], 2, "missing.json"),
         (["--db", env.path("nodb.db"), "--name", RUN, "-o", out], 2, "nodb.db"),
+        (base + ["--leaves", "-o", out], 2, "unknown option '--leaves'"),
+        (base + ["--no-leaves=1", "-o", out], 2, "--no-leaves takes no argument"),
     ]
     for args, status, words in cases:
         for path in (out, env.path("bad.gif"), env.path("bad")):
@@ -389,8 +396,118 @@ def part_years(env, c):
             "a title without years", title)
 
 
+LEAFY = "leafy.json"
+
+
+def leaf_coloured(p):
+    """Whether pixel p is the test's magenta leaf colour (shaded: s * (255, 0, 255),
+    s >= RENDER_LEAF_SHADE) over white or over branches, at least half covering: red
+    equals blue and both stand well above green. No branch colour, grey, text or
+    ground pixel is like that."""
+    return abs(p[0] - p[2]) <= 4 and p[0] - p[1] >= 60
+
+
+def same_bytes(a, b):
+    with open(a, "rb") as f, open(b, "rb") as g:
+        return f.read() == g.read()
+
+
+def part_leaves(env, c):
+    k = render_constants(env.server)
+    scenario = env.scenario(LEAFY)
+    with open(scenario) as f:
+        spec = json.load(f)
+    leaf_size = spec["species"]["plane"]["leaf_size"]
+    width = 800
+    leafy, bare = env.path("leafy.png"), env.path("bare.png")
+    for out, extra in ((leafy, []), (bare, ["--no-leaves"])):
+        rc, stdout, err = env.render(scenario, "--view", "front", "--width", width, *extra,
+                                     "-o", out)
+        if not c.check(rc == 0 and stdout == "" and clean_stderr(err),
+                       "render leafy.json --view front %s" % " ".join(extra), err):
+            return
+    with_leaves = FrontView(leafy, k, spec["world"], width)
+    skeleton = FrontView(bare, k, spec["world"], width)
+    c.check((with_leaves.w, with_leaves.h) == (skeleton.w, skeleton.h),
+            "leaves change no part of the layout: the same size",
+            ((with_leaves.w, with_leaves.h), (skeleton.w, skeleton.h)))
+    lo, hi = skeleton.lo, skeleton.hi
+    panel = skeleton.box(lo[0], hi[0], lo[2], hi[2], 1)
+    # the crown's box: the skeleton's pixels, widened by a leaf's edge on every side
+    wood = [(x, y) for x, y in panel if skeleton.count_tree([(x, y)])]
+    if not c.check(wood, "the skeleton is drawn"):
+        return
+    margin = leaf_size * skeleton.scale + 2
+    x0, x1 = min(x for x, _ in wood) - margin, max(x for x, _ in wood) + 1 + margin
+    y0, y1 = min(y for _, y in wood) - margin, max(y for _, y in wood) + 1 + margin
+    leaf = {}
+    for x, y in panel:
+        p = with_leaves.png.pixel(x, y)
+        if leaf_coloured(p):
+            leaf[(x, y)] = p
+    inside = [xy for xy in leaf if x0 <= xy[0] < x1 and y0 <= xy[1] < y1]
+    c.check(len(inside) >= 2000, "leaf-coloured pixels in the crown's box", len(inside))
+    sky = [(x, y) for x, y in panel if y < y0]
+    c.check(y0 - skeleton.top >= 100, "control: 100 rows of sky above the crown",
+            y0 - skeleton.top)
+    c.check(not any(xy in leaf for xy in sky), "no leaf-coloured pixel in the sky above the crown",
+            sum(1 for xy in sky if xy in leaf))
+    c.check(len(inside) == len(leaf), "no leaf-coloured pixel outside the crown's box",
+            len(leaf) - len(inside))
+    none = sum(1 for x, y in panel if leaf_coloured(skeleton.png.pixel(x, y)))
+    c.check(none == 0, "--no-leaves: no leaf-coloured pixel", none)
+    # a leaf covering its pixel whole is s * (255, 0, 255), s from RENDER_LEAF_SHADE
+    # (seen edge-on) to 1 (facing the viewer), and the crown shows several shades
+    solid = {p for p in leaf.values() if p[1] == 0}
+    least = math.floor(255 * k["RENDER_LEAF_SHADE"]) - 1
+    c.check(solid and all(least <= p[0] <= 255 and p[0] == p[2] for p in solid),
+            "whole leaf pixels are the leaf colour shaded by %g to 1" % k["RENDER_LEAF_SHADE"],
+            sorted(solid)[:5])
+    c.check(len(solid) >= 5, "the crown shows several shades of the leaf colour", len(solid))
+    leaves_deterministic(env, c, scenario)
+    no_leaves_borne(env, c, spec)
+
+
+def leaves_deterministic(env, c, scenario):
+    """Two renders of the same world with leaves give the same bytes (PNG and SVG);
+    the SVG is read by rsvg-convert; leaves show from above too."""
+    for ext in ("png", "svg"):
+        a, b = env.path("again1." + ext), env.path("again2." + ext)
+        for out in (a, b):
+            rc, _, err = env.render(scenario, "-o", out)
+            c.check(rc == 0, "render leafy.json -o %s" % os.path.basename(out), err)
+        if os.path.exists(a) and os.path.exists(b):
+            c.check(same_bytes(a, b), "the same world with leaves: the same %s bytes" % ext)
+    p = subprocess.run(["rsvg-convert", "-o", env.path("svg.png"), env.path("again1.svg")],
+                       capture_output=True)
+    c.check(p.returncode == 0, "rsvg-convert converts the SVG with leaves", p.stderr.decode())
+    top = env.path("top.png")
+    rc, _, err = env.render(scenario, "--view", "top", "-o", top)
+    if c.check(rc == 0, "render leafy.json --view top", err):
+        png = Png(top)
+        seen = sum(1 for row in range(png.height) for x in range(png.width)
+                   if leaf_coloured(png.pixel(x, row)))
+        c.check(seen >= 1000, "leaves show from above", seen)
+
+
+def no_leaves_borne(env, c, spec):
+    """A world whose nodes bear no leaves (leaf_density 0) draws the same bytes with
+    leaves as with --no-leaves: leaves add nothing else to the picture."""
+    spec = json.loads(json.dumps(spec))
+    spec["species"]["plane"]["leaf_density"] = 0
+    bare_scenario = env.path("leafless.json")
+    with open(bare_scenario, "w") as f:
+        json.dump(spec, f)
+    a, b = env.path("leafless-default.png"), env.path("leafless-bare.png")
+    rc1, _, err1 = env.render(bare_scenario, "-o", a)
+    rc2, _, err2 = env.render(bare_scenario, "--no-leaves", "-o", b)
+    if c.check(rc1 == 0 and rc2 == 0, "render a world without leaves, with and without "
+               "--no-leaves", err1 + err2):
+        c.check(same_bytes(a, b), "no leaves borne: the same bytes as --no-leaves")
+
+
 PARTS = {"formats": part_formats, "pixels": part_pixels, "errors": part_errors,
-         "scenario": part_scenario, "years": part_years}
+         "scenario": part_scenario, "years": part_years, "leaves": part_leaves}
 
 
 def main():

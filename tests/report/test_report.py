@@ -33,6 +33,7 @@ ITERATIONS = 12
 YEARS = [5, 10, 12, 20]  # 20 is never reached
 MEASURES = [("height", "height"), ("dbh", "dbh"), ("crown_diameter", "crown_width"),
             ("crown_height", "crown_height")]
+CSV_MEASURES = MEASURES + [("leaf_area", "leaf_area")]  # the summary has no leaf area
 
 
 # ---- what the store holds, read here ----------------------------------------------
@@ -67,10 +68,10 @@ def expected_rows(db, sweep, years):
                                           (rid,)).fetchone()[0])
             keys = {p["id"]: p["species"] for p in scen["plants"]}
             for y in years:
-                for (stem, plant, plant_stem, age, height, dbh, cw, ch, zones, clearance,
+                for (stem, plant, plant_stem, age, height, dbh, cw, ch, la, zones, clearance,
                      pruned) in con.execute(
                         "SELECT stem, plant, plant_stem, age, height, dbh, crown_width,"
-                        " crown_height, zones, clearance, pruned FROM stats"
+                        " crown_height, leaf_area, zones, clearance, pruned FROM stats"
                         " WHERE run = ? AND iteration = ? ORDER BY stem", (rid, y)):
                     total = con.execute("SELECT SUM(pruned) FROM stats WHERE run = ? AND"
                                         " stem = ? AND iteration <= ?",
@@ -81,6 +82,7 @@ def expected_rows(db, sweep, years):
                                  "species": species, "key": key, "age": age,
                                  "year": start + y, "iteration": y, "height": height,
                                  "dbh": dbh, "crown_width": cw, "crown_height": ch,
+                                 "leaf_area": la,
                                  "zones": json.loads(zones) if zones else None,
                                  "clearance": json.loads(clearance) if clearance else None,
                                  "pruned": total if pruned is not None else None})
@@ -108,10 +110,9 @@ def check_csv(c, path, expect, axes, multi_stem):
     obstacles = [h[len("clearance_"):] for h in header if h.startswith("clearance_")]
     want_head = (["run"] + axes + ["plant"] + (["stem"] if multi_stem else [])
                  + ["species", "age", "year", "height", "dbh", "crown_diameter",
-                    "crown_height"])
+                    "crown_height", "leaf_area"])
     c.check(header[:len(want_head)] == want_head, "CSV header starts " + ",".join(want_head),
             header)
-    c.check("leaf_area" not in header, "no leaf_area column (it is not stored)")
     c.check(len(rows) == len(expect), "CSV has one row per stored stem and reached year",
             "%d rows, %d expected" % (len(rows), len(expect)))
     bad = []
@@ -127,7 +128,7 @@ def check_csv(c, path, expect, axes, multi_stem):
             bad.append((i, "age", f["age"], e["age"]))
         if int(f["year"]) != e["year"]:
             bad.append((i, "year", f["year"], e["year"]))
-        for col, key in MEASURES:
+        for col, key in CSV_MEASURES:
             if number(f[col]) != e[key]:
                 bad.append((i, col, f[col], e[key]))
         for z in zones:
@@ -141,6 +142,8 @@ def check_csv(c, path, expect, axes, multi_stem):
         if "pruned" in f and number(f["pruned"]) != e["pruned"]:
             bad.append((i, "pruned", f["pruned"], e["pruned"]))
     c.check(not bad, "every CSV value equals the stored stats", bad[:10])
+    c.check(all(e["leaf_area"] is not None for e in expect) and any(e["leaf_area"] for e in expect),
+            "the leaf_area column holds stored leaf areas (some above 0)")
     return header, rows, zones
 
 

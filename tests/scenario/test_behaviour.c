@@ -13,9 +13,9 @@
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
 
-#define GOLDEN_WALL 0xe1f329a86f9bbbaeull
-#define GOLDEN_STAND 0xa278c5b6603914e8ull
-#define GOLDEN_SHRUB 0x53f5502d41063e97ull
+#define GOLDEN_WALL 0xbac9864901de375full
+#define GOLDEN_STAND 0xa1ee8bbef7f65fb9ull
+#define GOLDEN_SHRUB 0xe4fce69f387cd0b4ull
 
 static sylva_scenario *load(const char *name) {
   return scenario_file(SOURCE_ROOT "/scenarios", name);

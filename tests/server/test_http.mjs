@@ -27,14 +27,14 @@ async function get(d, path) {
 }
 
 const TYPES = { skeleton: /^application\/json/, obj: /^text\/plain/, ply: /^application\/octet-stream/,
-  csv: /^text\/csv/ };
-const EXTENSIONS = { skeleton: 'json', obj: 'obj', ply: 'ply', csv: 'csv' };
+  csv: /^text\/csv/, glb: /^model\/gltf-binary$/ };
+const EXTENSIONS = { skeleton: 'json', obj: 'obj', ply: 'ply', csv: 'csv', glb: 'glb' };
 
 test('export: every format at a middle and the last iteration, byte for byte as the CLI', () => withDaemon({}, async (d) => {
   await grown(d, 'wall.json', 'wall', 12);
   // 7 lies between the snapshots of 5 and 10: regrown, as the CLI does
   for (const iteration of [7, 12]) {
-    for (const format of ['skeleton', 'obj', 'ply', 'csv']) {
+    for (const format of ['skeleton', 'obj', 'ply', 'csv', 'glb']) {
       const r = await get(d, `/api/runs/wall/export?format=${format}&iteration=${iteration}`);
       assert.equal(r.status, 200, `${format} ${iteration}: ${r.body}`);
       assert.match(r.headers.get('content-type'), TYPES[format]);
@@ -43,7 +43,7 @@ test('export: every format at a middle and the last iteration, byte for byte as 
       assert.equal(Number(r.headers.get('content-length')), r.body.length);
       assert.ok(r.body.equals(exportBytes(d.db, 'wall', format, iteration)), `${format} ${iteration}`);
     }
-    for (const format of ['obj', 'ply']) {
+    for (const format of ['obj', 'ply', 'glb']) {
       const r = await get(d, `/api/runs/wall/export?iteration=${iteration}&obstacles=1&format=${format}`);
       assert.equal(r.status, 200);
       const cli = exportBytes(d.db, 'wall', format, iteration, ['--obstacles']);
@@ -74,9 +74,9 @@ test('export: bad parameters get 400 and unknown runs 404, each with a line nami
     ['wall/export?format=obj&iteration=-1', 400, 'iteration: expected an integer from 0 to 12, got "-1"'],
     ['wall/export?format=obj&iteration=2.5', 400, 'iteration: expected an integer from 0 to 12, got "2.5"'],
     ['wall/export?format=obj&iteration=', 400, 'iteration: expected an integer from 0 to 12, got ""'],
-    ['wall/export?format=stl', 400, 'format: "stl" is not skeleton, obj, ply or csv'],
-    ['wall/export', 400, 'format: required (skeleton, obj, ply or csv)'],
-    ['wall/export?iteration=3', 400, 'format: required (skeleton, obj, ply or csv)'],
+    ['wall/export?format=stl', 400, 'format: "stl" is not skeleton, obj, ply, csv or glb'],
+    ['wall/export', 400, 'format: required (skeleton, obj, ply, csv or glb)'],
+    ['wall/export?iteration=3', 400, 'format: required (skeleton, obj, ply, csv or glb)'],
     ['wall/export?format=obj&format=ply', 400, 'format: given more than once'],
     ['wall/export?format=obj&obstacles=yes', 400, 'obstacles: expected 1 or 0, got "yes"'],
     ['wall/export?format=obj&sides=5', 400,

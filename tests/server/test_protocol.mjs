@@ -25,6 +25,18 @@ test('HTTP: /healthz, /metrics, /api/runs, and 404', async () => {
   }
 });
 
+// Each stem's leaf_area in a message's stats (one species, msg.foliage[0]) is the
+// leaves the model holds on its nodes x pi/4 x leaf_size^2 (docs/model.md, "Foliage").
+function checkLeafArea(model, msg) {
+  const { leaf_size: size } = msg.foliage[0];
+  for (const st of msg.stats) {
+    const plant = model.plants.find((p) => p.id === st.plant);
+    let leaves = 0;
+    for (const id of plant.stems[st.stem].nodes.keys()) leaves += model.leaves.get(id) ?? 0;
+    assert.equal(st.leaf_area, Number((leaves * Math.PI / 4 * size * size).toFixed(4)), `leaf_area of ${st.plant}/${st.stem}`);
+  }
+}
+
 test('create, subscribe, step: snapshot + deltas equal the stored export', async () => {
   const d = await startDaemon();
   try {
@@ -43,16 +55,29 @@ test('create, subscribe, step: snapshot + deltas equal the stored export', async
     assert.equal(snap.iteration, 0);
     const model = new Model(snap);
     assert.equal(model.plantsJSON(), plantsJSON(exportSkeleton(d.db, 'stand', 0)));
+    // the species' foliage, and the initial trunks' leaves
+    assert.deepEqual(snap.foliage, [{ species: 'broadleaf', leaf_size: 0.1, leaf_density: 6, leaf_colour: '#4a7f35' }]);
+    assert.deepEqual(snap.plant_species, [0, 0, 0, 0, 0]);
+    assert.ok(snap.leaves.length > 0 && snap.leaves.every(([, n]) => n === 6), 'the trunks bear leaves');
+    checkLeafArea(model, snap);
     c.send({ type: 'control', run, action: 'step', count: 4, id: 2 });
     const st = await c.type('status');
     assert.equal(st.status, 'paused');
+    let lost = 0;
     for (let i = 1; i <= 4; i++) {
       const delta = await c.type('delta');
       assert.equal(delta.iteration, i);
       assert.equal(delta.stats.length, 5);
+      lost += delta.leaves.filter(([, n]) => n === 0).length;
       model.apply(delta);
       assert.equal(model.plantsJSON(), plantsJSON(exportSkeleton(d.db, 'stand', i)), `iteration ${i}`);
+      checkLeafArea(model, { ...delta, foliage: snap.foliage });
+      // the leaves held are those of the stored iteration, regrown
+      c.send({ type: 'get', run, iteration: i, id: `g${i}` });
+      const stored = await c.type('snapshot');
+      assert.deepEqual(model.leavesList(), stored.leaves, `leaves at iteration ${i}`);
     }
+    assert.ok(lost > 0, 'nodes lose their leaves');
     // a late subscriber, and a resubscriber with since, end equal too
     const late = await connect(d.url);
     late.send({ type: 'subscribe', run });
@@ -80,6 +105,13 @@ test('create, subscribe, step: snapshot + deltas equal the stored export', async
     const final = plantsJSON(exportSkeleton(d.db, 'stand'));
     assert.equal(model.plantsJSON(), final);
     assert.equal(lateModel.plantsJSON(), final);
+    const fresh = await connect(d.url);
+    fresh.send({ type: 'subscribe', run });
+    const finalSnap = await fresh.type('snapshot');
+    fresh.close();
+    assert.deepEqual(model.leavesList(), finalSnap.leaves);
+    assert.deepEqual(lateModel.leavesList(), finalSnap.leaves);
+    checkLeafArea(model, finalSnap);
     const csv = await (await fetch(`${d.http}/api/runs/stand/stats.csv`)).text();
     assert.equal(csv.trim().split('\n').length, 1 + 12 * 5);
     const m = await (await fetch(`${d.http}/metrics`)).text();
@@ -359,15 +391,19 @@ test('zones and pruning: stats carry pruned, zones and clearance as stored; prun
     // the stored stats (CSV) equal the streamed ones
     const csv = (await (await fetch(`${d.http}/api/runs/${encodeURIComponent('street "a"')}/stats.csv`)).text())
       .trim().split('\n');
-    // street.json's planes grow in years: their four columns follow the conflicts
+    // the leaf area follows the conflicts, and street.json's planes grow in years:
+    // their four columns come last
     const years = /,age,year,crown_diameter,crown_height$/.test(csv[0]);
-    assert.match(csv[0], years ? /,pruned,zones,clearance,age,year,crown_diameter,crown_height$/
-      : /,pruned,zones,clearance$/);
-    const lastRows = csv.slice(1).filter((r) => r.startsWith('9,'))
-      .map((r) => (years ? r.replace(/(,[^,]*){4}$/, '') : r));
+    assert.match(csv[0], years ? /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height$/
+      : /,pruned,zones,clearance,leaf_area$/);
+    const tail = new RegExp(`,([^,]*)(,[^,]*){${years ? 4 : 0}}$`);
+    const lastRows = csv.slice(1).filter((r) => r.startsWith('9,'));
     assert.equal(lastRows.length, last.length);
+    assert.ok(last.every((st) => st.leaf_area > 0), 'every stem has leaves');
     for (let k = 0; k < last.length; k++) {
-      const m = /,(\d+),"?(\{.*?\})"?,"?(\{.*\})"?$/.exec(lastRows[k]);
+      const t = tail.exec(lastRows[k]);
+      assert.equal(Number(t[1]), last[k].leaf_area, `leaf_area of ${lastRows[k]}`);
+      const m = /,(\d+),"?(\{.*?\})"?,"?(\{.*\})"?$/.exec(lastRows[k].slice(0, t.index));
       assert.ok(m, lastRows[k]);
       assert.equal(Number(m[1]), last[k].pruned);
       assert.deepEqual(JSON.parse(m[2].replaceAll('""', '"')), last[k].zones);
@@ -485,11 +521,12 @@ test('years: start year, ages and crown measures in snapshots, deltas, status, s
   });
   const last = deltas.at(-1).stats;
   assert.ok(last.some((st) => st.crown_height > 0), 'a crown has a height');
+  assert.ok(last.every((st) => st.leaf_area > 0), 'every stem has a leaf area');
   const lane = last[1].zones.lane;
   assert.ok(lane && lane.first > 2027 && lane.first <= 2035, `the old tree entered the lane: ${JSON.stringify(last[1].zones)}`);
   // stats.csv: the CLI's stored run exports the same bytes
   const csv = await (await fetch(`${d.http}/api/runs/years/stats.csv`)).text();
-  assert.match(csv.split('\n')[0], /,pruned,zones,clearance,age,year,crown_diameter,crown_height$/);
+  assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height$/);
   assert.equal(csv, exportBytes(join(d.dir, 'cli.db'), 'Trees in years', 'csv').toString());
   // /metrics: the run's year and each aged plant's age
   let metrics = await (await fetch(`${d.http}/metrics`)).text();
@@ -576,7 +613,7 @@ test('years: a run without a start year or years carries none of their fields', 
     for (const key of ['age', 'crown_diameter', 'crown_height']) assert.equal(key in delta.stats[0], false, key);
     await c.type('delta', 60000);
     const csv = await (await fetch(`${d.http}/api/runs/plain/stats.csv`)).text();
-    assert.match(csv.split('\n')[0], /,pruned,zones,clearance$/);
+    assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area$/);
     const metrics = await (await fetch(`${d.http}/metrics`)).text();
     assert.doesNotMatch(metrics, /^sylva_run_year\{/m);
     assert.doesNotMatch(metrics, /^sylva_plant_age\{/m);

@@ -8,7 +8,8 @@
   regrown from an earlier snapshot) equals `sylva run --iterations T --export`;
 - `sylva runs` lists the run: finished, limit, 10/10;
 - CSV: one header line, one row per stem and iteration 1..last, every value as
-  on the stats lines of `sylva run`; --iteration T cuts it at T;
+  on the stats lines of `sylva run` (leaf_area too, and the stats table's
+  leaf_area column rounds to the lines'); --iteration T cuts it at T;
 - resume after a clean stop (--iterations 5, then resume --iterations 10):
   exactly the uninterrupted lines 6..10 and the done line, the same final
   skeleton and the same CSV; resume of a run at its limit prints only the
@@ -38,7 +39,7 @@ from store_common import (Checks, Env, crash_text, query, read_bytes,  # noqa: E
 ITERATIONS = 10
 SNAPSHOT_EVERY = 3
 HEADER = ("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished,"
-          "pruned,zones,clearance")
+          "pruned,zones,clearance,leaf_area")
 
 
 def main():
@@ -237,7 +238,7 @@ def years(env, c):
     want = [[text(s["age"]), str(o["year"]), text(s["crown_diameter"]), text(s["crown_height"])]
             for o in objs for s in o["stems"]]
     # the lines print lengths with at most 4 decimals, as the CSV does
-    got = [r[15:] for r in records[1:]]
+    got = [r[16:] for r in records[1:]]
     c.check(got == want, "years: the CSV's years columns equal the lines'",
             "\n".join("%r != %r" % (g, w) for g, w in zip(got, want) if g != w)[:2000])
     c.check(query(db, "SELECT start_year FROM runs") == [(2027,)], "years: runs.start_year")
@@ -329,7 +330,7 @@ def check_csv(env, c, db, name, lines, stems):
     rows = text.splitlines()
     # a run in years (street.json's planes) carries the years columns after the rest
     in_years = rows[0] == ",".join([HEADER] + YEARS_COLUMNS)
-    width = 15 + (len(YEARS_COLUMNS) if in_years else 0)
+    width = 16 + (len(YEARS_COLUMNS) if in_years else 0)
     c.check(rows[0] == HEADER or in_years, "CSV header", rows[0])
     c.check(sum(1 for r in rows if r.startswith("iteration,")) == 1, "exactly one header line")
     records = list(csv.reader(io.StringIO("\n".join(rows[1:]))))
@@ -349,17 +350,25 @@ def check_csv(env, c, db, name, lines, stems):
         obj = lambda v: None if v == "" else json.loads(v)  # noqa: E731
         got = (int(rec[0]), rec[1], int(rec[2]), num(rec[3]), num(rec[4]), num(rec[5]),
                num(rec[6]), int(rec[7]), int(rec[8]), num(rec[9]), int(rec[10]), rec[11],
-               None if rec[12] == "" else int(rec[12]), obj(rec[13]), obj(rec[14]))
+               None if rec[12] == "" else int(rec[12]), obj(rec[13]), obj(rec[14]), num(rec[15]))
         want = (it, s["plant"], s["stem"], s["height"], s["dbh"], s["crown_width"],
                 s["crown_base"], s["nodes"], s["shed"], s["light"], s["cap"],
                 "true" if s["finished"] else "false", s.get("pruned"), s.get("zones"),
-                s.get("clearance"))
+                s.get("clearance"), s["leaf_area"])
         if got != want:
             mismatches.append("row %d: %r != %r" % (i + 1, got, want))
     c.check(len(expected) == len(records) and not mismatches,
             "every CSV row equals the stats line of its iteration and stem "
-            "(height, dbh, crown, nodes, shed, light, cap, finished, pruned, zones, clearance)",
+            "(height, dbh, crown, nodes, shed, light, cap, finished, pruned, zones, clearance, "
+            "leaf_area)",
             "\n".join(mismatches[:10]))
+    # the store keeps the measured double; the lines and the CSV print it to 4 decimals
+    stored = [round(v, 4) if v is not None else None for (v,) in query(
+        db, "SELECT s.leaf_area FROM stats s JOIN runs r ON r.id = s.run WHERE r.name = ?"
+        " ORDER BY s.iteration, s.stem", (name,))]
+    c.check(stored == [s["leaf_area"] for _, s in expected] and any(stored),
+            "the stats table's leaf_area equals the lines' (to their 4 decimals), some above 0",
+            "%r != %r" % (stored[:6], [s["leaf_area"] for _, s in expected][:6]))
     rc, data, err = env.export(db, name, fmt="csv", iteration=4)
     c.check(rc == 0 and data is not None and
             data.decode().splitlines() == rows[:1 + 4 * stems],

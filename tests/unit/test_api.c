@@ -1,7 +1,8 @@
 /* The public API's contract for bad ids (a negative status or NULL, and nothing
  * changes), the species field list (sylva/species_fields.h): its defaults, its
  * ranges as sylva_species_check applies them, and a snapshot that keeps every field;
- * and, in debug builds, the phase checks that stop a step on a broken invariant. */
+ * each stem's leaf_area against its leaf-bearing nodes; and, in debug builds, the phase checks that stop a step on a broken invariant. */
+#include <math.h>
 #include <signal.h>
 #include <stddef.h>
 #include <string.h>
@@ -145,6 +146,17 @@ static void test_species_fields(void) {
 #undef REPORTED_species
 #undef REPORTED_markers
 
+/* w saved to a snapshot image and loaded again (NULL if either failed). */
+static sylva_world *snapshot_copy(const sylva_world *w) {
+  uint8_t *img = NULL;
+  size_t n = 0;
+  sylva_world *r = NULL;
+  CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
+  if (img) CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
+  sylva_free(img);
+  return r;
+}
+
 /* A species whose every field differs from the default survives a snapshot. */
 static void test_species_snapshot(void) {
   sylva_world_def wd = sylva_default_world_def();
@@ -162,11 +174,7 @@ static void test_species_snapshot(void) {
   d.tropism[0] = 0.1, d.tropism[1] = -0.2, d.tropism[2] = 0.7;
   CHECK_INT(sylva_species_check(&d, NULL), 0);
   CHECK_INT(sylva_world_add_species(w, &d, "odd"), 0);
-  uint8_t *img = NULL;
-  size_t n = 0;
-  CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
-  sylva_world *r = NULL;
-  CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
+  sylva_world *r = snapshot_copy(w);
   if (r) {
     const sylva_species_def *e = sylva_world_species(r, 0);
     CHECK(e != NULL);
@@ -180,7 +188,76 @@ static void test_species_snapshot(void) {
       CHECK(memcmp(e->tropism, d.tropism, sizeof d.tropism) == 0);
     }
   }
-  sylva_free(img);
+  sylva_world_destroy(r);
+  sylva_world_destroy(w);
+}
+
+/* Checks every stem's leaf_area against its nodes: leaf-bearing nodes (those whose
+ * `leaves` is not 0, each with its species' leaf_density) x leaf_density x
+ * SYLVA_LEAF_FILL x leaf_size^2; for a species without years a node bears leaves
+ * exactly while the next iteration's age is at most leaf_age (docs/model.md,
+ * "Foliage"). Returns the leaf-bearing nodes counted. */
+static size_t check_leaf_area(const sylva_world *w) {
+  enum { STEMS = 3 };
+  size_t leafy[STEMS] = {0}, counted = 0;
+  int iteration = sylva_world_iteration(w);
+  CHECK_INT(sylva_world_stem_count(w), STEMS);
+  for (size_t i = 0; i < sylva_world_node_count(w); i++) {
+    sylva_node_info n;
+    CHECK_INT(sylva_world_node_at(w, i, &n), 0);
+    int k = sylva_world_stem_index(w, n.plant, n.stem);
+    if (k < 0 || k >= STEMS) continue;
+    const sylva_species_def *d = sylva_world_species(w, sylva_world_plant_species(w, n.plant));
+    if (!d) continue;
+    CHECK(n.leaves == 0 || n.leaves == d->leaf_density);
+    if (!d->years) CHECK((n.leaves != 0) == (iteration + 1 - n.birth <= d->leaf_age));
+    if (n.leaves) leafy[k]++, counted++;
+  }
+  for (int k = 0; k < STEMS; k++) {
+    sylva_stem_stats st;
+    CHECK_INT(sylva_world_stem_stats(w, k, &st), 0);
+    const sylva_species_def *d = sylva_world_species(w, sylva_world_plant_species(w, st.plant));
+    if (!d) continue;
+    double want = (double)leafy[k] * d->leaf_density * SYLVA_LEAF_FILL * d->leaf_size * d->leaf_size;
+    CHECK(fabs(st.leaf_area - want) <= 1e-12 * want);
+    if (fabs(st.leaf_area - want) > 1e-12 * want)
+      fprintf(stderr, "iteration %d stem %d: leaf_area %.17g, %zu leaf-bearing nodes give %.17g\n",
+              iteration, k, st.leaf_area, leafy[k], want);
+  }
+  return counted;
+}
+
+/* leaf_area, every iteration of a shrub of the default species and a tree of a
+ * species in years with its own foliage, and in a world read back from a snapshot. */
+static void test_leaf_area(void) {
+  sylva_world *w = small_world();
+  CHECK(w != NULL);
+  if (!w) return;
+  sylva_species_def big = sylva_default_species_def();
+  big.years = 1;
+  big.leaf_size = 0.3;
+  big.leaf_density = 4;
+  big.leaf_colour = 0x2d5047;
+  double root[1][3] = {{-1, 1, 0}};
+  sylva_plant_def tree = {sylva_world_add_species(w, &big, "pine"), "tree",
+                          (const double(*)[3])root, 1, 0, NULL, 0};
+  CHECK(sylva_world_add_plant(w, &tree, NULL) >= 0);
+  size_t counted = 0;
+  for (int t = 1; t <= 14; t++) {
+    CHECK_INT(sylva_world_step(w, NULL), 0);
+    counted += check_leaf_area(w);
+  }
+  CHECK(counted > 0);
+  sylva_world *r = snapshot_copy(w);
+  if (r) {
+    check_leaf_area(r);
+    for (int k = 0; k < 3; k++) {
+      sylva_stem_stats a, b;
+      CHECK_INT(sylva_world_stem_stats(w, k, &a), 0);
+      CHECK_INT(sylva_world_stem_stats(r, k, &b), 0);
+      CHECK(a.leaf_area == b.leaf_area);
+    }
+  }
   sylva_world_destroy(r);
   sylva_world_destroy(w);
 }
@@ -230,7 +307,8 @@ int main(int argc, char **argv) {
 #ifndef NDEBUG
       CHECK_TEST(phase_checks),
 #endif
-      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot)};
+      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot),
+      CHECK_TEST(leaf_area)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");
 }

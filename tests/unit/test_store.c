@@ -1,6 +1,7 @@
 /* The store module on a real SQLite file: schema marks, runs, iterations with and
  * without snapshots, stats rows (with the ages and start year of a run in years),
- * the command log, restoring with fallback, migrations of older schemas, and
+ * the command log, restoring with fallback, migrations of older schemas (leaf areas
+ * NULL in the rows of a store before foliage), and
  * refusal of foreign and newer files. */
 #include <math.h>
 #include <sqlite3.h>
@@ -272,10 +273,14 @@ static int first_row(const store_stats_row *r, void *ctx) {
   return 0;
 }
 
-/* The tables schema 4 added and the columns schema 3 added, dropped: a store of
+/* The column schema 5 added, dropped: a store of schema 4 again. */
+#define BACK_TO_SCHEMA_4 "ALTER TABLE stats DROP COLUMN leaf_area; PRAGMA user_version = 4;"
+
+/* The tables schema 4 added and the columns schemas 5 and 3 added, dropped: a store of
  * schema 2 again. */
 #define BACK_TO_SCHEMA_2                                                                  \
-  "DROP TABLE run_axes; DROP TABLE sweep_runs; DROP TABLE sweeps;"                         \
+  BACK_TO_SCHEMA_4                                                                        \
+  " DROP TABLE run_axes; DROP TABLE sweep_runs; DROP TABLE sweeps;"                        \
   " ALTER TABLE stats DROP COLUMN age; ALTER TABLE stats DROP COLUMN crown_height;"        \
   " ALTER TABLE runs DROP COLUMN start_year; PRAGMA user_version = 2;"
 
@@ -316,18 +321,24 @@ static int user_version(const char *path) {
   return v;
 }
 
+/* The fixture's store taken back to an older schema by `sql` (which leaves it at
+ * `version`), then opened again: migrated to this build's schema. */
+static void fixture_reopen_from(fixture *f, const char *sql, int version) {
+  fixture_open(f);
+  store_close(f->st);
+  f->st = NULL;
+  exec_sql(f->path, sql);
+  CHECK_INT(user_version(f->path), version);
+  CHECK_INT(store_open(f->path, false, &f->st), 0);
+  CHECK_INT(user_version(f->path), STORE_SCHEMA_VERSION);
+}
+
 /* A store of schema 2 (before years) is migrated in place: its rows stay and read
  * without ages (age -1, crown height NaN), its runs without a start year, and the
  * run grows on into the new columns. */
 static void test_schema2_migrates(void) {
   fixture f;
-  fixture_open(&f);
-  store_close(f.st);
-  f.st = NULL;
-  exec_sql(f.path, BACK_TO_SCHEMA_2);
-  CHECK_INT(user_version(f.path), 2);
-  CHECK_INT(store_open(f.path, false, &f.st), 0);
-  CHECK_INT(user_version(f.path), STORE_SCHEMA_VERSION);
+  fixture_reopen_from(&f, BACK_TO_SCHEMA_2, 2);
   store_stats_row r = {.iteration = -1};
   if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 7, first_row, &r), 0);
   CHECK_INT(r.iteration, 1);
@@ -349,6 +360,32 @@ static void test_schema2_migrates(void) {
   rows = 0;
   if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 8, count_rows, &rows), 0);
   CHECK_INT(rows, 8 * 2);
+  fixture_close(&f);
+}
+
+/* A stats row's leaf area at iterations 1..8 (stem 0), for test_schema4_migrates. */
+static int leaf_area_row(const store_stats_row *r, void *ctx) {
+  double *out = ctx;
+  if (r->stem == 0 && r->iteration >= 1 && r->iteration <= 8) out[r->iteration] = r->leaf_area;
+  return 0;
+}
+
+/* A store of schema 4 (before foliage) is migrated in place: its rows stay and read
+ * without a leaf area (NaN), and the run grows on into the new column, which holds
+ * the stem's leaf_area as the world measures it. */
+static void test_schema4_migrates(void) {
+  fixture f;
+  fixture_reopen_from(&f, BACK_TO_SCHEMA_4, 4);
+  const sylva_journal *j;
+  CHECK_INT(sylva_world_step(f.w, &j), 0);
+  if (f.st) CHECK_INT(store_save_iteration(f.st, f.run, f.w, j, true), 0);
+  double leaf[9];
+  for (int i = 0; i < 9; i++) leaf[i] = -1.0;
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 8, leaf_area_row, leaf), 0);
+  for (int t = 1; t <= 7; t++) CHECK(isnan(leaf[t]));
+  sylva_stem_stats st;
+  CHECK_INT(sylva_world_stem_stats(f.w, 0, &st), 0);
+  CHECK(st.leaf_area > 0 && leaf[8] == st.leaf_area);
   fixture_close(&f);
 }
 
@@ -434,7 +471,8 @@ int main(int argc, char **argv) {
       CHECK_TEST(load_world), CHECK_TEST(iteration_hash), CHECK_TEST(stats_rows),
       CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
       CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused),
-      CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(years_round_trip)};
+      CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(schema4_migrates),
+      CHECK_TEST(years_round_trip)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");
 }

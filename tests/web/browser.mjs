@@ -42,11 +42,22 @@ export async function until(page, pred, what, ms = 60000) {
 }
 
 // Counts the pixels of one colour kind inside a rectangle [x0, y0, x1, y1] (null:
-// the whole picture) of a PNG screenshot, decoding it in the page. Kinds: 'tree'
-// (plant 0's green, lit or shaded) and 'highlight' (the zone highlight's red,
-// #e8112d).
+// the whole picture) of a PNG screenshot (decoded by pixels()). Kinds: 'tree'
+// (plant 0's green, lit or shaded), 'highlight' (the zone highlight's red,
+// #e8112d) and 'purple' (red and blue both well above green).
 export async function countPixels(page, png, rect, kind) {
-  return page.evaluate(async ([src, rect, kind]) => {
+  const is = {
+    tree: (r, gr, b) => gr > r + 25 && gr > b + 15,
+    highlight: (r, gr, b) => r > 150 && gr < 70 && b < 90,
+    purple: (r, gr, b) => r > gr + 25 && b > gr + 25,
+  }[kind];
+  return countWhere(await pixels(page, png), rect, is);
+}
+
+// The pixels of a PNG screenshot, decoded in the page: {w, h, d} (RGBA bytes, rows
+// from the top).
+export async function pixels(page, png) {
+  const { w, h, data } = await page.evaluate(async (src) => {
     const img = new Image();
     img.src = `data:image/png;base64,${src}`;
     await img.decode();
@@ -55,16 +66,23 @@ export async function countPixels(page, png, rect, kind) {
     c.height = img.height;
     const g = c.getContext('2d');
     g.drawImage(img, 0, 0);
-    const [x0, y0, x1, y1] = rect ?? [0, 0, img.width, img.height];
-    const w = Math.max(1, Math.round(x1 - x0)), h = Math.max(1, Math.round(y1 - y0));
-    const d = g.getImageData(Math.round(x0), Math.round(y0), w, h).data;
-    const is = kind === 'tree'
-      ? (r, gr, b) => gr > r + 25 && gr > b + 15
-      : (r, gr, b) => r > 150 && gr < 70 && b < 90;
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) if (is(d[i], d[i + 1], d[i + 2])) n++;
-    return n;
-  }, [png.toString('base64'), rect, kind]);
+    return { w: img.width, h: img.height, data: Array.from(g.getImageData(0, 0, img.width, img.height).data) };
+  }, png.toString('base64'));
+  return { w, h, d: data };
+}
+
+// Counts the decoded pixels (pixels()) for which is(r, g, b) holds inside a
+// rectangle [x0, y0, x1, y1] of CSS pixels (null: the whole picture).
+export function countWhere({ w, h, d }, rect, is) {
+  const [x0, y0, x1, y1] = rect ?? [0, 0, w, h];
+  let n = 0;
+  for (let y = Math.max(0, Math.round(y0)), ye = Math.min(h, Math.round(y1)); y < ye; y++) {
+    for (let x = Math.max(0, Math.round(x0)), xe = Math.min(w, Math.round(x1)); x < xe; x++) {
+      const i = (y * w + x) * 4;
+      if (is(d[i], d[i + 1], d[i + 2])) n++;
+    }
+  }
+  return n;
 }
 
 export const treePixels = (page, png, rect) => countPixels(page, png, rect, 'tree');

@@ -70,9 +70,14 @@ async function watchRun(page, run) {
   return until(page, (s) => s.run === run && s.seq >= 0, 'the selected run');
 }
 
-// Pixels of the zone highlight's red (#e8112d) in a screenshot of the view.
+// Pixels of the zone highlight's red (#e8112d) in a screenshot of the view. The
+// highlight is on the internodes, which the leaves may hide: it is counted on the
+// bare skeleton (the view's Leaves toggle), and the leaves shown again.
 async function highlightPixels(page) {
-  return countPixels(page, await page.locator('#view canvas').screenshot(), null, 'highlight');
+  await page.evaluate(() => { window.sylva.setLeaves(false); window.sylva.render(); });
+  const png = await page.locator('#view canvas').screenshot();
+  await page.evaluate(() => window.sylva.setLeaves(true));
+  return countPixels(page, png, null, 'highlight');
 }
 
 const near = (a, b) => a.length === b.length && a.every((v, i) => Math.abs(v - b[i]) < 1e-6);
@@ -259,7 +264,7 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
     await page.waitForFunction(() => window.sylva.plots().height?.iterations.length === 8);
     const plots = await page.evaluate(() => window.sylva.plots());
     assert.deepEqual(Object.keys(plots),
-      ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height', 'nodes', 'cap']);
+      ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height', 'leaf_area', 'nodes', 'cap']);
     const its = [1, 2, 3, 4, 5, 6, 7, 8];
     for (const key of Object.keys(plots)) {
       assert.equal(plots[key].axis, 'year', key);
@@ -269,6 +274,7 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
     const snap = await serverSnapshot(d, run);
     assert.deepEqual(plots.crown_diameter.stems['old/0'].at(-1), snap.stats[1].crown_diameter);
     assert.deepEqual(plots.crown_height.stems['old/0'].at(-1), snap.stats[1].crown_height);
+    assert.deepEqual(plots.leaf_area.stems['old/0'].at(-1), snap.stats[1].leaf_area);
 
     // the conflicts table: the year the old tree first grew into the lane; its row
     // shows that year from the store

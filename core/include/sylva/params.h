@@ -62,10 +62,19 @@ typedef struct sylva_species_def {
                                 than half of crown_max * H^crown_max_exp m for the stem's
                                 height H (0: no limit; docs/model.md, "Species in years") */
   double crown_max_exp;    /**< 0..2: the exponent of that limit */
+  /* Foliage (docs/model.md, "Foliage"): what every leaf-bearing node carries. It
+   * changes no growth. */
+  double leaf_size;        /**< m: a leaf's length, the edge of its square card */
+  int leaf_density;        /**< leaves per leaf-bearing node */
+  int leaf_colour;         /**< 0xRRGGBB, the scenario's "#rrggbb" */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */
 } sylva_species_def;
+
+/** The share of a leaf's square card its blade covers: an ellipse inscribed in the
+ *  card, pi / 4. A leaf's area is SYLVA_LEAF_FILL * leaf_size^2. */
+#define SYLVA_LEAF_FILL 0.78539816339744831
 
 /** The defaults of scenario.md (the igm-fig11 row with r_s 0.35). */
 sylva_species_def sylva_default_species_def(void);

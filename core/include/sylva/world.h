@@ -122,6 +122,8 @@ typedef struct sylva_node_info {
   int32_t plant, stem; /**< plant id, stem index within the plant */
   int32_t birth;       /**< birth iteration (0 for the initial trunk) */
   float x, y, z, radius;
+  int32_t leaves;      /**< leaves it carries: its species' leaf_density when it bears
+                            leaves (as the stats count them), else 0 */
 } sylva_node_info;
 
 /** A radius that changed in an iteration. */
@@ -136,6 +138,8 @@ typedef struct sylva_stem_stats {
   double height, dbh, crown_width, crown_base, light;
   double crown_height; /**< height - crown_base (NaN with crown_base) */
   int32_t age;         /**< years since planting (species with years), else -1 */
+  double leaf_area;    /**< m^2, one-sided: leaf-bearing nodes x leaf_density x
+                            SYLVA_LEAF_FILL x leaf_size^2 (docs/model.md, "Foliage") */
   int64_t nodes, shed;
   int64_t pruned; /**< nodes pruned at this iteration (by schedule or edit) */
   int cap;
@@ -166,11 +170,23 @@ typedef struct sylva_conflicts {
   const sylva_clearance_stat *clearances; size_t clearance_count;
 } sylva_conflicts;
 
+/** A node whose leaves changed: the leaves it carries now (0: it bears none). */
+typedef struct sylva_leaf_change {
+  int32_t id;
+  int32_t leaves;
+} sylva_leaf_change;
+
 /** What one iteration changed; valid until the next step or destroy. */
 typedef struct sylva_journal {
   int iteration;
   const sylva_node_info *added; size_t added_count;
   const sylva_radius_change *radii; size_t radii_count;
+  const sylva_leaf_change *leaves; size_t leaves_count; /**< live nodes whose leaves
+                                                             (sylva_node_info.leaves)
+                                                             differ from the last
+                                                             journal's, the nodes born
+                                                             in this step with leaves
+                                                             too; in id order */
   const int32_t *shed; size_t shed_count;        /**< roots of removed subtrees (shed or pruned) */
   const sylva_stem_stats *stats; size_t stem_count;
   const int32_t *order;                           /**< stem order of phase 4 (global stem indices) */

@@ -28,7 +28,8 @@ bool sylva_encode_years(const sylva_world *w);
 /** One line of `sylva run` (cli.md), without the newline:
  *  {"iteration": 7, "elapsed_ms": 12.5, "stems": [{"plant": "t1", "stem": 0, ...}]}
  *  Stems in global stem order (j->stats); NaN measures print null; lengths with 4
- *  decimals, light with 3, elapsed_ms with 1, all trimmed. In a world that reports
+ *  decimals, leaf_area (m^2, after crown_base or crown_height) with 4, light with 3,
+ *  elapsed_ms with 1, all trimmed. In a world that reports
  *  conflicts each stem has pruned, zones and clearance; in one with years
  *  (sylva_encode_years) age, crown_diameter and crown_height. start_year (0: none)
  *  adds "year" (start_year + iteration) after "iteration" and dates the zones'

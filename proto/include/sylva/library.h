@@ -1,7 +1,8 @@
 /* sylva: the species library, species in years calibrated to the USDA Urban Tree
  * Database (McPherson, van Doorn and Peper 2016, https://doi.org/10.2737/RDS-2016-0005)
  * by scripts/species-library. Its file, data/species/library.json, is built into
- * the binary. A library species is a preset: "preset": "utdb:NoEast:PLAC". */
+ * the binary, and so is the foliage of its species, data/species/foliage.csv. A
+ * library species is a preset: "preset": "utdb:NoEast:PLAC". */
 #ifndef SYLVA_LIBRARY_H
 #define SYLVA_LIBRARY_H
 
@@ -16,8 +17,14 @@
  *  given) receives its length. */
 const char *sylva_library_text(size_t *len);
 
-/** The species named `name` ("utdb:REGION:CODE"): 0 and *out, SYLVA_ENOTFOUND, or
- *  SYLVA_ENOMEM. */
+/** The foliage table (data/species/foliage.csv: `code,kind,leaf_size,leaf_density,
+ *  leaf_colour,source`, one row per species code), NUL-terminated; *len (if given)
+ *  receives its length. */
+const char *sylva_library_foliage_text(size_t *len);
+
+/** The species named `name` ("utdb:REGION:CODE"), with the leaf_size, leaf_density
+ *  and leaf_colour of its code's row of the foliage table: 0 and *out,
+ *  SYLVA_ENOTFOUND, SYLVA_EINVAL (a value out of its range), or SYLVA_ENOMEM. */
 int sylva_library_find(const char *name, sylva_species_def *out);
 
 /** The library's names, ", "-separated, into buf (truncated to size). */
