@@ -64,6 +64,18 @@ const conflicts = new ConflictsPanel({ watch, timeline });
 
 for (const b of document.querySelectorAll('[data-view]')) b.onclick = () => view.setView(b.dataset.view);
 
+// Leaves or the bare skeleton: the button, or L outside a text field.
+function toggleLeaves(on = !view.leaves.visible) {
+  view.setLeaves(on);
+  $('leaves-toggle').setAttribute('aria-pressed', String(on));
+}
+$('leaves-toggle').onclick = () => toggleLeaves();
+document.addEventListener('keydown', (ev) => {
+  if (ev.key !== 'l' && ev.key !== 'L') return;
+  if (ev.ctrlKey || ev.metaKey || ev.altKey || ev.target.closest?.('input, textarea, select, [contenteditable]')) return;
+  toggleLeaves();
+});
+
 // The panels that show what changed in the watched run (see watch.mjs).
 function changed(what) {
   if (what === 'switch') {
@@ -120,6 +132,11 @@ window.sylva = {
     species: watch.live.species.slice(),
     slice: light.slice,
     drawnInstances: (view.branches.mesh?.geometry.instanceCount ?? 0) - (view.branches.sk?.deadCount ?? 0),
+    leaves: view.leaves.visible,
+    drawnLeaves: view.leaves.visible ? view.leaves.live : 0,
+    leafTotal: watch.shown().leafTotal,
+    leafStride: view.leaves.stride,
+    leafBudget: view.leaves.budget,
     drawnObstacles: view.drawnBoxes('obstacle').map((b) => b.id),
     drawnZones: view.drawnBoxes('zone'),
     zones: zonesOf(watch.shown().obstacles).map((o) => o.id),
@@ -132,12 +149,14 @@ window.sylva = {
     authed: session.authed,
   }),
   timings: () => Object.fromEntries([...Object.entries(watch.timings).map(([k, v]) => [k, v.slice()]),
-    ['renderMs', view.renderMs.slice()]]),
+    ['renderMs', view.renderMs.slice()], ['frameMs', view.frameMs.slice()]]),
+  setLeaves: (on) => toggleLeaves(on),
   memory: () => ({ skeletonBytes: watch.live.bytes() + (watch.history ? watch.history.bytes() : 0) }),
   plots: () => plots.points(),
   skeleton: () => watch.shown().toExport(),
   project: (x, y, z) => view.project(x, y, z),
   setView: (name) => { view.setView(name); view.render(); },
+  orbit: (angle) => view.orbit(angle),
   render: () => view.render(),
   compare: () => compare.state(),
   compareImages: () => compare.images(),

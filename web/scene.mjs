@@ -3,10 +3,40 @@
 // parent, scaled by the node's radius), solid obstacles as translucent boxes and
 // clearance zones as fainter amber ones, the internodes inside a zone in a colour
 // of their own, the ground with a 1 m grid and labelled scales, a light-slice heat
-// map, and orbit/front/side/top cameras. z is up, as in the model.
+// map, and orbit/front/side/top cameras. z is up, as in the model. The leaves
+// (leaves.mjs) are lit by a sky light and a sun straight above (the zenith sky of
+// the model's light), which casts the crown's shadow on the ground, under a
+// sky-coloured background. The view measures its frames (frameMs: the time
+// between two frames drawn one after the other) and lowers the leaves' budget
+// of instances when they are slow.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { isZone, markInZones, zonesOf } from './zones.mjs';
+import { Leaves } from './leaves.mjs';
+import { LEAF_BUDGET_MIN } from './foliage.mjs';
+
+// Frames slower than this (ms, the median of FRAME_SAMPLES in a row) halve the
+// leaves' budget, down to LEAF_BUDGET_MIN.
+const FRAME_TARGET_MS = 50;
+const FRAME_SAMPLES = 9;
+const SKY_TOP = '#8ec3ec';
+const SKY_HORIZON = '#e4f1fb';
+
+// The background: a vertical gradient from the zenith's blue to a pale horizon.
+function skyTexture() {
+  const c = document.createElement('canvas');
+  c.width = 2;
+  c.height = 256;
+  const g = c.getContext('2d');
+  const grad = g.createLinearGradient(0, 0, 0, 256);
+  grad.addColorStop(0, SKY_TOP);
+  grad.addColorStop(1, SKY_HORIZON);
+  g.fillStyle = grad;
+  g.fillRect(0, 0, 2, 256);
+  const t = new THREE.CanvasTexture(c);
+  t.colorSpace = THREE.SRGBColorSpace;
+  return t;
+}
 
 // One colour per plant (by its index in the snapshot), shared with the plots.
 export const PALETTE = ['#2e8b3a', '#c46a1b', '#2f6fb3', '#b8326e', '#7d5bb5', '#1a9a8f', '#a08a12',
@@ -187,9 +217,20 @@ export class View {
     this.container = container;
     this.renderer = new THREE.WebGLRenderer({ antialias: true });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
-    this.renderer.setClearColor(0xeef3f7);
+    this.renderer.setClearColor(SKY_HORIZON);
+    // the shadow map is drawn again only when the leaves or the world change
+    this.renderer.shadowMap.enabled = true;
+    this.renderer.shadowMap.autoUpdate = false;
     container.appendChild(this.renderer.domElement);
     this.scene = new THREE.Scene();
+    this.scene.background = skyTexture();
+    this.hemi = new THREE.HemisphereLight(0xeaf4ff, 0x9a9077, 2.0);
+    this.hemi.position.set(0, 0, 1);   // its sky is up (z)
+    this.sun = new THREE.DirectionalLight(0xffffff, 1.9);
+    this.sun.castShadow = true;
+    this.sun.shadow.mapSize.set(2048, 2048);
+    this.sun.shadow.bias = -0.0005;
+    this.scene.add(this.hemi, this.sun, this.sun.target);
     this.material = new THREE.ShaderMaterial({
       vertexShader: VERTEX, fragmentShader: FRAGMENT,
       uniforms: {
@@ -199,6 +240,10 @@ export class View {
       },
     });
     this.branches = new Branches(this.scene, this.material);
+    this.leaves = new Leaves(this.scene);
+    this.leafMs = 0;        // the leaves' part of the last show(), ms
+    this.frameMs = [];      // time between two frames drawn in a row, ms
+    this.shadowDirty = true;
     this.worldGroup = new THREE.Group();     // ground, grid, scales
     this.obstacleGroup = new THREE.Group();
     this.scene.add(this.worldGroup, this.obstacleGroup);
@@ -221,11 +266,51 @@ export class View {
     this.renderMs = [];
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
-    const loop = () => {
+    let last = -1;   // when the frame before was drawn (-1: it was not)
+    const loop = (now) => {
       requestAnimationFrame(loop);
-      if (this.dirty) this.render();
+      if (!this.dirty) {
+        last = -1;
+        return;
+      }
+      this.render();
+      if (last >= 0) this.frame(now - last);
+      last = now;
     };
     requestAnimationFrame(loop);
+  }
+
+  // A frame drawn right after another took ms: kept, and slow frames with leaves
+  // drawn halve the leaves' budget.
+  frame(ms) {
+    this.frameMs.push(ms);
+    if (this.frameMs.length > 200) this.frameMs.shift();
+    const l = this.leaves;
+    if (!l.visible || l.live === 0 || l.budget <= LEAF_BUDGET_MIN) return;
+    this.slow = (this.slow || []).concat(ms).slice(-FRAME_SAMPLES);
+    if (this.slow.length < FRAME_SAMPLES) return;
+    const median = this.slow.slice().sort((a, b) => a - b)[FRAME_SAMPLES >> 1];
+    if (median <= FRAME_TARGET_MS || l.live <= LEAF_BUDGET_MIN) return;
+    this.slow = [];
+    l.setBudget(Math.max(LEAF_BUDGET_MIN, Math.floor(l.budget / 2)));
+    if (this.shown) this.show(this.shown);
+  }
+
+  // Turns the camera by angle (radians) around the vertical through its target.
+  orbit(angle) {
+    const t = this.controls.target, p = this.camera.position;
+    const x = p.x - t.x, y = p.y - t.y, c = Math.cos(angle), s = Math.sin(angle);
+    p.set(t.x + c * x - s * y, t.y + s * x + c * y, p.z);
+    this.camera.lookAt(t);
+    this.invalidate();
+  }
+
+  // Leaves drawn (true) or the bare skeleton (false).
+  setLeaves(on) {
+    this.leaves.setVisible(on);
+    if (on && this.shown) this.show(this.shown);
+    this.shadowDirty = true;
+    this.invalidate();
   }
 
   invalidate() { this.dirty = true; }
@@ -260,6 +345,10 @@ export class View {
       u.uPixelPersp.value = 0;
       u.uPixelOrtho.value = (this.ortho.top - this.ortho.bottom) / this.ortho.zoom / h;
     }
+    if (this.shadowDirty) {
+      this.renderer.shadowMap.needsUpdate = true;
+      this.shadowDirty = false;
+    }
     const t0 = performance.now();
     this.renderer.render(this.scene, this.camera);
     this.renderMs.push(performance.now() - t0);
@@ -272,6 +361,10 @@ export class View {
     this.setWorld(sk.world);
     this.setObstacles(sk.obstacles);
     this.branches.sync(sk);
+    this.shown = sk;
+    const t0 = performance.now();
+    if (this.leaves.sync(sk)) this.shadowDirty = true;
+    this.leafMs = performance.now() - t0;
     this.invalidate();
   }
 
@@ -285,9 +378,22 @@ export class View {
     this.worldGroup.clear();
     const [x0, y0] = world.min, [x1, y1, z1] = world.max;
     const ground = new THREE.Mesh(new THREE.PlaneGeometry(x1 - x0, y1 - y0),
-      new THREE.MeshBasicMaterial({ color: 0xd9d2bf, side: THREE.DoubleSide }));
+      new THREE.MeshLambertMaterial({ color: 0xd9d2bf, side: THREE.DoubleSide }));
     ground.position.set((x0 + x1) / 2, (y0 + y1) / 2, -0.002);
     ground.name = 'ground';
+    ground.receiveShadow = true;
+    // the sun straight above the world's centre, its shadow camera over the whole box
+    const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2, sc = this.sun.shadow.camera;
+    this.sun.position.set(cx, cy, z1 + 1);
+    this.sun.target.position.set(cx, cy, 0);
+    this.sun.target.updateMatrixWorld();
+    const half = Math.max(x1 - x0, y1 - y0) / 2;
+    sc.left = sc.bottom = -half;
+    sc.right = sc.top = half;
+    sc.near = 0.5;
+    sc.far = z1 + 2 - world.min[2];
+    sc.updateProjectionMatrix();
+    this.shadowDirty = true;
     this.ground = ground;
     this.worldGroup.add(ground);
     // a 1 m grid over the ground

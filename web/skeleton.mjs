@@ -6,11 +6,14 @@
 // per slot). A delta's shed subtrees are found in one pass from the first shed
 // slot and marked dead (zero length, so they draw nothing); compact() squeezes
 // them out later, in a task of its own, so that applying a delta stays short.
+// Each slot also holds its node's leaf count (the snapshot's and deltas' `leaves`);
+// the ids whose leaves changed are logged for the view's leaf cards (takeLeafLog).
 // Nothing here knows about three.js or the DOM.
 import { pastStage } from './helpers.mjs';
 
 const GROW = 2;
 const NONE = 2 ** 31;
+const LEAF_LOG_SLACK = 4096;   // ids logged beyond the slots held before the log gives up
 
 export class Skeleton {
   constructor(capacity = 1024) {
@@ -29,6 +32,11 @@ export class Skeleton {
     this.stats = [];
     this.startYear = null;   // the calendar year of iteration 0 (a run with a start year)
     this.earliest = 0;       // the earliest birth of the snapshot: below 0 for a tree with a past
+    this.foliage = [];       // per species {species, leaf_size, leaf_density, leaf_colour}
+    this.plantSpecies = [];  // each plant's species index
+    this.leafTotal = 0;      // the leaves of all live slots
+    this.leafLog = [];       // ids whose leaves changed since the last takeLeafLog()
+    this.leafLogFull = true; // the log is not enough: every slot's leaves must be read again
     this.idSlot = new Int32Array(1024).fill(-1);
     this.scratch = new Int32Array(0);
     this.allocate(capacity);
@@ -39,7 +47,7 @@ export class Skeleton {
     const id = new Int32Array(capacity), parent = new Int32Array(capacity);
     const plant = new Uint16Array(capacity), stem = new Uint16Array(capacity);
     const birth = new Int32Array(capacity), radius = new Float32Array(capacity);
-    const dead = new Uint8Array(capacity);
+    const dead = new Uint8Array(capacity), leaves = new Uint16Array(capacity);
     const start = new Float32Array(capacity * 3), end = new Float32Array(capacity * 3);
     if (old) {
       id.set(this.id.subarray(0, this.count));
@@ -48,11 +56,12 @@ export class Skeleton {
       stem.set(this.stem.subarray(0, this.count));
       birth.set(this.birth.subarray(0, this.count));
       dead.set(this.dead.subarray(0, this.count));
+      leaves.set(this.leaves.subarray(0, this.count));
       radius.set(this.radius.subarray(0, this.count));
       start.set(this.start.subarray(0, this.count * 3));
       end.set(this.end.subarray(0, this.count * 3));
     }
-    Object.assign(this, { id, parent, plant, stem, birth, radius, start, end, dead });
+    Object.assign(this, { id, parent, plant, stem, birth, radius, start, end, dead, leaves });
     this.capacity = capacity;
     this.version++;
   }
@@ -94,7 +103,7 @@ export class Skeleton {
     let maxId = -1;
     for (let i = i0; i < i1; i++) if (src.id[i] > maxId) maxId = src.id[i];
     if (maxId >= this.idSlot.length) this.mapId(maxId, -1);
-    const { id, parent, plant, stem, radius, start, end, idSlot } = this;
+    const { id, parent, plant, stem, radius, start, end, idSlot, leaves } = this;
     const births = this.birth, xyzr = src.xyzr, sid = src.id, spar = src.parent;
     const splant = src.plant, sstem = src.stem, slots = idSlot.length;
     const one = typeof birth === 'number', each = one ? null : birth;
@@ -112,6 +121,7 @@ export class Skeleton {
       plant[k] = splant[i];
       stem[k] = sstem[i];
       births[k] = one ? birth : each[i];
+      leaves[k] = 0;
       const k3 = k * 3, i4 = i * 4;
       end[k3] = xyzr[i4];
       end[k3 + 1] = xyzr[i4 + 1];
@@ -130,6 +140,7 @@ export class Skeleton {
   loadSnapshot(msg) {
     this.idSlot.fill(-1);
     this.dead.fill(0, 0, this.count);
+    this.leaves.fill(0, 0, this.count);
     this.count = 0;
     this.deadCount = 0;
     this.firstDead = NONE;
@@ -143,6 +154,12 @@ export class Skeleton {
     let earliest = 0;
     for (let i = 0, b = msg.nodes.birth; i < total; i++) if (b[i] < earliest) earliest = b[i];
     this.earliest = earliest;
+    this.leafTotal = 0;
+    this.leafLog = [];
+    this.leafLogFull = true;
+    if (msg.leaves) this.setLeaves(msg.leaves);
+    this.foliage = msg.foliage || [];
+    this.plantSpecies = msg.plant_species || [];
     this.plants = msg.plants;
     this.species = msg.species || [];
     this.obstacles = msg.obstacles || [];
@@ -168,6 +185,7 @@ export class Skeleton {
       const k = ids[i] < idSlot.length ? idSlot[ids[i]] : -1;
       if (k >= 0) radius[k] = r[i];
     }
+    if (msg.leaves) this.setLeaves(msg.leaves);
     this.iteration = msg.iteration;
     this.seq = msg.seq;
     this.stats = msg.stats;
@@ -175,15 +193,54 @@ export class Skeleton {
     return from;
   }
 
-  // Marks the subtrees under these ids dead: unmapped, zero length and radius.
-  // Returns the first slot it changed.
+  // Sets the leaf counts of a leaves list (wire.mjs: {n, id, count}) on the nodes
+  // held, and logs their ids.
+  setLeaves(list) {
+    const { idSlot, leaves } = this;
+    let total = this.leafTotal;
+    for (let i = 0; i < list.n; i++) {
+      const nid = list.id[i], k = nid < idSlot.length ? idSlot[nid] : -1;
+      if (k < 0) continue;
+      total += list.count[i] - leaves[k];
+      leaves[k] = list.count[i];
+      this.logLeaves(nid);
+    }
+    this.leafTotal = total;
+  }
+
+  logLeaves(nid) {
+    if (this.leafLogFull) return;
+    if (this.leafLog.length > this.count + LEAF_LOG_SLACK) {
+      this.leafLogFull = true;
+      this.leafLog = [];
+    } else {
+      this.leafLog.push(nid);
+    }
+  }
+
+  // The ids whose leaves changed since the last call, or null when every slot must
+  // be read again (after a snapshot, or too many changes unread).
+  takeLeafLog() {
+    const log = this.leafLogFull ? null : this.leafLog;
+    this.leafLog = [];
+    this.leafLogFull = false;
+    return log;
+  }
+
+  // Marks the subtrees under these ids dead: unmapped, zero length and radius, no
+  // leaves. Returns the first slot it changed.
   markShed(roots) {
-    const { id, parent, dead, radius, start, end, idSlot } = this;
+    const { id, parent, dead, radius, start, end, idSlot, leaves } = this;
     let first = this.count;
     const kill = (k) => {
       dead[k] = 1;
       idSlot[id[k]] = -1;
       radius[k] = 0;
+      if (leaves[k]) {
+        this.leafTotal -= leaves[k];
+        leaves[k] = 0;
+        this.logLeaves(id[k]);
+      }
       const k3 = k * 3;
       end[k3] = start[k3];
       end[k3 + 1] = start[k3 + 1];
@@ -211,7 +268,7 @@ export class Skeleton {
     const first = this.firstDead;
     if (this.scratch.length < this.count) this.scratch = new Int32Array(this.capacity);
     const map = this.scratch;  // old slot -> new slot
-    const { id, parent, plant, stem, birth, radius, start, end, dead, idSlot } = this;
+    const { id, parent, plant, stem, birth, radius, start, end, dead, idSlot, leaves } = this;
     let w = first;
     for (let i = first, n = this.count; i < n; i++) {
       if (dead[i]) continue;
@@ -224,6 +281,7 @@ export class Skeleton {
         stem[w] = stem[i];
         birth[w] = birth[i];
         radius[w] = radius[i];
+        leaves[w] = leaves[i];
         const w3 = w * 3, i3 = i * 3;
         start[w3] = start[i3];
         start[w3 + 1] = start[i3 + 1];
@@ -253,7 +311,8 @@ export class Skeleton {
   // A new skeleton of this one's world as it was at an iteration T before this
   // one's: a measured tree's past stage (docs/model.md, "Measured trees"), the
   // nodes born by T with their radii by that stage's pipe model (helpers.mjs,
-  // pastStage). Its iteration is T; it has no stats.
+  // pastStage). Its iteration is T; it has no stats and no leaves (the messages do
+  // not say which of a past stage's nodes bore them).
   stageAt(T) {
     const stage = pastStage(this, T);
     const n = stage.slots.length;
@@ -274,6 +333,7 @@ export class Skeleton {
     const sk = new Skeleton();
     sk.loadSnapshot({
       nodes, plants: this.plants, species: this.species, obstacles: this.obstacles, sky: this.sky,
+      foliage: this.foliage, plant_species: this.plantSpecies,
       start_year: this.startYear, world: this.world, voxel: this.voxel, iteration: T, seq: -1, stats: [],
     });
     return sk;
@@ -299,6 +359,6 @@ export class Skeleton {
 
   // Bytes held by the arrays (the page's memory is the skeleton plus this).
   bytes() {
-    return this.capacity * (4 * 4 + 2 * 2 + 1 + 4 * 6) + this.idSlot.byteLength + this.scratch.byteLength;
+    return this.capacity * (4 * 4 + 2 * 2 + 1 + 2 + 4 * 6) + this.idSlot.byteLength + this.scratch.byteLength;
   }
 }

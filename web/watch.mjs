@@ -22,7 +22,8 @@ export class Watch {
     this.live = new Skeleton();
     this.history = null;        // a stored iteration's skeleton while the timeline shows it
     this.statsLoaded = false;   // the plots have the run's stored stats
-    this.timings = { applyMs: [], parseMs: [], bytes: [], held: [], tidyMs: [] };   // held: [iteration, internodes]
+    // held: [iteration, internodes]; leafMs: the leaves' part of applyMs
+    this.timings = { applyMs: [], parseMs: [], bytes: [], held: [], tidyMs: [], leafMs: [] };
     this.tidying = new Set();   // skeletons with a tidy task pending
   }
 
@@ -92,11 +93,12 @@ export class Watch {
     if (!this.history) this.view.show(this.live);
     const t = this.timings;
     t.applyMs.push(performance.now() - t0);
+    t.leafMs.push(this.history ? 0 : this.view.leafMs);
     this.tidyLater(this.live);
     t.parseMs.push(meta.parseMs);
     t.bytes.push(meta.bytes);
     t.held.push([msg.iteration, this.live.live]);
-    for (const a of [t.applyMs, t.parseMs, t.bytes, t.held]) if (a.length > TIMINGS) a.shift();
+    for (const a of [t.applyMs, t.parseMs, t.bytes, t.held, t.leafMs]) if (a.length > TIMINGS) a.shift();
     this.run.iteration = msg.iteration;
     this.plots.add(msg.iteration, msg.stats);
     this.onChange('live');

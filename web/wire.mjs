@@ -2,8 +2,19 @@
 // delta of a million internodes crosses from the socket worker to the page as a
 // few transferable buffers, and applying it is a handful of tight loops.
 
+// [[id, n], ...] leaf counts (protocol.md, "snapshot" and "delta": leaves) as
+// {n, id, count}; a message without them (a skeleton export) gives none.
+function leafArrays(list = []) {
+  const n = list.length, out = { n, id: new Int32Array(n), count: new Uint16Array(n) };
+  for (let i = 0; i < n; i++) {
+    out.id[i] = list[i][0];
+    out.count[i] = list[i][1];
+  }
+  return out;
+}
+
 // A delta: added [[id, parent, plant, stem, x, y, z, radius]], radii [[id, r]],
-// shed [id] become flat arrays.
+// shed [id] and leaves [[id, n]] become flat arrays.
 export function deltaArrays(msg) {
   const a = msg.added, n = a.length;
   const added = {
@@ -29,12 +40,13 @@ export function deltaArrays(msg) {
   }
   return {
     type: 'delta', run: msg.run, seq: msg.seq, iteration: msg.iteration, stats: msg.stats,
-    added, radii, shed: Int32Array.from(msg.shed), typed: true,
+    added, radii, shed: Int32Array.from(msg.shed), leaves: leafArrays(msg.leaves), typed: true,
   };
 }
 
 // A snapshot (or a skeleton export): the plants' nodes [id, parent, x, y, z,
-// radius, birth] become flat arrays in plant, stem, id order; the rest is kept.
+// radius, birth] and the leaves [[id, n]] become flat arrays, the nodes in plant,
+// stem, id order; the rest is kept.
 export function snapshotArrays(msg) {
   let n = 0;
   for (const p of msg.plants) for (const s of p.stems) n += s.nodes.length;
@@ -57,9 +69,9 @@ export function snapshotArrays(msg) {
       k++;
     }
   }));
-  const { plants, ...rest } = msg;
+  const { plants, leaves, ...rest } = msg;
   return {
-    ...rest, typed: true, nodes,
+    ...rest, typed: true, nodes, leaves: leafArrays(leaves),
     plants: plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root })) })),
   };
 }
@@ -67,7 +79,7 @@ export function snapshotArrays(msg) {
 // The buffers of a converted message, for postMessage's transfer list.
 export function transferables(msg) {
   const out = [];
-  for (const part of [msg.added, msg.radii, msg.nodes]) {
+  for (const part of [msg.added, msg.radii, msg.nodes, msg.leaves]) {
     if (!part) continue;
     for (const v of Object.values(part)) if (ArrayBuffer.isView(v)) out.push(v.buffer);
   }

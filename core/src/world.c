@@ -524,6 +524,12 @@ static int finish_plant(sylva_world *w, const sylva_plant_def *def, int stems) {
   pl->stem_count = stems;
   file_plant(w, pid);
   w->plant_count++;
+  /* its leaves as a snapshot taken now gives them (sylva_node_info.leaves): the next
+   * journal lists the leaves that differ from those */
+  const sylva_species_def *d = &w->species[def->species].def;
+  for (size_t i = w->mark.count; i < w->nodes.count; i++)
+    w->nodes.leaves[i] =
+        (uint16_t)(sylva__leaf_age(&w->nodes, d, i, w->iteration + 1) >= 0 ? d->leaf_density : 0);
   for (int r = 0; r < stems; r++) sylva__stats_planted(w, pl->first_stem + r);
   sylva__conflicts(w, w->iteration);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);

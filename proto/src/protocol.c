@@ -572,6 +572,43 @@ char *sylva_runs_json(const sylva_run_summary *runs, size_t n) {
   return sylva__strbuf_finish(&b);
 }
 
+/* ,"foliage":[{"species":..,"leaf_size":..,"leaf_density":..,"leaf_colour":"#rrggbb"},..],
+ * "plant_species":[k,..]: what the viewer draws each species' leaves with, in the
+ * world's species order, and each plant's species (an index into it). */
+static void put_foliage(sylva__strbuf *b, const sylva_world *w) {
+  sylva__strbuf_puts(b, ",\"foliage\":[");
+  int species = sylva_world_species_count(w);
+  for (int k = 0; k < species; k++) {
+    const sylva_species_def *d = sylva_world_species(w, k);
+    sylva__strbuf_puts(b, k ? ",{\"species\":" : "{\"species\":");
+    put_string(b, sylva_world_species_label(w, k));
+    sylva__strbuf_puts(b, ",\"leaf_size\":");
+    sylva__strbuf_shortest(b, d->leaf_size);
+    sylva__strbuf_printf(b, ",\"leaf_density\":%d,\"leaf_colour\":\"#%06x\"}", d->leaf_density,
+                         (unsigned)d->leaf_colour & 0xffffffu);
+  }
+  sylva__strbuf_puts(b, "],\"plant_species\":[");
+  int plants = sylva_world_plant_count(w);
+  for (int p = 0; p < plants; p++)
+    sylva__strbuf_printf(b, "%s%d", p ? "," : "", sylva_world_plant_species(w, p));
+  sylva__strbuf_putc(b, ']');
+}
+
+/* ,"leaves":[[id,n],..]: every node bearing leaves now (sylva_node_info.leaves), in
+ * id order. */
+static void put_node_leaves(sylva__strbuf *b, const sylva_world *w) {
+  sylva__strbuf_puts(b, ",\"leaves\":[");
+  size_t count = sylva_world_node_count(w);
+  bool first = true;
+  for (size_t i = 0; i < count; i++) {
+    sylva_node_info n;
+    if (sylva_world_node_at(w, i, &n) != 0 || n.leaves <= 0) continue;
+    sylva__strbuf_printf(b, "%s[%" PRId32 ",%" PRId32 "]", first ? "" : ",", n.id, n.leaves);
+    first = false;
+  }
+  sylva__strbuf_putc(b, ']');
+}
+
 char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
                          const char *ref) {
   sylva__strbuf b = {0};
@@ -597,6 +634,8 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int sta
   /* the sky that lights the run (scenario.md, "Light") */
   sylva__strbuf_puts(&b, sylva_world_get_def(w)->sky_count ? "],\"sky\":\"site\"" : "],\"sky\":\"zenith\"");
   put_start_year(&b, start_year);
+  put_foliage(&b, w);
+  put_node_leaves(&b, w);
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }
@@ -606,7 +645,7 @@ char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylv
   sylva__strbuf b = {0};
   sylva__stats_form form = sylva__stats_form_of(w, start_year);
   if (!sylva__strbuf_reserve(&b, j->added_count * 64 + j->radii_count * 24 + j->shed_count * 12 +
-                                     j->stem_count * 200 + 256))
+                                     j->leaves_count * 20 + j->stem_count * 200 + 256))
     return sylva__strbuf_finish(&b);
   sylva__strbuf_printf(&b, "{\"type\":\"delta\",\"run\":%" PRId64 ",\"seq\":%" PRId64
                            ",\"iteration\":%d,\"added\":[",
@@ -627,6 +666,10 @@ char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylv
   sylva__strbuf_puts(&b, "],\"shed\":[");
   for (size_t i = 0; i < j->shed_count; i++)
     sylva__strbuf_printf(&b, "%s%" PRId32, i ? "," : "", j->shed[i]);
+  sylva__strbuf_puts(&b, "],\"leaves\":[");
+  for (size_t i = 0; i < j->leaves_count; i++)
+    sylva__strbuf_printf(&b, "%s[%" PRId32 ",%" PRId32 "]", i ? "," : "", j->leaves[i].id,
+                         j->leaves[i].leaves);
   sylva__strbuf_puts(&b, "],\"stats\":[");
   for (size_t i = 0; i < j->stem_count; i++) {
     if (i) sylva__strbuf_putc(&b, ',');

@@ -20,6 +20,7 @@
 #include "sylva/json_check.h"
 #include "sylva/protocol.h"
 #include "sylva/scenario.h"
+#include "sylva/snapshot.h"
 #include "sylva/status.h"
 #include "sylva/world.h"
 
@@ -1002,6 +1003,7 @@ static void test_encode_scenarios(void) {
 typedef struct model_node {
   bool live;
   double parent, plant, stem, x, y, z, r, birth;
+  double leaves; /* the leaves the messages gave it (0 when none) */
 } model_node;
 
 typedef struct model {
@@ -1046,10 +1048,33 @@ static void model_load(model *m, const cJSON *root) {
           continue;
         }
         *mn = (model_node){true, item_num(n, 1), p, k, item_num(n, 2), item_num(n, 3),
-                           item_num(n, 4), item_num(n, 5), item_num(n, 6)};
+                           item_num(n, 4), item_num(n, 5), item_num(n, 6), 0};
       }
     }
   }
+}
+
+/* Sets the leaves of a "leaves" list ([[id, n], ...], ids ascending) on live nodes. */
+static void model_set_leaves(model *m, const cJSON *leaves) {
+  CHECK(cJSON_IsArray(leaves));
+  double last = -1;
+  for (const cJSON *e = leaves ? leaves->child : NULL; e; e = e->next) {
+    CHECK_INT(cJSON_GetArraySize(e), 2);
+    double id = item_num(e, 0), n = item_num(e, 1);
+    CHECK(id > last && n >= 0 && n == floor(n));
+    last = id;
+    model_node *mn = model_at(m, id);
+    CHECK(mn && mn->live);
+    if (mn) mn->leaves = n;
+  }
+}
+
+/* A snapshot into the model: its nodes, then its leaves (every entry above 0). */
+static void model_load_snapshot(model *m, const cJSON *snap) {
+  model_load(m, snap);
+  const cJSON *leaves = cJSON_GetObjectItemCaseSensitive(snap, "leaves");
+  for (const cJSON *e = leaves ? leaves->child : NULL; e; e = e->next) CHECK(item_num(e, 1) > 0);
+  model_set_leaves(m, leaves);
 }
 
 /* Applies one delta; returns the number of shed subtree roots. */
@@ -1068,7 +1093,7 @@ static size_t model_apply(model *m, const cJSON *delta) {
     model_node *pn = parent >= 0 ? model_at(m, parent) : NULL;
     CHECK(parent == -1 || (pn && pn->live));
     *mn = (model_node){true, parent, item_num(n, 2), item_num(n, 3), item_num(n, 4),
-                       item_num(n, 5), item_num(n, 6), item_num(n, 7), iteration};
+                       item_num(n, 5), item_num(n, 6), item_num(n, 7), iteration, 0};
   }
   const cJSON *radii = cJSON_GetObjectItemCaseSensitive(delta, "radii");
   for (const cJSON *r = radii ? radii->child : NULL; r; r = r->next) {
@@ -1098,7 +1123,28 @@ static size_t model_apply(model *m, const cJSON *delta) {
   for (size_t i = 0; i < m->cap; i++)
     if (dead[i]) m->nodes[i].live = false;
   free(dead);
+  model_set_leaves(m, cJSON_GetObjectItemCaseSensitive(delta, "leaves"));
   return shed_count;
+}
+
+/* The model's leaves must be those the world gives every node
+ * (sylva_node_info.leaves). Returns the leaves counted. */
+static int64_t model_compare_leaves(model *m, const sylva_world *w, int iteration) {
+  size_t bad = 0, count = sylva_world_node_count(w);
+  int64_t total = 0;
+  for (size_t i = 0; i < count; i++) {
+    sylva_node_info n;
+    sylva_world_node_at(w, i, &n);
+    total += n.leaves;
+    model_node *mn = model_at(m, n.id);
+    if (mn && mn->live && mn->leaves == n.leaves) continue;
+    if (bad++ < 5)
+      fprintf(stderr, "iteration %d: node %d has %d leaves, the messages gave %g\n", iteration,
+              (int)n.id, (int)n.leaves, mn ? mn->leaves : -1.0);
+  }
+  if (bad) check_failed++;
+  else check_passed++;
+  return total;
 }
 
 /* The model must hold exactly the skeleton's nodes. */
@@ -1242,11 +1288,20 @@ static void test_snapshot(void) {
     CHECK_INT(cJSON_GetArraySize(labels), 2);
     CHECK_STR(cJSON_GetStringValue(cJSON_GetArrayItem(labels, 0)), "oak");
     CHECK_STR(cJSON_GetStringValue(cJSON_GetArrayItem(labels, 1)), "big \"leaf\"");
-    CHECK(snap && strstr(snap, "],\"species\":[\"oak\",\"big \\\"leaf\\\"\"],\"sky\":\"zenith\",\"ref\":\"sub\"}"));
-    model_load(&m, sj);
+    CHECK(snap && strstr(snap, "],\"species\":[\"oak\",\"big \\\"leaf\\\"\"],\"sky\":\"zenith\",\"foliage\":["));
+    /* each species' leaves, then the nodes bearing them, before the ref */
+    CHECK(snap && strstr(snap, ",\"foliage\":[{\"species\":\"oak\",\"leaf_size\":0.1,"
+                               "\"leaf_density\":6,\"leaf_colour\":\"#4a7f35\"},"
+                               "{\"species\":\"big \\\"leaf\\\"\",\"leaf_size\":0.1,"
+                               "\"leaf_density\":6,\"leaf_colour\":\"#4a7f35\"}],\"plant_species\":[0,0],"
+                               "\"leaves\":[["));
+    CHECK(snap && strstr(snap, "]],\"ref\":\"sub\"}"));
+    CHECK(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(sj, "leaves")) > 0);
+    model_load_snapshot(&m, sj);
   }
   check_snapshot_matches_skeleton(snap, w);
   compare_with_skeleton(&m, w, 0);
+  model_compare_leaves(&m, w, 0);
   cJSON_Delete(sj);
   free(snap);
   free(m.nodes);
@@ -1254,7 +1309,7 @@ static void test_snapshot(void) {
 }
 
 typedef struct delta_totals {
-  size_t added, radii, shed;
+  size_t added, radii, shed, leaves, leafless;
 } delta_totals;
 
 /* The delta of iteration it: its header and stats (those of the stats line); applied
@@ -1271,6 +1326,10 @@ static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, 
     CHECK(cJSON_GetObjectItemCaseSensitive(dj, "ref") == NULL);
     t->added += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "added"));
     t->radii += (size_t)cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(dj, "radii"));
+    const cJSON *leaves = cJSON_GetObjectItemCaseSensitive(dj, "leaves");
+    CHECK_INT(cJSON_GetArraySize(leaves), (int)j->leaves_count);
+    t->leaves += j->leaves_count;
+    for (size_t i = 0; i < j->leaves_count; i++) t->leafless += j->leaves[i].leaves == 0;
     t->shed += model_apply(m, dj);
     char *line = sylva_encode_stats_line(w, j, 0, 0);
     cJSON *lj = line ? cJSON_Parse(line) : NULL;
@@ -1283,29 +1342,99 @@ static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, 
   free(delta);
 }
 
-/* The first snapshot plus 15 deltas rebuild the skeleton after every iteration. */
-static void test_deltas(void) {
-  sylva_world *w = snapshot_world();
-  if (!w) return;
+/* The model of w's snapshot now (its nodes and leaves). */
+static model model_of_snapshot(const sylva_world *w) {
   char *snap = sylva_msg_snapshot(4, 10, w, 0, "\"sub\"");
   cJSON *sj = VALID_JSON(snap);
   model m = {0};
-  model_load(&m, sj);
+  model_load_snapshot(&m, sj);
   cJSON_Delete(sj);
   free(snap);
-  delta_totals t = {0};
-  for (int it = 1; it <= 15; it++) {
+  return m;
+}
+
+/* Grows w through iterations from..to, applying each delta to the model, which must
+ * then hold the skeleton and every node's leaves. */
+static void step_and_apply(model *m, sylva_world *w, int from, int to, delta_totals *t) {
+  for (int it = from; it <= to; it++) {
     const sylva_journal *j = NULL;
     int rc = sylva_world_step(w, &j);
     CHECK_INT(rc, 0);
     if (rc || !j) break;
-    apply_delta(&m, w, j, it, &t);
-    compare_with_skeleton(&m, w, it);
+    apply_delta(m, w, j, it, t);
+    compare_with_skeleton(m, w, it);
+    model_compare_leaves(m, w, it);
   }
-  printf("snapshot + 15 deltas: %zu nodes added, %zu radii, %zu subtrees shed\n", t.added,
-         t.radii, t.shed);
+}
+
+/* The first snapshot plus 15 deltas rebuild the skeleton and the leaves after every
+ * iteration. */
+static void test_deltas(void) {
+  sylva_world *w = snapshot_world();
+  if (!w) return;
+  model m = model_of_snapshot(w);
+  delta_totals t = {0};
+  step_and_apply(&m, w, 1, 15, &t);
+  printf("snapshot + 15 deltas: %zu nodes added, %zu radii, %zu subtrees shed, %zu leaf changes "
+         "(%zu lost)\n",
+         t.added, t.radii, t.shed, t.leaves, t.leafless);
   CHECK(t.added > 100);
   CHECK(t.radii > 0);
+  CHECK(t.leaves > 0 && t.leafless > 0);
+  /* each stem's leaf area is its leaves as the messages gave them x pi/4 x size^2 */
+  for (int s = 0; s < sylva_world_stem_count(w); s++) {
+    sylva_stem_stats st;
+    sylva_world_stem_stats(w, s, &st);
+    double leaves = 0;
+    for (size_t i = 0; i < m.cap; i++) {
+      const model_node *mn = &m.nodes[i];
+      if (mn->live && sylva_world_stem_index(w, (int)mn->plant, (int)mn->stem) == s)
+        leaves += mn->leaves;
+    }
+    const sylva_species_def *d = sylva_world_species(w, 0);
+    double want = leaves * SYLVA_LEAF_FILL * d->leaf_size * d->leaf_size;
+    CHECK(st.leaf_area > 0 && fabs(st.leaf_area - want) <= 1e-9 * want);
+  }
+  free(m.nodes);
+  sylva_world_destroy(w);
+}
+
+/* Plants added between iterations (as an edit adds them, to a world read back from
+ * its image): a snapshot after the addition plus the deltas that follow give every
+ * node its leaves, those of a plant planted old (some of whose nodes lose their
+ * leaves at the next iteration) and of a species whose nodes bear leaves for one
+ * iteration only. */
+static void test_leaves_after_edit(void) {
+  sylva_species_def sp;
+  sylva_world *grown = oak_world(&sp);
+  if (!grown) return;
+  sp.years = 1;
+  int lime = sylva_world_add_species(grown, &sp, "lime");
+  sp.years = 0;
+  sp.leaf_age = 1;
+  sp.leaf_density = 3;
+  int brief = sylva_world_add_species(grown, &sp, "brief");
+  const double a[][3] = {{-2, 0, 0}};
+  sylva_plant_def first = {0, "first", a, 1, 0, NULL, 0};
+  CHECK_INT(sylva_world_add_plant(grown, &first, NULL), 0);
+  grow(grown, 4);
+  uint8_t *img = NULL;
+  size_t size = 0;
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_snapshot_save(grown, &img, &size), 0);
+  CHECK_INT(sylva_snapshot_load(img, size, &w), 0);
+  free(img);
+  sylva_world_destroy(grown);
+  if (!w) return;
+  const double b[][3] = {{0, 0, 0}}, c[][3] = {{2, 0, 0}};
+  sylva_plant_def old = {lime, "old", b, 1, 6, NULL, 0}, young = {brief, "young", c, 1, 0, NULL, 0};
+  CHECK_INT(sylva_world_add_plant(w, &old, NULL), 1);
+  CHECK_INT(sylva_world_add_plant(w, &young, NULL), 2);
+  model m = model_of_snapshot(w);
+  model_compare_leaves(&m, w, 4);
+  delta_totals t = {0};
+  step_and_apply(&m, w, 5, 10, &t);
+  CHECK(t.leafless > 0);
   free(m.nodes);
   sylva_world_destroy(w);
 }
@@ -1336,7 +1465,7 @@ static void test_years_messages(void) {
   if (!w) return;
   CHECK(sylva_encode_years(w));
   char *snap = sylva_msg_snapshot(4, 10, w, 2027, NULL);
-  CHECK(snap && strstr(snap, ",\"sky\":\"zenith\",\"start_year\":2027}"));
+  CHECK(snap && strstr(snap, ",\"sky\":\"zenith\",\"start_year\":2027,\"foliage\":["));
   CHECK(snap && strstr(snap, "{\"plant\":\"lime\",\"stem\":0,\"age\":5,\"height\":"));
   CHECK(snap && strstr(snap, "{\"plant\":\"oak\",\"stem\":0,\"age\":null,\"height\":"));
   CHECK(snap && strstr(snap, ",\"crown_diameter\":") && strstr(snap, ",\"crown_height\":"));
@@ -1392,8 +1521,9 @@ static void test_later_snapshot(void) {
     CHECK_INT(num_of(sj, "iteration"), 15);
     CHECK(cJSON_GetObjectItemCaseSensitive(sj, "ref") == NULL);
     model fresh = {0};
-    model_load(&fresh, sj);
+    model_load_snapshot(&fresh, sj);
     compare_with_skeleton(&fresh, w, 15);
+    CHECK(model_compare_leaves(&fresh, w, 15) > 0);
     free(fresh.nodes);
   }
   cJSON_Delete(sj);
@@ -1616,7 +1746,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(encode_parse_error), CHECK_TEST(encode_created), CHECK_TEST(encode_status),
       CHECK_TEST(encode_runs), CHECK_TEST(encode_sweep_runs),
       CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
-      CHECK_TEST(deltas), CHECK_TEST(later_snapshot), CHECK_TEST(years_messages),
+      CHECK_TEST(deltas), CHECK_TEST(leaves_after_edit), CHECK_TEST(later_snapshot), CHECK_TEST(years_messages),
       CHECK_TEST(light_slice_board),
       CHECK_TEST(light_slice_top), CHECK_TEST(light_slice_layers), CHECK_TEST(light_slice_padding)};
   CHECK_RUN(argc, argv, 1, tests);

@@ -165,6 +165,15 @@ export async function connect(url, opts) {
   return c;
 }
 
+// A fresh subscriber's snapshot of a run (on a connection of its own).
+export async function serverSnapshot(d, run) {
+  const c = await connect(d.url);
+  c.send({ type: 'subscribe', run });
+  const snap = await c.type('snapshot');
+  c.close();
+  return snap;
+}
+
 export function scenario(name, overrides = {}) {
   const s = JSON.parse(readFileSync(join(ROOT, 'scenarios', name), 'utf8'));
   return { ...s, ...overrides };
@@ -183,6 +192,8 @@ export class Model {
     this.iteration = snapshot.iteration;
     this.seq = snapshot.seq;
     this.plants = snapshot.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root, nodes: new Map(s.nodes.map((n) => [n[0], n.slice()])) })) }));
+    // id -> leaves of every node bearing leaves (protocol.md, "snapshot": leaves)
+    this.leaves = new Map((snapshot.leaves ?? []).map(([id, n]) => [id, n]));
   }
 
   apply(delta) {
@@ -210,8 +221,21 @@ export class Model {
         grew = false;
         for (const [id, n] of s.nodes) if (!gone.has(id) && gone.has(n[1])) { gone.add(id); grew = true; }
       }
-      for (const id of gone) s.nodes.delete(id);
+      for (const id of gone) {
+        s.nodes.delete(id);
+        this.leaves.delete(id);
+      }
     }
+    for (const [id, n] of delta.leaves) {
+      if (!where.has(id) || !where.get(id).nodes.has(id)) throw new Error(`leaves of unknown node ${id}`);
+      if (n > 0) this.leaves.set(id, n);
+      else this.leaves.delete(id);
+    }
+  }
+
+  // The leaves held, as a snapshot lists them: [[id, n], ...] in id order.
+  leavesList() {
+    return [...this.leaves].sort((a, b) => a[0] - b[0]);
   }
 
   // The plants part of a skeleton, nodes in id order, as JSON.

@@ -134,6 +134,20 @@ test('snapshot plus deltas from a real daemon equal the export at every iteratio
       assert.deepEqual(f32(sk.toExport()), f32(exportSkeleton(d.db, 'w', it)), `iteration ${it}`);
     }
     assert.ok(shed > 0, 'the run shed branches');
+    // the leaves held are those of a fresh snapshot, and their total is kept
+    const fresh = await connect(d.url);
+    fresh.send({ type: 'subscribe', run });
+    const snap = await fresh.type('snapshot');
+    fresh.close();
+    const held = [];
+    let total = 0;
+    for (let k = 0; k < sk.count; k++) {
+      if (!sk.dead[k] && sk.leaves[k] > 0) held.push([sk.id[k], sk.leaves[k]]);
+      total += sk.leaves[k];
+    }
+    assert.ok(snap.leaves.length > 0);
+    assert.deepEqual(held.sort((a, b) => a[0] - b[0]), snap.leaves);
+    assert.equal(sk.leafTotal, total);
     c.close();
   } finally {
     await stopDaemon(d);

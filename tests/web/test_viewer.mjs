@@ -6,6 +6,7 @@ import { spawnSync } from 'node:child_process';
 import { readFileSync } from 'node:fs';
 import {
   SYLVA, ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, exportSkeleton, plantsJSON, cleanup, tempDir,
+  serverSnapshot,
 } from '../server/harness.mjs';
 import { launch, openViewer, state, until, treePixels, httpGet } from './browser.mjs';
 
@@ -78,9 +79,11 @@ test('the wall scenario grows in the page: internodes, pixels, plots, memory', a
       assert.equal(count, want, `internodes held after iteration ${it}`);
     }
     const plots = await page.evaluate(() => window.sylva.plots());
-    // a run without years or a start year: the five plots, against the iteration
-    assert.deepEqual(Object.keys(plots), ['height', 'dbh', 'crown_width', 'nodes', 'cap']);
-    for (const key of ['height', 'dbh', 'crown_width', 'nodes', 'cap']) {
+    // a run without years or a start year: the six plots, against the iteration
+    const keys = ['height', 'dbh', 'crown_width', 'leaf_area', 'nodes', 'cap'];
+    assert.deepEqual(Object.keys(plots), keys);
+    assert.ok(plots.leaf_area.stems['tree/0'].at(-1) > 0, 'a leaf area');
+    for (const key of keys) {
       assert.equal(plots[key].axis, 'iteration', key);
       assert.deepEqual(plots[key].iterations, its, `${key}: one point per iteration`);
       const want = rows.map((r) => (r[key] === '' ? null : Number(r[key])));
@@ -123,14 +126,6 @@ async function runInPage(d, page, file, { name, start, overrides = {} }) {
   await page.click(`#runs tr[data-run="${run}"]`);
   await until(page, (s) => s.run === run && s.seq >= 0, 'the selected run');
   return run;
-}
-
-async function serverSnapshot(d, run) {
-  const c = await connect(d.url);
-  c.send({ type: 'subscribe', run });
-  const snap = await c.type('snapshot');
-  c.close();
-  return snap;
 }
 
 test('controls, a wall and a tree between iterations, the timeline, light and exports', async () => {
@@ -221,7 +216,8 @@ test('controls, a wall and a tree between iterations, the timeline, light and ex
     // the export links name the shown iteration
     const href = await page.getAttribute('#export-skeleton', 'href');
     assert.match(href, /format=skeleton&iteration=2$/);
-    for (const [link, format] of [['#export-skeleton', 'skeleton'], ['#export-obj', 'obj'], ['#export-csv', 'csv']]) {
+    for (const [link, format] of [['#export-skeleton', 'skeleton'], ['#export-obj', 'obj'], ['#export-glb', 'glb'],
+      ['#export-csv', 'csv']]) {
       const got = await httpGet(`${d.http}/${await page.getAttribute(link, 'href')}`);
       const cli = spawnSync(SYLVA, ['export', '--db', d.db, '--name', 'site', '--iteration', '2', '--format', format, '-o', '-']);
       assert.equal(got.status, 200, format);

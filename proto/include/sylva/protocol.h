@@ -182,21 +182,26 @@ char *sylva_runs_json(const sylva_run_summary *runs, size_t n);
 
 /** {"type":"snapshot","run":..,"seq":..,"iteration":..,"voxel":..,"world":{"min":[..],
  *  "max":[..]},"obstacles":[..],"plants":[..],"stats":[..],"species":[..],"sky":..,
- *  "start_year":..,"ref":..}: world, obstacles and plants byte for byte as in
- *  sylva_encode_skeleton(); stats per global stem as in the stats line (compact), the
- *  stems' current measures; species: the labels of the world's species in id order
- *  (what an edit's add_plants may name); start_year (the run's, 0: none) only when
- *  given. */
+ *  "start_year":..,"foliage":[..],"plant_species":[..],"leaves":[[id,n],..],"ref":..}:
+ *  world, obstacles and plants byte for byte as in sylva_encode_skeleton(); stats per
+ *  global stem as in the stats line (compact), the stems' current measures; species:
+ *  the labels of the world's species in id order (what an edit's add_plants may name);
+ *  start_year (the run's, 0: none) only when given; foliage: per species in id order
+ *  {"species","leaf_size","leaf_density","leaf_colour":"#rrggbb"}; plant_species: each
+ *  plant's species (its index in species and foliage), in the order of plants; leaves:
+ *  every node with sylva_node_info.leaves n > 0, in id order. */
 char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
                          const char *ref);
 
 /** {"type":"delta","run":..,"seq":..,"iteration":..,"added":[[id,parent,plant,stem,x,
- *  y,z,radius],..],"radii":[[id,radius],..],"shed":[id,..],"stats":[..]} of the step
- *  that gave journal j (plant: the plant's index as in "plants" of the snapshot;
- *  stem: the stem's index within the plant). A client that applies a snapshot and
- *  then each delta (adds the nodes with birth = "iteration", sets the radii, then
- *  removes every shed node with its whole subtree) holds the skeleton of that
- *  iteration. start_year (0: none) dates the stats' zone entries in calendar years. */
+ *  y,z,radius],..],"radii":[[id,radius],..],"shed":[id,..],"leaves":[[id,n],..],
+ *  "stats":[..]} of the step that gave journal j (plant: the plant's index as in
+ *  "plants" of the snapshot; stem: the stem's index within the plant; leaves: j's
+ *  leaf changes, n = 0 for a node that lost its leaves). A client that applies a
+ *  snapshot and then each delta (adds the nodes with birth = "iteration", sets the
+ *  radii, removes every shed node with its whole subtree, then sets the leaves) holds
+ *  the skeleton and the leaves of that iteration. start_year (0: none) dates the
+ *  stats' zone entries in calendar years. */
 char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j,
                       int start_year);
 
