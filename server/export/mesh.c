@@ -7,6 +7,7 @@
  * which the glTF export shares) gives ring after ring, stem by stem; it keeps one
  * frame (u, t) per node so children can carry their parent's frame. */
 #include "mesh.h"
+#include "vec3.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -145,24 +146,6 @@ int sylva_mesh_count(const sylva_world *w, sylva_mesh_format format,
   return 0;
 }
 
-/* Vector helpers on double[3]. */
-static double dot3(const double a[3], const double b[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double out[3]) {
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* Scales v to unit length; false (v unchanged) when it is too short to have a direction. */
-static bool normalize3(double v[3]) {
-  double len = sqrt(dot3(v, v));
-  if (!(len > 1e-12)) return false;
-  for (int a = 0; a < 3; a++) v[a] /= len;
-  return true;
-}
 
 /* A fixed unit vector perpendicular to the unit vector t (+x for t = +z). */
 static void first_perpendicular(const double t[3], double u[3]) {
