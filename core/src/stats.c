@@ -176,13 +176,9 @@ void sylva__stats_leaf_area(sylva_world *w) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     sylva__stem *st = &w->stems[s->stem[i]];
     if (leafy(s, &w->species[st->species].def, i, w->iteration)) st->stats.leaf_area += 1.0;
+    /* the leaves as the last journal gave them: the next one lists what changes */
+    w->nodes.leaves[i] = (uint16_t)sylva__node_leaves(w, i);
   }
   for (int k = 0; k < w->stem_count; k++)
     w->stems[k].stats.leaf_area *= sylva__node_leaf_area(&w->species[w->stems[k].species].def);
-  /* the leaves as the last journal gave them: the next one lists what changes */
-  for (size_t i = 0; i < s->count; i++) {
-    const sylva__stem *st = &w->stems[s->stem[i]];
-    const sylva_species_def *d = &w->species[st->species].def;
-    w->nodes.leaves[i] = (uint16_t)(leafy(s, d, i, w->iteration) ? d->leaf_density : 0);
-  }
 }

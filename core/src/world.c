@@ -526,10 +526,8 @@ static int finish_plant(sylva_world *w, const sylva_plant_def *def, int stems) {
   w->plant_count++;
   /* its leaves as a snapshot taken now gives them (sylva_node_info.leaves): the next
    * journal lists the leaves that differ from those */
-  const sylva_species_def *d = &w->species[def->species].def;
   for (size_t i = w->mark.count; i < w->nodes.count; i++)
-    w->nodes.leaves[i] =
-        (uint16_t)(sylva__leaf_age(&w->nodes, d, i, w->iteration + 1) >= 0 ? d->leaf_density : 0);
+    w->nodes.leaves[i] = (uint16_t)sylva__node_leaves(w, i);
   for (int r = 0; r < stems; r++) sylva__stats_planted(w, pl->first_stem + r);
   sylva__conflicts(w, w->iteration);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
@@ -889,8 +887,7 @@ static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {
   out->y = s->y[slot];
   out->z = s->z[slot];
   out->radius = s->radius[slot];
-  const sylva_species_def *d = &w->species[st->species].def;
-  out->leaves = sylva__leaf_age(s, d, slot, w->iteration + 1) >= 0 ? d->leaf_density : 0;
+  out->leaves = sylva__node_leaves(w, slot);
 }
 
 /* The nodes born at T, the nodes whose leaves changed and the radius changes of
@@ -901,16 +898,15 @@ static void collect_journal(sylva_world *w, int T) {
   w->leaf_changes.len = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
-    sylva_node_info info;
-    node_info(w, i, &info);
-    if (info.leaves != (int32_t)s->leaves[i]) {
+    int leaves = sylva__node_leaves(w, i);
+    if (leaves != (int)s->leaves[i]) {
       SYLVA_ASSERT(w->leaf_changes.len < w->leaf_changes.cap);
-      w->leaf_changes.data[w->leaf_changes.len++] = (sylva_leaf_change){info.id, info.leaves};
-      s->leaves[i] = (uint16_t)info.leaves;
+      w->leaf_changes.data[w->leaf_changes.len++] = (sylva_leaf_change){s->id[i], leaves};
+      s->leaves[i] = (uint16_t)leaves;
     }
     if (s->birth[i] != T) continue;
     SYLVA_ASSERT(w->added.len < w->added.cap);
-    w->added.data[w->added.len++] = info;
+    node_info(w, i, &w->added.data[w->added.len++]);
   }
   /* radii changes of nodes shed later in the same iteration are dropped */
   size_t k = 0;

@@ -211,6 +211,13 @@ static inline int sylva__leaf_age(const sylva__skeleton *s, const sylva_species_
   return d->years && s->axis_child[i] < 0 ? 1 : -1;
 }
 
+/** The leaves node i carries now (sylva_node_info.leaves): its species' leaf_density
+ *  while it bears leaves as the next iteration counts them, else 0. */
+static inline int sylva__node_leaves(const sylva_world *w, size_t i) {
+  const sylva_species_def *d = &w->species[w->stems[w->nodes.stem[i]].species].def;
+  return sylva__leaf_age(&w->nodes, d, i, w->iteration + 1) >= 0 ? d->leaf_density : 0;
+}
+
 /** The one-sided leaf area one leaf-bearing node of species d carries, m^2. */
 static inline double sylva__node_leaf_area(const sylva_species_def *d) {
   return (double)d->leaf_density * SYLVA_LEAF_FILL * d->leaf_size * d->leaf_size;

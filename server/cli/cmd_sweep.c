@@ -62,7 +62,7 @@ typedef struct sweep_ctx {
   const sweep_plan *plan;
   const char *db;
   int iterations;   /* 0: the scenario's */
-  int *todo;        /* positions to run, in order */
+  int *pending;     /* the positions still to grow, in plan order */
   int count, done, failed;
   bool progress;
   double t0, busy;  /* wall clock at the start; summed seconds of finished runs */
@@ -187,7 +187,7 @@ static int grow_one(const sweep_plan *p, const char *db, int position, int itera
 
 static int pool_job(int i, void *ctx) {
   sweep_ctx *c = ctx;
-  return grow_one(c->plan, c->db, c->todo[i], c->iterations);
+  return grow_one(c->plan, c->db, c->pending[i], c->iterations);
 }
 
 /* One line per started run: how far the sweep is, and which run it grows now. */
@@ -199,7 +199,7 @@ static void show_progress(const sweep_ctx *c, int started) {
              (c->count - c->done) * (c->busy / c->done) / c->jobs);
   sweep_run r;
   char err[256];
-  if (started >= 0 && sweep_plan_run(c->plan, c->todo[started], &r, err, sizeof err) == 0) {
+  if (started >= 0 && sweep_plan_run(c->plan, c->pending[started], &r, err, sizeof err) == 0) {
     fprintf(stderr, "sweep: %d/%d runs done%s; growing %s\n", c->done, c->count, left, r.name);
     sweep_run_free(&r);
   } else {
@@ -218,7 +218,7 @@ static void pool_done(int i, int status, double seconds, void *ctx) {
     c->failed++;
     sweep_run r;
     char err[256];
-    if (sweep_plan_run(c->plan, c->todo[i], &r, err, sizeof err) == 0) {
+    if (sweep_plan_run(c->plan, c->pending[i], &r, err, sizeof err) == 0) {
       fprintf(stderr, "sylva: sweep: run \"%s\" failed (status %d)\n", r.name, status);
       sweep_run_free(&r);
     }
@@ -272,22 +272,22 @@ static int stored_state(const sweep_plan *p, const char *db, int iterations, boo
 static int run_local(const sweep_plan *p, const char *db, int jobs, int iterations, int k, int t,
                      bool progress) {
   bool *finished = calloc((size_t)p->runs, sizeof *finished);
-  int *todo = malloc((size_t)p->runs * sizeof *todo);
-  if (!finished || !todo) {
+  int *pending = malloc((size_t)p->runs * sizeof *pending);
+  if (!finished || !pending) {
     free(finished);
-    free(todo);
+    free(pending);
     fprintf(stderr, "sylva: out of memory\n");
     return CLI_EXIT_FAILURE;
   }
   int rc = stored_state(p, db, iterations, finished);
-  sweep_ctx c = {.plan = p, .db = db, .iterations = iterations, .todo = todo,
+  sweep_ctx c = {.plan = p, .db = db, .iterations = iterations, .pending = pending,
                  .progress = progress, .t0 = wall_seconds(), .jobs = jobs};
   int kept = 0;
   for (int i = 0; i < p->runs && rc == CLI_EXIT_OK; i++) {
     if (t && i % t != k) continue;
     /* a finished run is kept, unless a new limit asks for more */
     if (finished[i]) kept++;
-    else todo[c.count++] = i;
+    else pending[c.count++] = i;
   }
   if (rc == CLI_EXIT_OK && progress)
     fprintf(stderr, "sweep: %s: %d runs to grow in %d processes%s\n", p->name, c.count, jobs,
@@ -306,7 +306,7 @@ static int run_local(const sweep_plan *p, const char *db, int jobs, int iteratio
     }
   }
   free(finished);
-  free(todo);
+  free(pending);
   return rc;
 }
 

@@ -36,15 +36,10 @@ static void validate_usage(FILE *f) {
   cli_print_options(f, validate_options, VALIDATE_OPTION_COUNT);
 }
 
-/* Whether the file is a sweep plan: a JSON object whose "format" is the plan's. An
- * unreadable or malformed file is not; the scenario's reader then names what is
- * wrong with it. */
-static bool is_plan(const char *path) {
-  char *data = NULL;
-  size_t len = 0;
-  if (files_read(path, FILES_MAX_INPUT, &data, &len)) return false;
+/* Whether the text is a sweep plan: a JSON object whose "format" is the plan's. A
+ * malformed text is not; the scenario's reader then names what is wrong with it. */
+static bool is_plan(const char *data, size_t len) {
   cJSON *root = cJSON_ParseWithLength(data, len);
-  free(data);
   const cJSON *format = cJSON_GetObjectItemCaseSensitive(root, "format");
   bool plan = cJSON_IsString(format) && strcmp(format->valuestring, SWEEP_FORMAT) == 0;
   cJSON_Delete(root);
@@ -53,10 +48,10 @@ static bool is_plan(const char *path) {
 
 /* A sweep plan: the plan as `sylva sweep` reads it (--force: a plan of more runs than
  * the default limit is still valid), then every run's scenario. */
-static int validate_plan(const char *path) {
+static int validate_plan(const char *path, const char *data, size_t len) {
   sweep_plan *p;
   char err[1200];
-  if (sweep_plan_load(path, true, &p, err, sizeof err)) {
+  if (sweep_plan_parse(data, len, path, true, &p, err, sizeof err)) {
     fprintf(stderr, "sylva: %s\n", err);
     return CLI_EXIT_USAGE;
   }
@@ -103,7 +98,16 @@ int cmd_validate(int argc, char **argv) {
     return cli_usage_error("validate", argc - first == 0 ? "missing SCENARIO.json"
                                                          : "expected one SCENARIO.json");
   const char *path = argv[first];
-  if (is_plan(path)) return validate_plan(path);
+  /* a plan is told by its content; anything else (an unreadable file too) is read
+   * as a scenario, whose reader names what is wrong */
+  char *data = NULL;
+  size_t len = 0;
+  if (files_read(path, FILES_MAX_INPUT, &data, &len) == 0 && is_plan(data, len)) {
+    int rc = validate_plan(path, data, len);
+    free(data);
+    return rc;
+  }
+  free(data);
 
   sylva_scenario *s;
   int rc = cli_input_scenario(path, SYLVA_SCENARIO_NEED_PLANTS, &s);

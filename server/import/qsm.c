@@ -21,15 +21,6 @@ void sylva_qsm_free(sylva_qsm *q) {
   memset(q, 0, sizeof *q);
 }
 
-int sylva__qsm_fail(char *err, size_t errlen, int status, const char *fmt, ...) {
-  if (err && errlen) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-  }
-  return status;
-}
 
 int sylva__qsm_grow(sylva_qsm *q, size_t *cap) {
   if (q->count < *cap) return SYLVA_OK;
@@ -197,9 +188,9 @@ static const char *positive_problem(double v) {
 int sylva__qsm_check_named(const sylva_qsm *q, sylva__qsm_namer name, const void *ctx, char *err,
                            size_t errlen) {
   if (!name) name = name_cylinder;
-  if (!q || q->count == 0) return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "no cylinders");
+  if (!q || q->count == 0) return server_fail(err, errlen, SYLVA_EINVAL, "no cylinders");
   if (q->count > (size_t)INT_MAX)
-    return sylva__qsm_fail(err, errlen, SYLVA_ETOOBIG, "%zu cylinders: more than %d", q->count,
+    return server_fail(err, errlen, SYLVA_ETOOBIG, "%zu cylinders: more than %d", q->count,
                            INT_MAX);
   char who[96];
   for (size_t i = 0; i < q->count; i++) {
@@ -207,32 +198,32 @@ int sylva__qsm_check_named(const sylva_qsm *q, sylva__qsm_namer name, const void
     const char *why;
     if ((why = positive_problem(c->radius))) {
       name(ctx, i, who, sizeof who);
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: radius %g %s", who, c->radius, why);
+      return server_fail(err, errlen, SYLVA_EINVAL, "%s: radius %g %s", who, c->radius, why);
     }
     if ((why = positive_problem(c->length))) {
       name(ctx, i, who, sizeof who);
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: length %g %s", who, c->length, why);
+      return server_fail(err, errlen, SYLVA_EINVAL, "%s: length %g %s", who, c->length, why);
     }
     for (int k = 0; k < 3; k++) {
       if (!isfinite(c->start[k])) {
         name(ctx, i, who, sizeof who);
-        return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: start %c %g is not a finite number",
+        return server_fail(err, errlen, SYLVA_EINVAL, "%s: start %c %g is not a finite number",
                                who, "xyz"[k], c -> start[k]);
       }
       if (!isfinite(c->axis[k])) {
         name(ctx, i, who, sizeof who);
-        return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: axis %c %g is not a finite number",
+        return server_fail(err, errlen, SYLVA_EINVAL, "%s: axis %c %g is not a finite number",
                                who, "xyz"[k], c -> axis[k]);
       }
     }
     if (c->axis[0] == 0 && c->axis[1] == 0 && c->axis[2] == 0) {
       name(ctx, i, who, sizeof who);
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: axis (0, 0, 0) has no direction", who);
+      return server_fail(err, errlen, SYLVA_EINVAL, "%s: axis (0, 0, 0) has no direction", who);
     }
     if (c->parent < -1 || c->parent >= (int)q->count) {
       name(ctx, i, who, sizeof who);
       /* Told as TreeQSM counts: cylinders from 1, 0 for none. */
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      return server_fail(err, errlen, SYLVA_EINVAL,
                              "%s: parent %lld is not a cylinder (1..%zu, or 0 for a root)", who,
                              (long long)c->parent + 1, q->count);
     }
@@ -240,7 +231,7 @@ int sylva__qsm_check_named(const sylva_qsm *q, sylva__qsm_namer name, const void
   /* Cycles: follow each chain of parents until a root or a cylinder already known
    * to reach one; meeting the chain itself again is a cycle. */
   unsigned char *state = calloc(q->count, 1); /* 0 unseen, 1 on the chain, 2 reaches a root */
-  if (!state) return sylva__qsm_fail(err, errlen, SYLVA_ENOMEM, "out of memory");
+  if (!state) return server_fail(err, errlen, SYLVA_ENOMEM, "out of memory");
   int rc = SYLVA_OK;
   for (size_t i = 0; i < q->count && !rc; i++) {
     size_t j = i;
@@ -262,7 +253,7 @@ int sylva__qsm_check_named(const sylva_qsm *q, sylva__qsm_namer name, const void
         shown++;
       } while (k != j && shown < 8);
       name(ctx, j, who, sizeof who);
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: its parents form a cycle (%s -> %s%s)",
+      rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: its parents form a cycle (%s -> %s%s)",
                            who, msg, k == j ? "" : "... -> ", who);
     }
     for (j = i; state[j] == 1; j = (size_t)q->cyl[j].parent) {
@@ -378,14 +369,14 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
   size_t len;
   int e = read_all(path, &text, &len);
   if (e)
-    return sylva__qsm_fail(err, errlen, e == ENOMEM ? SYLVA_ENOMEM : SYLVA_EINVAL, "%s: %s", path,
+    return server_fail(err, errlen, e == ENOMEM ? SYLVA_ENOMEM : SYLVA_EINVAL, "%s: %s", path,
                            strerror(e));
   cJSON *root = cJSON_ParseWithLength(text, len);
   if (!root) {
     const char *at = cJSON_GetErrorPtr();
     size_t off = at && at >= text && at <= text + len ? (size_t)(at - text) : len;
     free(text);
-    return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: not valid JSON (near byte %zu)", path,
+    return server_fail(err, errlen, SYLVA_EINVAL, "%s: not valid JSON (near byte %zu)", path,
                            off);
   }
   free(text);
@@ -397,23 +388,23 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
   const cJSON *plants = cJSON_GetObjectItemCaseSensitive(root, "plants");
   if (!cJSON_IsObject(root) || !cJSON_IsString(fmt) ||
       strcmp(fmt->valuestring, "sylva.skeleton/1") != 0) {
-    rc = sylva__qsm_fail(
+    rc = server_fail(
         err, errlen, SYLVA_EINVAL, "%s: not a sylva.skeleton/1 file (its \"format\" is %s%.40s%s)",
         path, cJSON_IsString(fmt) ? "'" : "", cJSON_IsString(fmt) ? fmt->valuestring : "missing",
         cJSON_IsString(fmt) ? "'" : "");
     goto done;
   }
   if (!cJSON_IsArray(plants)) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: no \"plants\" array", path);
+    rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: no \"plants\" array", path);
     goto done;
   }
   int models = cJSON_GetArraySize(plants);
   if (models == 0) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: no plants: an empty model", path);
+    rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: no plants: an empty model", path);
     goto done;
   }
   if (model > models) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_ERANGE, "%s: no model %d: the file holds %d plant%s",
+    rc = server_fail(err, errlen, SYLVA_ERANGE, "%s: no model %d: the file holds %d plant%s",
                          path, model, models, models == 1 ? "" : "s");
     goto done;
   }
@@ -426,7 +417,7 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
     snprintf(plant_name, sizeof plant_name, "%d", model ? model : 1);
   const cJSON *stems = cJSON_GetObjectItemCaseSensitive(plant, "stems");
   if (!cJSON_IsArray(stems)) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: plant '%s': no \"stems\" array", path,
+    rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: plant '%s': no \"stems\" array", path,
                          plant_name);
     goto done;
   }
@@ -436,14 +427,14 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
   cJSON_ArrayForEach(stem, stems) {
     const cJSON *ns = cJSON_GetObjectItemCaseSensitive(stem, "nodes");
     if (!cJSON_IsArray(ns)) {
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      rc = server_fail(err, errlen, SYLVA_EINVAL,
                            "%s: plant '%s': a stem without a \"nodes\" array", path, plant_name);
       goto done;
     }
     n += (size_t)cJSON_GetArraySize(ns);
   }
   if (n > (size_t)INT_MAX) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_ETOOBIG, "%s: plant '%s': too many nodes", path,
+    rc = server_fail(err, errlen, SYLVA_ETOOBIG, "%s: plant '%s': too many nodes", path,
                          plant_name);
     goto done;
   }
@@ -451,7 +442,7 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
   by_id = calloc(n ? n : 1, sizeof *by_id);
   node_id = calloc(n ? n : 1, sizeof *node_id);
   if (!nodes || !by_id || !node_id) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path);
+    rc = server_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path);
     goto done;
   }
   size_t k = 0;
@@ -470,7 +461,7 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
         if (ok) v[j] = x->valuedouble;
       }
       if (!ok || !whole(v[0]) || !whole(v[1])) {
-        rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+        rc = server_fail(err, errlen, SYLVA_EINVAL,
                              "%s: plant '%s', stem %d, node %d: not [id, parent, x, y, z, radius, "
                              "birth] with whole ids",
                              path, plant_name, stem_no, node_no);
@@ -488,7 +479,7 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
   qsort(by_id, n, sizeof *by_id, skel_cmp_id);
   for (size_t i = 1; i < n; i++)
     if (by_id[i]->id == by_id[i - 1]->id) {
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: plant '%s': two nodes with id %.0f",
+      rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: plant '%s': two nodes with id %.0f",
                            path, plant_name, by_id[i]->id);
       goto done;
     }
@@ -497,13 +488,13 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
     if (nodes[i].parent != -1) nodes[i].cyl = (int)cyls++;
   q->models = models;
   if (cyls == 0) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+    rc = server_fail(err, errlen, SYLVA_EINVAL,
                          "%s: plant '%s': no cylinders (no node has a parent)", path, plant_name);
     goto done;
   }
   q->cyl = calloc(cyls, sizeof *q->cyl);
   if (!q->cyl) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path);
+    rc = server_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path);
     goto done;
   }
   for (size_t i = 0; i < n; i++) {
@@ -511,7 +502,7 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
     if (s->cyl < 0) continue;
     const skel_node *p = skel_find(by_id, n, s->parent);
     if (!p) {
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      rc = server_fail(err, errlen, SYLVA_EINVAL,
                            "%s: plant '%s', node %.0f: its parent %.0f is no node of the plant",
                            path, plant_name, s->id, s->parent);
       goto done;
@@ -533,7 +524,7 @@ static int read_skeleton(const char *path, int model, sylva_qsm *q, char *err, s
   skel_names names = {plant_name, node_id};
   rc = sylva__qsm_check_named(q, skel_name, &names, msg, sizeof msg);
   if (rc)
-    sylva__qsm_fail(err, errlen, rc, "%s: %s", path, msg);
+    server_fail(err, errlen, rc, "%s: %s", path, msg);
   else
     sylva__qsm_normalise(q);
 
@@ -552,23 +543,23 @@ int sylva_qsm_read(const char *path, sylva_qsm_format f, int model, sylva_qsm *q
   if (err && errlen) err[0] = '\0';
   memset(q, 0, sizeof *q);
   if (model < 0)
-    return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+    return server_fail(err, errlen, SYLVA_EINVAL,
                            "%s: model %d: models count from 1 (0 for the first)", path, model);
   char buf[SNIFF_BYTES];
   size_t n;
   int e = sniff_read(path, buf, &n);
   if (e)
-    return sylva__qsm_fail(err, errlen, e == ENOMEM ? SYLVA_ENOMEM : SYLVA_EINVAL, "%s: %s", path,
+    return server_fail(err, errlen, e == ENOMEM ? SYLVA_ENOMEM : SYLVA_EINVAL, "%s: %s", path,
                            strerror(e));
   if (f == SYLVA_QSM_UNKNOWN) {
     switch (sniff_bytes(path, buf, n, &f)) {
       case SNIFF_EMPTY:
-        return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: empty file: not a QSM", path);
+        return server_fail(err, errlen, SYLVA_EINVAL, "%s: empty file: not a QSM", path);
       case SNIFF_BINARY:
-        return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+        return server_fail(err, errlen, SYLVA_EINVAL,
                                "%s: not a QSM: binary data, but not a MATLAB MAT-file", path);
       case SNIFF_JSON_OTHER:
-        return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+        return server_fail(err, errlen, SYLVA_EINVAL,
                                "%s: not a QSM: JSON, but not sylva.skeleton/1", path);
       case SNIFF_FORMAT:
         break;
@@ -589,7 +580,7 @@ int sylva_qsm_read(const char *path, sylva_qsm_format f, int model, sylva_qsm *q
       rc = read_skeleton(path, model, q, err, errlen);
       break;
     default:
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: unknown format %d", path, (int)f);
+      rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: unknown format %d", path, (int)f);
   }
   if (rc)
     sylva_qsm_free(q);

@@ -6,6 +6,7 @@
 #ifndef SYLVA_IMPORT_QSM_H
 #define SYLVA_IMPORT_QSM_H
 
+#include "server_error.h"
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -94,12 +95,6 @@ void sylva__qsm_normalise(sylva_qsm *q);
 /** Makes room for one more cylinder in q, whose array holds *cap; 0 or SYLVA_ENOMEM. */
 int sylva__qsm_grow(sylva_qsm *q, size_t *cap);
 
-/** Formats a message into err (when err and errlen allow) and returns status. */
-int sylva__qsm_fail(char *err, size_t errlen, int status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
 
 /** The readers behind sylva_qsm_read, with its contract (messages start "PATH: "):
  *  TreeQSM .mat (qsm_mat.c), TreeQSM text and SimpleForest CSV (qsm_text.c). The

@@ -73,10 +73,10 @@ enum { TEXT_MAX_COLUMNS = 17 };
 int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, size_t errlen) {
   memset(q, 0, sizeof *q);
   if (model > 1)
-    return sylva__qsm_fail(err, errlen, SYLVA_ERANGE,
+    return server_fail(err, errlen, SYLVA_ERANGE,
                            "%s: no model %d: a TreeQSM text file holds 1", path, model);
   FILE *f = fopen(path, "r");
-  if (!f) return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
+  if (!f) return server_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
   int rc = SYLVA_OK;
   char *line = NULL;
   size_t line_cap = 0, cap = 0, line_no = 0, rows_cap = 0;
@@ -89,7 +89,7 @@ int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, s
   while ((got = getline(&line, &line_cap, f)) != -1) {
     line_no++;
     if (memchr(line, '\0', (size_t)got)) {
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      rc = server_fail(err, errlen, SYLVA_EINVAL,
                            "%s: row %zu: a NUL byte: binary data, not TreeQSM text", path, line_no);
       break;
     }
@@ -111,7 +111,7 @@ int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, s
     }
     if (!columns) {
       if (n != 17 && n != 15) {
-        rc = sylva__qsm_fail(
+        rc = server_fail(
             err, errlen, SYLVA_EINVAL,
             "%s: row %zu: %d columns: TreeQSM text has 17 (radius, length, start, "
             "axis, parent, extension, branch, branch_order, position_in_branch, "
@@ -122,14 +122,14 @@ int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, s
       columns = n;
       names = n == 17 ? text_columns17 : text_columns15;
     } else if (n != columns) {
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      rc = server_fail(err, errlen, SYLVA_EINVAL,
                            "%s: row %zu: %d columns where the rows above have %d", path, line_no, n,
                            columns);
       break;
     }
     for (int k = 0; k < n; k++)
       if (!parse_number(tok[k], &v[k])) {
-        rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+        rc = server_fail(err, errlen, SYLVA_EINVAL,
                              "%s: row %zu, column %d (%s): '%.40s' is not a number", path, line_no,
                              k + 1, names[k], tok[k]);
         break;
@@ -137,7 +137,7 @@ int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, s
     if (rc) break;
     for (int k = 10; k <= 11; k++)
       if (!whole_int(v[k])) {
-        rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+        rc = server_fail(err, errlen, SYLVA_EINVAL,
                              "%s: row %zu, column %d (%s): %s is not a whole number", path, line_no,
                              k + 1, names[k], tok[k]);
         break;
@@ -171,18 +171,18 @@ int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, s
     q->count++;
   }
   if (!rc && ferror(f))
-    rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
-  if (rc == SYLVA_ENOMEM) sylva__qsm_fail(err, errlen, rc, "%s: out of memory", path);
+    rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
+  if (rc == SYLVA_ENOMEM) server_fail(err, errlen, rc, "%s: out of memory", path);
   free(line);
   fclose(f);
   if (!rc && q->count == 0)
-    rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: no cylinders%s", path,
+    rc = server_fail(err, errlen, SYLVA_EINVAL, "%s: no cylinders%s", path,
                          header ? " below the header row" : ": an empty model");
   /* Parents count from 1 in the file, 0 for a root. */
   for (size_t i = 0; !rc && i < q->count; i++) {
     double p = parent[i];
     if (!whole_int(p) || p < 0 || p > (double)q->count)
-      rc = sylva__qsm_fail(
+      rc = server_fail(
           err, errlen, SYLVA_EINVAL,
           "%s: row %zu, column 9 (parent): %g is not a cylinder (1..%zu, or 0 for a root)", path,
           rows[i], p, q->count);
@@ -192,7 +192,7 @@ int sylva__qsm_read_text(const char *path, int model, sylva_qsm *q, char *err, s
   if (!rc) {
     char msg[512];
     rc = sylva__qsm_check_named(q, name_row, rows, msg, sizeof msg);
-    if (rc) sylva__qsm_fail(err, errlen, rc, "%s: %s", path, msg);
+    if (rc) server_fail(err, errlen, rc, "%s: %s", path, msg);
   }
   free(rows);
   free(parent);
@@ -257,7 +257,7 @@ typedef struct csv_reader {
 
 static void csv_fail_nomem(csv_reader *r) {
   if (r->status) return;
-  r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_ENOMEM, "%s: out of memory", r->path);
+  r->status = server_fail(r->err, r->errlen, SYLVA_ENOMEM, "%s: out of memory", r->path);
 }
 
 static bool blank(char ch) { return ch == ' ' || ch == '\t' || ch == '\r'; }
@@ -276,7 +276,7 @@ static void csv_on_field(void *s, size_t len, void *data) {
   if (r->nfields == r->fields_cap) {
     size_t cap = r->fields_cap ? 2 * r->fields_cap : 32;
     if (cap > 4096) {
-      r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+      r->status = server_fail(r->err, r->errlen, SYLVA_EINVAL,
                                   "%s: row %zu: more than 4096 fields", r->path, r->row_line);
       return;
     }
@@ -306,7 +306,7 @@ static void csv_on_field(void *s, size_t len, void *data) {
     r->text_cap = cap;
   }
   if (memchr(p, '\0', len)) {
-    r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+    r->status = server_fail(r->err, r->errlen, SYLVA_EINVAL,
                                 "%s: row %zu: a NUL byte: binary data, not CSV", r->path, r->line);
     return;
   }
@@ -328,7 +328,7 @@ static void csv_header(csv_reader *r) {
         break;
       }
     if (c < COL_REQUIRED && r->col[c] < 0) {
-      r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+      r->status = server_fail(r->err, r->errlen, SYLVA_EINVAL,
                                   "%s: row %zu: the header has no column '%s' (a SimpleForest CSV "
                                   "needs ID, parentID, startX, startY, startZ, endX, endY, endZ "
                                   "and radius)",
@@ -348,14 +348,14 @@ static double csv_number(csv_reader *r, int c, bool whole) {
   double v = 0;
   if (!*s)
     r->status =
-        sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL, "%s: row %zu, column %zu (%s): empty",
+        server_fail(r->err, r->errlen, SYLVA_EINVAL, "%s: row %zu, column %zu (%s): empty",
                         r->path, r->row_line, k + 1, csv_names[c]);
   else if (!parse_number(s, &v))
-    r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+    r->status = server_fail(r->err, r->errlen, SYLVA_EINVAL,
                                 "%s: row %zu, column %zu (%s): '%.40s' is not a number", r->path,
                                 r->row_line, k + 1, csv_names[c], s);
   else if (whole && !whole_int(v))
-    r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+    r->status = server_fail(r->err, r->errlen, SYLVA_EINVAL,
                                 "%s: row %zu, column %zu (%s): '%.40s' is not a whole number",
                                 r->path, r->row_line, k + 1, csv_names[c], s);
   return v;
@@ -363,7 +363,7 @@ static double csv_number(csv_reader *r, int c, bool whole) {
 
 static void csv_data_row(csv_reader *r) {
   if (r->nfields != r->header_fields) {
-    r->status = sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+    r->status = server_fail(r->err, r->errlen, SYLVA_EINVAL,
                                 "%s: row %zu: %zu fields where the header has %zu", r->path,
                                 r->row_line, r->nfields, r->header_fields);
     return;
@@ -457,7 +457,7 @@ static int csv_link(csv_reader *r) {
   for (size_t k = 1; k < q->count && !r->status; k++)
     if (by_id[k].id == by_id[k - 1].id)
       r->status =
-          sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+          server_fail(r->err, r->errlen, SYLVA_EINVAL,
                           "%s: row %zu, column %zu (ID): ID %.0f is also on row %zu", r->path,
                           r->rows[by_id[k].i], id_col, by_id[k].id, r->rows[by_id[k - 1].i]);
   for (size_t i = 0; i < q->count && !r->status; i++) {
@@ -473,7 +473,7 @@ static int csv_link(csv_reader *r) {
     }
     if (lo == q->count || by_id[lo].id != p)
       r->status =
-          sylva__qsm_fail(r->err, r->errlen, SYLVA_EINVAL,
+          server_fail(r->err, r->errlen, SYLVA_EINVAL,
                           "%s: row %zu, column %zu (parentID): no row has ID %.0f (-1 for a root)",
                           r->path, r->rows[i], parent_col, p);
     else
@@ -496,15 +496,15 @@ static void name_csv_row(const void *ctx, size_t i, char *buf, size_t len) {
 int sylva__qsm_read_csv(const char *path, int model, sylva_qsm *q, char *err, size_t errlen) {
   memset(q, 0, sizeof *q);
   if (model > 1)
-    return sylva__qsm_fail(err, errlen, SYLVA_ERANGE,
+    return server_fail(err, errlen, SYLVA_ERANGE,
                            "%s: no model %d: a SimpleForest CSV file holds 1", path, model);
   FILE *f = fopen(path, "r");
-  if (!f) return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
+  if (!f) return server_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
   csv_reader r = {.path = path, .err = err, .errlen = errlen, .q = q};
   struct csv_parser p;
   if (csv_init(&p, CSV_STRICT | CSV_STRICT_FINI) != 0) {
     fclose(f);
-    return sylva__qsm_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path);
+    return server_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path);
   }
   char *line = NULL;
   size_t line_cap = 0;
@@ -521,30 +521,30 @@ int sylva__qsm_read_csv(const char *path, int model, sylva_qsm *q, char *err, si
     if (csv_parse(&p, s, n, csv_on_field, csv_on_row, &r) != n && !r.status) {
       r.status =
           csv_error(&p) == CSV_ENOMEM || csv_error(&p) == CSV_ETOOBIG
-              ? sylva__qsm_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path)
-              : sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: row %zu: malformed quoting (%s)",
+              ? server_fail(err, errlen, SYLVA_ENOMEM, "%s: out of memory", path)
+              : server_fail(err, errlen, SYLVA_EINVAL, "%s: row %zu: malformed quoting (%s)",
                                 path, r.line, csv_strerror(csv_error(&p)));
     }
   }
   if (!r.status && ferror(f))
-    r.status = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
+    r.status = server_fail(err, errlen, SYLVA_EINVAL, "%s: %s", path, strerror(errno));
   if (!r.status && csv_fini(&p, csv_on_field, csv_on_row, &r) != 0 && !r.status)
-    r.status = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+    r.status = server_fail(err, errlen, SYLVA_EINVAL,
                                "%s: row %zu: a quoted field never closed", path, r.line);
   csv_free(&p);
   free(line);
   fclose(f);
   if (!r.status && !r.have_header)
-    r.status = sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "%s: empty: no header row", path);
+    r.status = server_fail(err, errlen, SYLVA_EINVAL, "%s: empty: no header row", path);
   if (!r.status && q->count == 0)
-    r.status = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+    r.status = server_fail(err, errlen, SYLVA_EINVAL,
                                "%s: no cylinders below the header row: an empty model", path);
   if (!r.status) csv_link(&r);
   if (!r.status) {
     char msg[512];
     csv_names_ctx names = {r.rows, r.id};
     r.status = sylva__qsm_check_named(q, name_csv_row, &names, msg, sizeof msg);
-    if (r.status) sylva__qsm_fail(err, errlen, r.status, "%s: %s", path, msg);
+    if (r.status) server_fail(err, errlen, r.status, "%s: %s", path, msg);
   }
   free(r.text);
   free(r.start);

@@ -312,26 +312,26 @@ static int estimate_births(sylva_tree *t, const sylva_tree_options *o) {
 
 static int check_options(const sylva_tree_options *o, char *err, size_t errlen) {
   if (!(isfinite(o->rho) && o->rho > 0))
-    return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "rho %g is not a length above 0", o->rho);
+    return server_fail(err, errlen, SYLVA_EINVAL, "rho %g is not a length above 0", o->rho);
   for (int j = 0; j < 3; j++)
     if (!isfinite(o->base[j]))
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "the base is not a finite point");
+      return server_fail(err, errlen, SYLVA_EINVAL, "the base is not a finite point");
   if (!o->heights) {
     if (o->age < 0)
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "age %d is negative", o->age);
+      return server_fail(err, errlen, SYLVA_EINVAL, "age %d is negative", o->age);
     return SYLVA_OK;
   }
   if (o->years < 0)
-    return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "the height curve has no years");
+    return server_fail(err, errlen, SYLVA_EINVAL, "the height curve has no years");
   if (o->age < 0 || o->age > o->years)
-    return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+    return server_fail(err, errlen, SYLVA_EINVAL,
                            "age %d is outside the height curve's ages 0 to %d", o->age, o->years);
   for (int a = 0; a <= o->years; a++) {
     if (!(isfinite(o->heights[a]) && o->heights[a] >= 0))
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      return server_fail(err, errlen, SYLVA_EINVAL,
                              "the height curve at age %d is %g, not a height", a, o->heights[a]);
     if (a > 0 && o->heights[a] < o->heights[a - 1])
-      return sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      return server_fail(err, errlen, SYLVA_EINVAL,
                              "the height curve decreases at age %d (%g m after %g m)", a,
                              o->heights[a], o->heights[a - 1]);
   }
@@ -344,9 +344,9 @@ int sylva_tree_build(const sylva_qsm *q, const sylva_tree_options *o, sylva_tree
   memset(t, 0, sizeof *t);
   int rc = check_options(o, err, errlen);
   if (rc) return rc;
-  if (!q->count) return sylva__qsm_fail(err, errlen, SYLVA_EINVAL, "the model has no cylinders");
+  if (!q->count) return server_fail(err, errlen, SYLVA_EINVAL, "the model has no cylinders");
   if (q->count > (size_t)INT32_MAX)
-    return sylva__qsm_fail(err, errlen, SYLVA_ETOOBIG, "%zu cylinders: too many", q->count);
+    return server_fail(err, errlen, SYLVA_ETOOBIG, "%zu cylinders: too many", q->count);
   size_t n = q->count;
   builder b = {.q = q, .o = o};
   b.child_start = calloc(n + 1, sizeof *b.child_start);
@@ -446,7 +446,7 @@ int sylva_tree_build(const sylva_qsm *q, const sylva_tree_options *o, sylva_tree
     }
   }
   if (reach / o->rho + 2.0 * (double)b.axes_n > (double)SYLVA_TREE_MAX_NODES) {
-    rc = sylva__qsm_fail(err, errlen, SYLVA_ETOOBIG,
+    rc = server_fail(err, errlen, SYLVA_ETOOBIG,
                          "more than %zu nodes: rho %g m is too short for %.1f m of cylinders",
                          SYLVA_TREE_MAX_NODES, o->rho, reach);
     goto fail;
@@ -480,7 +480,7 @@ int sylva_tree_build(const sylva_qsm *q, const sylva_tree_options *o, sylva_tree
         }
     }
     if (!(o->heights[t->age] > 0)) {
-      rc = sylva__qsm_fail(err, errlen, SYLVA_EINVAL,
+      rc = server_fail(err, errlen, SYLVA_EINVAL,
                            "the height curve is 0 at age %d: it cannot be scaled", t->age);
       goto fail;
     }
@@ -492,7 +492,7 @@ int sylva_tree_build(const sylva_qsm *q, const sylva_tree_options *o, sylva_tree
 
 fail:
   if (rc == SYLVA_ENOMEM && err && errlen && !err[0])
-    sylva__qsm_fail(err, errlen, rc, "out of memory");
+    server_fail(err, errlen, rc, "out of memory");
   builder_free(&b);
   free(piece);
   sylva_tree_free(t);
