@@ -18,7 +18,18 @@ function normalize(v) {
 // alone, its blade 45 degrees between the internode and the outward direction; a root
 // takes a vertical internode of one leaf's length.
 export function placeLeaf(p, q, k, n, size, out = { centre: [0, 0, 0], along: [0, 0, 0], across: [0, 0, 0], edge: 0 }) {
-  const base = [0, 0, 0], axis = [0, 0, 0];
+  return leafAt(leafFrame(p, q, size), k, n, size, out);
+}
+
+// placeLeaf in two halves, for a node's n leaves: its frame once (leafFrame), then
+// each leaf (leafAt), the same operations in the same order as foliage_place().
+export function newFrame() {
+  return { base: [0, 0, 0], axis: [0, 0, 0], d: [0, 0, 0], e1: [0, 0, 0], e2: [0, 0, 0] };
+}
+
+// The internode's base, axis and direction d, and the frame e1, e2 fixed by it.
+export function leafFrame(p, q, size, f = newFrame()) {
+  const { base, axis, d, e1, e2 } = f;
   if (p) {
     for (let a = 0; a < 3; a++) {
       base[a] = p[a];
@@ -32,26 +43,50 @@ export function placeLeaf(p, q, k, n, size, out = { centre: [0, 0, 0], along: [0
     axis[2] = size;
   }
   const length = Math.sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
-  const d = [0.0, 0.0, 1.0];
+  d[0] = 0.0;
+  d[1] = 0.0;
+  d[2] = 1.0;
   if (length > 0.0) for (let a = 0; a < 3; a++) d[a] = axis[a] / length;
   // e1 = up x d, the horizontal perpendicular (x for a vertical internode); e2 = d x e1
-  const e1 = [-d[1], d[0], 0.0];
+  e1[0] = -d[1];
+  e1[1] = d[0];
+  e1[2] = 0.0;
   if (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2] < 1e-12) {
     e1[0] = 1.0;
     e1[1] = e1[2] = 0.0;
   }
   normalize(e1);
-  const e2 = [d[1] * e1[2] - d[2] * e1[1], d[2] * e1[0] - d[0] * e1[2], d[0] * e1[1] - d[1] * e1[0]];
+  e2[0] = d[1] * e1[2] - d[2] * e1[1];
+  e2[1] = d[2] * e1[0] - d[0] * e1[2];
+  e2[2] = d[0] * e1[1] - d[1] * e1[0];
   normalize(e2);
-  const phi = GOLDEN_ANGLE * k;
-  const c = Math.cos(phi), s = Math.sin(phi);
+  return f;
+}
+
+// cos and sin of k golden angles, kept: the same doubles as computed each time.
+const turnCos = [], turnSin = [];
+function turn(k) {
+  for (let j = turnCos.length; j <= k; j++) {
+    const phi = GOLDEN_ANGLE * j;
+    turnCos.push(Math.cos(phi));
+    turnSin.push(Math.sin(phi));
+  }
+}
+
+// Leaf k of n in a frame of leafFrame (placeLeaf's second half).
+export function leafAt(f, k, n, size, out) {
+  const { base, axis, d, e1, e2 } = f;
+  if (k >= turnCos.length) turn(k);
+  const c = turnCos[k], s = turnSin[k];
   const t = (k + 0.5) / (n > 0 ? n : 1);
-  const outward = [0, 0, 0], along = out.along, across = out.across;
-  for (let a = 0; a < 3; a++) outward[a] = c * e1[a] + s * e2[a];
-  for (let a = 0; a < 3; a++) along[a] = (outward[a] + d[a]) * SQRT1_2;
-  across[0] = d[1] * outward[2] - d[2] * outward[1];
-  across[1] = d[2] * outward[0] - d[0] * outward[2];
-  across[2] = d[0] * outward[1] - d[1] * outward[0];
+  const along = out.along, across = out.across;
+  const o0 = c * e1[0] + s * e2[0], o1 = c * e1[1] + s * e2[1], o2 = c * e1[2] + s * e2[2];
+  along[0] = (o0 + d[0]) * SQRT1_2;
+  along[1] = (o1 + d[1]) * SQRT1_2;
+  along[2] = (o2 + d[2]) * SQRT1_2;
+  across[0] = d[1] * o2 - d[2] * o1;
+  across[1] = d[2] * o0 - d[0] * o2;
+  across[2] = d[0] * o1 - d[1] * o0;
   normalize(along);
   normalize(across);
   for (let a = 0; a < 3; a++) out.centre[a] = base[a] + t * axis[a] + 0.5 * size * along[a];

@@ -13,7 +13,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { isZone, markInZones, zonesOf } from './zones.mjs';
 import { Leaves } from './leaves.mjs';
-import { LEAF_BUDGET_MIN } from './foliage.mjs';
+import { LEAF_BUDGET, LEAF_BUDGET_MIN } from './foliage.mjs';
 
 // Frames slower than this (ms, the median of FRAME_SAMPLES in a row) halve the
 // leaves' budget, down to LEAF_BUDGET_MIN.
@@ -240,8 +240,14 @@ export class View {
       },
     });
     this.branches = new Branches(this.scene, this.material);
-    this.leaves = new Leaves(this.scene);
+    // (the leaves' work done in slices of their own: the cards drawn again, and
+    // the crown's shadow)
+    this.leaves = new Leaves(this.scene, () => {
+      if (this.leaves.takeSettled()) this.shadowDirty = true;
+      this.invalidate();
+    });
     this.leafMs = 0;        // the leaves' part of the last show(), ms
+    this.leafBudgetSet = false;  // the leaves' budget was set (setLeafBudget), not lowered by frames
     this.frameMs = [];      // time between two frames drawn in a row, ms
     this.shadowDirty = true;
     this.worldGroup = new THREE.Group();     // ground, grid, scales
@@ -285,14 +291,25 @@ export class View {
   frame(ms) {
     this.frameMs.push(ms);
     if (this.frameMs.length > 200) this.frameMs.shift();
+    if (this.leafBudgetSet) return;
     const l = this.leaves;
-    if (!l.visible || l.live === 0 || l.budget <= LEAF_BUDGET_MIN) return;
+    // (not while cards are being placed: the frames are of neither stride)
+    if (!l.visible || l.live === 0 || l.budget <= LEAF_BUDGET_MIN || l.pending()) return;
     this.slow = (this.slow || []).concat(ms).slice(-FRAME_SAMPLES);
     if (this.slow.length < FRAME_SAMPLES) return;
     const median = this.slow.slice().sort((a, b) => a - b)[FRAME_SAMPLES >> 1];
     if (median <= FRAME_TARGET_MS || l.live <= LEAF_BUDGET_MIN) return;
     this.slow = [];
     l.setBudget(Math.max(LEAF_BUDGET_MIN, Math.floor(l.budget / 2)));
+    if (this.shown) this.show(this.shown);
+  }
+
+  // Sets the leaves' budget of cards, which slow frames then leave alone; null: the
+  // default budget, halved by slow frames.
+  setLeafBudget(budget) {
+    this.leafBudgetSet = budget !== null;
+    this.slow = [];
+    this.leaves.setBudget(budget ?? LEAF_BUDGET);
     if (this.shown) this.show(this.shown);
   }
 
@@ -363,7 +380,8 @@ export class View {
     this.branches.sync(sk);
     this.shown = sk;
     const t0 = performance.now();
-    if (this.leaves.sync(sk)) this.shadowDirty = true;
+    this.leaves.sync(sk);
+    if (this.leaves.takeSettled()) this.shadowDirty = true;
     this.leafMs = performance.now() - t0;
     this.invalidate();
   }

@@ -1,19 +1,33 @@
-// Benchmark (not a test): how long the viewer takes to apply each delta of the
-// 100-tree stand in headless Chromium, against a real daemon.
+// Benchmark (not a test): how long the viewer takes to apply each delta of a
+// stand in headless Chromium, against a real daemon.
 //
-//   node tests/bench/viewer_apply.mjs [--exe build/server/sylva] [--iterations 24] [--no-draw]
-//        [--frames 20] [--no-leaves]
+//   node tests/bench/viewer_apply.mjs [--stand stand100|planes] [--exe build/server/sylva]
+//        [--iterations N] [--no-draw] [--frames 20] [--no-leaves] [--web web]
+//
+// --stand stand100 (the default): the 100-tree stand of igm-fig17b (stand100.mjs);
+// every stem finishes at iteration 23 (the stop rule) with 169,525 internodes.
+// --stand planes: 100 London planes in years (planes.mjs), 35 seasons: a million
+// internodes and 600,000 leaves, the viewer's level of detail at that size.
+// --web DIR: the viewer's files served (default web/), to compare another version.
 //
 // For every delta the page reports its size, the time the socket worker took to
 // parse it and turn it into typed arrays, and the time to apply it in the page:
 // the skeleton's typed arrays changed in place plus the GPU attributes marked for
 // upload (web/watch.mjs, Watch.delta). Then the separate task after it that
 // squeezes shed slots out and grows the arrays ahead of need. The leaves' part of
-// applying (their cards placed and marked for upload, web/leaves.mjs) is reported
-// on its own. At the end, the frame time with leaves on and off: --frames frames
-// drawn one after the other (each in its own animation frame, the camera turning),
-// the time between them. Chromium draws with SwiftShader here (WebGL on the CPU),
-// so frame times say little about a real GPU. Use a release build.
+// applying (their cards placed and marked for upload, web/leaves.mjs: at most a
+// slice, the rest in tasks of their own) is reported on its own, and how long
+// after the tidy every card was in place. Also the leaves' level of detail as the
+// page chose it after each delta (the budget its slow frames left, the stride,
+// the cards drawn), the leaves' larger pieces of work (a pass over every node
+// after a change of stride or a snapshot, the instance arrays squeezed or grown)
+// with their time, and the page's JS heap after a garbage collection (the V8
+// heap; the typed arrays' buffers are outside it). At the end, the frame time
+// with leaves on and off: --frames frames drawn one after the other (each in its
+// own animation frame, the camera turning), the time between them. Chromium draws
+// with SwiftShader here (WebGL on the CPU), so frame times say little about a
+// real GPU, and its slow frames halve the leaves' budget (--no-draw: no frames,
+// the budget stays, as with a GPU that keeps up). Use a release build.
 import { spawn } from 'node:child_process';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -21,6 +35,7 @@ import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { createRequire } from 'node:module';
 import { stand100 } from './stand100.mjs';
+import { planes100 } from './planes.mjs';
 
 const root = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
 const require = createRequire(join(root, 'tests/web/package.json'));
@@ -31,7 +46,12 @@ const arg = (name, def) => {
   return i > 0 ? process.argv[i + 1] : def;
 };
 const exe = resolve(arg('exe', join(root, 'build/server/sylva')));
-const iterations = Number(arg('iterations', '24'));
+const web = resolve(arg('web', join(root, 'web')));   // the viewer's files (another version, to compare)
+const stands = { stand100: [stand100, 24], planes: [planes100, 35] };
+const standName = arg('stand', 'stand100');
+if (!stands[standName]) throw new Error(`--stand: one of ${Object.keys(stands).join(', ')}`);
+const [makeStand, defaultIterations] = stands[standName];
+const iterations = Number(arg('iterations', String(defaultIterations)));
 // --no-draw: stop the page drawing (SwiftShader renders on this VM's CPU cores,
 // which a real GPU would not take from the page)
 const noDraw = process.argv.includes('--no-draw');
@@ -42,7 +62,7 @@ const port = 18000 + Math.floor(Math.random() * 2000);
 const dir = mkdtempSync(join(tmpdir(), 'sylva-bench-'));
 
 const daemon = spawn(exe, ['serve', '--db', join(dir, 'b.db'), '--listen', `127.0.0.1:${port}`,
-  '--web', join(root, 'web')], { stdio: ['ignore', 'ignore', 'pipe'] });
+  '--web', web], { stdio: ['ignore', 'ignore', 'pipe'] });
 await new Promise((ok) => daemon.stderr.on('data', (d) => { if (String(d).includes('listening')) ok(); }));
 
 const browser = await chromium.launch({ executablePath: '/usr/bin/chromium', args: ['--headless',
@@ -55,7 +75,7 @@ await page.waitForFunction(() => window.sylva?.state().connection === 'open');
 
 const ws = new WebSocket(`ws://127.0.0.1:${port}/ws`, 'sylva.v1');
 await new Promise((ok) => ws.on('open', ok));
-ws.send(JSON.stringify({ type: 'create', id: 'c', scenario: { ...stand100(), iterations }, name: 'stand100', start: false }));
+ws.send(JSON.stringify({ type: 'create', id: 'c', scenario: { ...makeStand(), iterations }, name: standName, start: false }));
 const run = await new Promise((ok) => ws.on('message', (m) => {
   const msg = JSON.parse(m);
   if (msg.type === 'created') ok(msg.run);
@@ -69,6 +89,8 @@ if (noDraw) await page.evaluate(() => { window.requestAnimationFrame = () => 0; 
 // and a growing daemon would steal the page's core while it applies a delta (a
 // viewer watches from another machine).
 const t0 = Date.now();
+const lod = [];   // after each delta: [iteration, internodes, leaves, cards, stride, budget]
+const settle = [];   // ms from the delta applied and tidied to its cards all placed
 for (let k = 1; k <= iterations; k++) {
   ws.send(JSON.stringify({ type: 'control', run, action: 'step', count: 1 }));
   // (a run whose every stem has finished ends before its iteration limit)
@@ -76,20 +98,44 @@ for (let k = 1; k <= iterations; k++) {
     const st = window.sylva.state(), tidied = window.sylva.timings().tidyMs.length;
     return (st.iteration === n || st.status === 'finished') && tidied >= st.iteration;
   }, k, { timeout: 10 * 60000, polling: 50 });
-  if ((await page.evaluate(() => window.sylva.state().iteration)) < k) break;
+  // (the leaves' cards placed in slices after the delta: until every one is)
+  const t1 = Date.now();
+  await page.waitForFunction(() => !window.sylva.state().leafPending, null, { timeout: 10 * 60000, polling: 20 });
+  settle.push(Date.now() - t1);
+  const st = await page.evaluate(() => window.sylva.state());
+  lod.push([st.iteration, st.nodes, st.leafTotal, st.drawnLeaves, st.leafStride, st.leafBudget]);
+  if (st.iteration < k) break;
   process.stderr.write(`\riteration ${k}`);
 }
+process.stderr.write('\n');
 const s = await page.evaluate(() => window.sylva.state());
 const t = await page.evaluate(() => window.sylva.timings());
-console.log(`100-tree stand, ${s.iteration} iterations stepped one by one in ${((Date.now() - t0) / 1e3).toFixed(1)} s; ` +
+const cdp = await page.context().newCDPSession(page);
+async function heap() {
+  await cdp.send('HeapProfiler.collectGarbage');
+  return cdp.send('Runtime.getHeapUsage');
+}
+const mb = (x) => (x / 1e6).toFixed(0);
+console.log(`${makeStand().name}, ${s.iteration} iterations stepped one by one in ${((Date.now() - t0) / 1e3).toFixed(1)} s; ` +
   `the page holds ${s.nodes.toLocaleString('en')} internodes (${(await page.evaluate(() => window.sylva.memory().skeletonBytes) / 1e6).toFixed(0)} MB of arrays)`);
 console.log(`leaves: ${s.leaves ? 'on' : 'off'}, ${s.leafTotal.toLocaleString('en')} held, ` +
   `${s.drawnLeaves.toLocaleString('en')} cards drawn (stride ${s.leafStride}, budget ${s.leafBudget.toLocaleString('en')})`);
-console.log('delta  bytes        parse ms  apply ms  (leaves)  tidy ms');
+const h = await heap();
+console.log(`JS heap after a GC: ${mb(h.usedSize)} MB used of ${mb(h.totalSize)} MB` +
+  (h.backingStorageSize !== undefined ? ` (array buffers outside it: ${mb(h.backingStorageSize)} MB)` : ''));
+console.log('delta  bytes        parse ms  apply ms  (leaves)  tidy ms   internodes     leaves    cards  stride    budget');
 t.applyMs.forEach((a, i) => console.log(`${String(i + 1).padStart(5)}  ${String(t.bytes[i]).padStart(11)}  ` +
   `${t.parseMs[i].toFixed(1).padStart(8)}  ${a.toFixed(1).padStart(8)}  ${(t.leafMs[i] ?? NaN).toFixed(1).padStart(8)}  ` +
-  `${(t.tidyMs[i] ?? NaN).toFixed(1).padStart(7)}`));
-const sorted = t.applyMs.slice().sort((a, b) => a - b);
+  `${(t.tidyMs[i] ?? NaN).toFixed(1).padStart(7)}  ` + (lod[i] ?? []).slice(1).map((v, j) => String(v).padStart([11, 9, 8, 6, 9][j])).join(' ')));
+const sorted = t.applyMs.slice().sort((a, b) => a - b), leafSorted = t.leafMs.slice().sort((a, b) => a - b);
+const rebuilds = t.leafRebuilds;
+const settleSorted = settle.slice().sort((a, b) => a - b);
+console.log(`leaves' part of applying: median ${leafSorted[leafSorted.length >> 1].toFixed(1)} ms, max ${leafSorted[leafSorted.length - 1].toFixed(1)} ms; ` +
+  `every card in place ${settleSorted[settleSorted.length >> 1]} ms (median), at most ${settleSorted[settleSorted.length - 1]} ms after the tidy`);
+// (passes over every node: 'all' after a snapshot or the leaves shown again,
+// 'stride' after a change of stride; 'squeeze' and 'grow': the instance arrays)
+console.log(`the leaves' larger pieces of work: ${rebuilds.map((r) => `${r.why} ${r.ms.toFixed(0)} ms` +
+  (r.wall > r.ms + 1 ? ` (over ${r.wall.toFixed(0)} ms)` : '') + ` at ${r.cards.toLocaleString('en')} cards, stride ${r.stride}`).join('; ')}`);
 console.log(`apply: median ${sorted[sorted.length >> 1].toFixed(1)} ms, max ${sorted[sorted.length - 1].toFixed(1)} ms; ` +
   `tidy max ${Math.max(...t.tidyMs).toFixed(1)} ms; parse max ${Math.max(...t.parseMs).toFixed(1)} ms; frames drawn ${s.frames}, ` +
   `frame median ${(t.renderMs.slice().sort((a, b) => a - b)[t.renderMs.length >> 1] || 0).toFixed(0)} ms (SwiftShader)`);

@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
-import { placeLeaf, leafRgb, leafStride, drawnLeaves } from '../../web/foliage.mjs';
+import { placeLeaf, leafFrame, leafAt, newFrame, leafRgb, leafStride, drawnLeaves } from '../../web/foliage.mjs';
 
 const close = (a, b, what, eps = 1e-15) => {
   assert.equal(a.length, b.length, what);
@@ -83,5 +83,40 @@ test('level of detail: the stride keeps the drawn leaves near total / stride', (
       drawn += m;
     }
     assert.ok(Math.abs(drawn - (nodes * 6) / s) < 0.02 * nodes * 6 / s, `stride ${s}: ${drawn} leaves drawn`);
+  }
+  // r = (id x an odd number) mod s takes every value once over s ids in a row, and
+  // floor((n + r) / s) over every r adds up to n: s nodes in a row of n leaves
+  // draw n cards between them, of s times a leaf's area each
+  for (const s of [2, 4, 8, 32, 128]) {
+    for (const n of [1, 2, 3, 6, 40, 129]) {
+      for (const from of [0, 7, 1000, 123457]) {
+        let sum = 0;
+        for (let id = from; id < from + s; id++) sum += drawnLeaves(n, id, s);
+        assert.equal(sum, n, `n ${n}, stride ${s}, ids ${from}..${from + s - 1}`);
+      }
+    }
+  }
+});
+
+test('placeLeaf in halves: one frame a node, each leaf in it', () => {
+  const out = { centre: [0, 0, 0], along: [0, 0, 0], across: [0, 0, 0], edge: 0 };
+  const f = newFrame();
+  for (const [p, q, size] of [[[0.1, -0.2, 0.5], [0.1731, -0.1044, 0.6287], 0.1], [null, [2, -1, 0], 0.3],
+    [[1.25, 0.5, 2], [1.2501, 0.5, 2.1], 0.05]]) {
+    leafFrame(p, q, size, f);
+    // (the golden angles of high k first: their table fills as they are asked for)
+    for (const k of [70, 3, 0, 69, 1]) {
+      leafAt(f, k, 71, size, out);
+      const want = placeLeaf(p, q, k, 71, size);
+      for (const key of ['centre', 'along', 'across']) assert.deepEqual(out[key], want[key], `${key} of leaf ${k}`);
+      assert.equal(out.edge, want.edge);
+      // the angle computed afresh: the same doubles
+      const phi = (137.5 * 3.14159265358979323846) / 180.0 * k;
+      const outward = [0, 1, 2].map((a) => Math.cos(phi) * f.e1[a] + Math.sin(phi) * f.e2[a]);
+      const across = [f.d[1] * outward[2] - f.d[2] * outward[1], f.d[2] * outward[0] - f.d[0] * outward[2],
+        f.d[0] * outward[1] - f.d[1] * outward[0]];
+      const l = Math.sqrt(across[0] * across[0] + across[1] * across[1] + across[2] * across[2]);
+      assert.deepEqual(out.across, across.map((v) => v / l), `across of leaf ${k}`);
+    }
   }
 });
