@@ -4,12 +4,30 @@
 
 #include "world_impl.h"
 
+/* The share of a tip's pipes in its parent's, for a species grown at rho below its
+ * ref_rho (scale s > 1): the tip's shoot, counted back to the node it branched from,
+ * is L nodes, L / s internodes of ref_rho; a shoot shorter than one such internode
+ * carries L / s of a tip's pipes. A shoot of one fine node stands for resources that
+ * at ref_rho grow no internode or one, a half on average (docs/model.md, "Species in
+ * years", "Pipes at a finer rho"). At ref_rho, and without ref_rho, every tip counts
+ * 1. */
+static double tip_share(const sylva__skeleton *s, size_t i, double scale) {
+  if (scale <= 1.0) return 1.0;
+  int length = 1;
+  int32_t n = (int32_t)i;
+  for (int32_t p = s->parent[n]; p >= 0 && s->axis_child[p] == n && s->lateral_child[p] < 0 &&
+                                 length < scale;
+       n = p, p = s->parent[p])
+    length++;
+  return length >= scale ? 1.0 : (double)length / scale;
+}
+
 int sylva__radii(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   double *pipe = w->pipe;
   memset(pipe, 0, s->count * sizeof *pipe);
   int32_t cur_stem = -1;
-  double v = 2.5, inv_v = 0.4, r_tip = 0.0;
+  double v = 2.5, inv_v = 0.4, r_tip = 0.0, scale = 1.0;
   for (size_t i = s->count; i-- > 0;) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     if (s->stem[i] != cur_stem) {
@@ -18,6 +36,7 @@ int sylva__radii(sylva_world *w, int iteration) {
       v = d->pipe_exponent;
       inv_v = 1.0 / v;
       r_tip = d->r_tip;
+      scale = w->species[w->stems[cur_stem].species].scale;
     }
     bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
     double r = terminal ? r_tip : pow(pipe[i], inv_v);
@@ -29,7 +48,9 @@ int sylva__radii(sylva_world *w, int iteration) {
         w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
       }
     }
-    if (s->parent[i] >= 0) pipe[s->parent[i]] += pow((double)s->radius[i], v);
+    if (s->parent[i] >= 0)
+      pipe[s->parent[i]] += pow((double)s->radius[i], v) *
+                              (terminal && s->radius[i] <= (float)r_tip ? tip_share(s, i, scale) : 1.0);
   }
   /* the list was built apex to root; report it in id order */
   for (size_t a = 0, b = w->radii.len; a + 1 < b; a++, b--) {

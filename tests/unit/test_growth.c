@@ -1,5 +1,7 @@
-/* Hand-built skeletons: pipe-model radii, shedding of a dark branch (nodes,
- * occupancy and shade removed exactly), a world that grows, and snapshots. */
+/* Hand-built skeletons: pipe-model radii (and a short tip's share at a rho below
+ * ref_rho), shedding of a dark branch (nodes, occupancy and shade removed exactly),
+ * a world that grows, and snapshots. */
+#include <math.h>
 #include <string.h>
 
 #include "../check.h"
@@ -42,6 +44,31 @@ static void test_radii(void) {
   k->lateral_child[1] = -1;
   CHECK_INT(sylva__radii(w, 2), 0);
   CHECK_NEAR(k->radius[1], ra, 1e-7);
+  sylva_world_destroy(w);
+}
+
+/* At rho = ref_rho / 2 a tip whose shoot is one node long carries half a tip's pipes
+ * (docs/model.md, "Species in years", "Pipes at a finer rho"); a tip two nodes
+ * from its branching carries a whole one. */
+static void test_tip_share(void) {
+  sylva_species_def sp = sylva_default_species_def();
+  sp.initial_nodes = 2;
+  sp.ref_rho = 2.0 * sp.rho; /* the trunk: 2 x 2 nodes above the root */
+  sylva_world *w = one_tree(&sp, 5);
+  CHECK(w != NULL);
+  if (!w) return;
+  CHECK_INT((int)w->nodes.count, 5);
+  double pc[3] = {0.07, 0, 0.17};
+  w->iteration = 1;
+  int32_t c = sylva__add_node(w, 1, true, pc, 0, 1); /* a one-node lateral on node 1 */
+  CHECK_INT(c, 5);
+  CHECK_INT(sylva__reserve_scratch(w), 0);
+  CHECK_INT(sylva__radii(w, 1), 0);
+  double v = sp.pipe_exponent, r = sp.r_tip;
+  sylva__skeleton *k = &w->nodes;
+  CHECK_NEAR(k->radius[5], r, 1e-8);
+  CHECK_NEAR(k->radius[3], r, 1e-8); /* the trunk's tip 4 is two nodes from node 1 */
+  CHECK_NEAR(k->radius[1], pow(1.5 * pow(r, v), 1 / v), 1e-7);
   sylva_world_destroy(w);
 }
 
@@ -258,7 +285,7 @@ static void test_leaves(void) {
 
 int main(int argc, char **argv) {
   static const check_test tests[] = {
-      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
+      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
       CHECK_TEST(snapshot_bad_images), CHECK_TEST(add_plant_errors)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("growth");
