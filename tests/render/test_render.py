@@ -457,10 +457,12 @@ def part_leaves(env, c):
     none = sum(1 for x, y in panel if leaf_coloured(skeleton.png.pixel(x, y)))
     c.check(none == 0, "--no-leaves: no leaf-coloured pixel", none)
     # a leaf covering its pixel whole is s * (255, 0, 255), s from RENDER_LEAF_SHADE
-    # (seen edge-on) to 1 (facing the viewer), and the crown shows several shades
+    # (seen edge-on) to 1 (facing the viewer), and the crown shows several shades;
+    # red and blue within 1 of each other (the library London plane's crown has
+    # a pixel of two overlapping cards' edges at (228, 0, 229): 8-bit rounding)
     solid = {p for p in leaf.values() if p[1] == 0}
     least = math.floor(255 * k["RENDER_LEAF_SHADE"]) - 1
-    c.check(solid and all(least <= p[0] <= 255 and p[0] == p[2] for p in solid),
+    c.check(solid and all(least <= p[0] <= 255 and abs(p[0] - p[2]) <= 1 for p in solid),
             "whole leaf pixels are the leaf colour shaded by %g to 1" % k["RENDER_LEAF_SHADE"],
             sorted(solid)[:5])
     c.check(len(solid) >= 5, "the crown shows several shades of the leaf colour", len(solid))
