@@ -690,15 +690,15 @@ static const double TOLERANCE[4] = {0.15, 0.20, 0.20, 0.25};
 #define DECADES_MAX 40
 
 /* The largest error over those decades in tolerances, of the measures in mask (bit m
- * for measure m); the dbh scaled by `trunk` (dbh is linear in r_tip). */
+ * for measure m). */
 static double tolerance_error(const sylva_fit_targets *t, const sylva_fit_targets *g, int years,
-                              unsigned mask, double trunk) {
+                              unsigned mask) {
   double worst = 0.0;
   for (int a = 10; a <= years && a <= DECADES_MAX; a += 10) {
     if (a < t->first) continue;
     for (int m = 0; m < 4; m++) {
       if (!(mask & (1u << m)) || !isfinite(measure_of(&t->at[a], m))) continue;
-      double e = sylva_fit_error(measure_of(&g->at[a], m) * (m == 1 ? trunk : 1.0), measure_of(&t->at[a], m));
+      double e = sylva_fit_error(measure_of(&g->at[a], m), measure_of(&t->at[a], m));
       double x = isfinite(e) ? fabs(e) / TOLERANCE[m] : INFINITY;
       if (x > worst) worst = x;
     }
@@ -722,7 +722,6 @@ static double trunk_scale(const sylva_fit_targets *t, const sylva_fit_targets *g
   return hi > 0.0 ? 2.0 / (lo + hi) : 1.0;
 }
 
-
 /* The crown base's control, last: the rounds of scale_height centre the crown height's
  * errors on their median; this tries the control a few steps either side and keeps
  * the one whose largest error of height, crown diameter and crown height, in
@@ -743,7 +742,7 @@ static int polish_crown(search *s, double gamma) {
     if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
     s->trees += s->o->seeds;
     if (rc) return rc;
-    double e = tolerance_error(s->t, &g, s->years, 1u | 4u | 8u, 1.0);
+    double e = tolerance_error(s->t, &g, s->years, 1u | 4u | 8u);
     progress(s->o, "fit: crown control %+.2f: largest error %.2f tolerances", c, e);
     if (e < best) best = e, best_c = c;
   }
