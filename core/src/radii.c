@@ -1,4 +1,5 @@
-/* Phase 6a: pipe-model radii, basipetal; radii never shrink. */
+/* Phase 6a: pipe-model radii, basipetal; radii never shrink; with heartwood, a node's
+ * pipes also keep a share of its functional pipes each season. */
 #include <math.h>
 #include <string.h>
 
@@ -24,10 +25,11 @@ static double tip_share(const sylva__skeleton *s, size_t i, double scale) {
 
 int sylva__radii(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
-  double *pipe = w->pipe;
+  double *pipe = w->pipe, *sap = w->sap;
   memset(pipe, 0, s->count * sizeof *pipe);
+  memset(sap, 0, s->count * sizeof *sap);
   int32_t cur_stem = -1;
-  double v = 2.5, inv_v = 0.4, r_tip = 0.0, scale = 1.0;
+  double v = 2.5, inv_v = 0.4, r_tip = 0.0, scale = 1.0, heartwood = 0.0;
   for (size_t i = s->count; i-- > 0;) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     if (s->stem[i] != cur_stem) {
@@ -37,9 +39,17 @@ int sylva__radii(sylva_world *w, int iteration) {
       inv_v = 1.0 / v;
       r_tip = d->r_tip;
       scale = w->species[w->stems[cur_stem].species].scale;
+      heartwood = d->heartwood;
     }
     bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
     double r = terminal ? r_tip : pow(pipe[i], inv_v);
+    /* Heartwood h: the node's pipes r^v grow by h times its functional pipes, the
+     * tips' above it; the pipes of its children still bound them from below
+     * (docs/model.md, "Species in years", "Heartwood"). */
+    if (heartwood > 0.0 && !terminal) {
+      double kept = pow(pow((double)s->radius[i], v) + heartwood * sap[i], inv_v);
+      if (kept > r) r = kept;
+    }
     if (r > (double)s->radius[i]) {
       float old = s->radius[i];
       s->radius[i] = (float)r;
@@ -48,9 +58,13 @@ int sylva__radii(sylva_world *w, int iteration) {
         w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
       }
     }
-    if (s->parent[i] >= 0)
-      pipe[s->parent[i]] += pow((double)s->radius[i], v) *
-                              (terminal && s->radius[i] <= (float)r_tip ? tip_share(s, i, scale) : 1.0);
+    if (s->parent[i] >= 0) {
+      /* a tip's pipes are functional; a cut end (a terminal wider than a tip) has none */
+      bool tip = terminal && s->radius[i] <= (float)r_tip;
+      double share = tip ? tip_share(s, i, scale) : 1.0;
+      pipe[s->parent[i]] += pow((double)s->radius[i], v) * share;
+      sap[s->parent[i]] += tip ? pow(r_tip, v) * share : terminal ? 0.0 : sap[i];
+    }
   }
   /* the list was built apex to root; report it in id order */
   for (size_t a = 0, b = w->radii.len; a + 1 < b; a++, b--) {

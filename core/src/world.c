@@ -85,6 +85,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->light);
   sylva__free(w->q);
   sylva__free(w->pipe);
+  sylva__free(w->sap);
   sylva__free(w->leaves);
   sylva__free(w->remap);
   sylva__free(w->sprouts.data);
@@ -850,6 +851,7 @@ static int reserve_scratch(sylva_world *w) {
   if (grow_scratch((void **)&w->light, n, sizeof *w->light) ||
       grow_scratch((void **)&w->q, n, sizeof *w->q) ||
       grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
+      grow_scratch((void **)&w->sap, n, sizeof *w->sap) ||
       grow_scratch((void **)&w->leaves, n, sizeof *w->leaves) ||
       grow_scratch((void **)&w->remap, n, sizeof *w->remap))
     return SYLVA_ENOMEM;
@@ -1156,7 +1158,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->site = sylva__grid_site_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (3 * sizeof(double) + 2 * sizeof(int32_t)) +
+  out->other = w->scratch_cap * (4 * sizeof(double) + 2 * sizeof(int32_t)) +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +

@@ -137,6 +137,7 @@ struct sylva_world {
   double *q;             /* light: Q_i, the light of the node and its subtree, of the
                             last light pass (T for allocation, T + 1 after shoots) */
   double *pipe;          /* radii: sum over the node's children of r^v */
+  double *sap;           /* radii: the functional pipes of the node's tips, sum of r_tip^v */
   int32_t *leaves;       /* shedding: leaf-bearing nodes of the node's subtree */
   int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped */
   size_t scratch_cap;

@@ -722,6 +722,47 @@ static double trunk_scale(const sylva_fit_targets *t, const sylva_fit_targets *g
   return hi > 0.0 ? 2.0 / (lo + hi) : 1.0;
 }
 
+/* The dbh's largest error once the trunk's scale balances it: (max u - min u) /
+ * (max u + min u) over the decades, u = grown / target. */
+static double balanced_dbh_error(const sylva_fit_targets *t, const sylva_fit_targets *g, int years) {
+  double f = trunk_scale(t, g, years), worst = 0.0;
+  for (int a = 10; a <= years && a <= DECADES_MAX; a += 10) {
+    if (a < t->first) continue;
+    double grown = g->at[a].dbh_cm, target = t->at[a].dbh_cm;
+    if (!(grown > 0.0) || !(target > 0.0)) continue;
+    double e = fabs(f * grown / target - 1.0);
+    if (e > worst) worst = e;
+  }
+  return worst;
+}
+
+/* The heartwood tried after the pipe model (docs/model.md, "Calibration", step 6): the
+ * least whose balanced dbh error is at least HEARTWOOD_GAIN below the pipe model's and
+ * every smaller one's is kept. */
+static const double HEARTWOOD[] = {0.02, 0.05, 0.1, 0.2};
+#define HEARTWOOD_GAIN 0.01
+static int fit_heartwood(const sylva_fit_targets *t, int years, const sylva_fit_options *o,
+                         sylva_species_def *d, sylva_fit_targets *g, int *trees) {
+  double best = balanced_dbh_error(t, g, years);
+  for (size_t i = 0; i < sizeof HEARTWOOD / sizeof HEARTWOOD[0]; i++) {
+    sylva_species_def e = *d;
+    sylva_fit_targets h;
+    e.heartwood = HEARTWOOD[i];
+    int rc = sylva_fit_grow(&e, years, o->seeds, o->threads, &h);
+    *trees += o->seeds;
+    if (rc) return rc;
+    double err = balanced_dbh_error(t, &h, years);
+    progress(o, "fit: heartwood %.2f: dbh's largest error %.0f%% (was %.0f%%)", e.heartwood,
+             100 * err, 100 * best);
+    if (err <= best - HEARTWOOD_GAIN) {
+      best = err;
+      *d = e;
+      *g = h;
+    }
+  }
+  return SYLVA_OK;
+}
+
 /* The crown base's control, last: the rounds of scale_height centre the crown height's
  * errors on their median; this tries the control a few steps either side and keeps
  * the one whose largest error of height, crown diameter and crown height, in
@@ -859,6 +900,7 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
     d.pipe_exponent = v;
     rc = sylva_fit_grow(&d, years, o.seeds, o.threads, &g);
   }
+  if (!rc) rc = fit_heartwood(t, years, &o, &d, &g, &s.trees);
   if (!rc) {
     d.r_tip *= trunk_scale(t, &g, years);
     if (d.r_tip > 0.05) d.r_tip = 0.05;
@@ -874,9 +916,9 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   out->grown.first = t->first;
   out->evaluations = s.trees;
   decade_errors(t, &g, years, out->max_error);
-  progress(&o, "fit: gamma %.3f, mu %.3f, height x%.3f, r_tip %.4f m, pipe exponent %.2f; largest error "
+  progress(&o, "fit: gamma %.3f, mu %.3f, height x%.3f, r_tip %.4f m, pipe exponent %.2f, heartwood %.2f; largest error "
            "over the decades: height %.0f%%, dbh %.0f%%, crown diameter %.0f%%, crown height %.0f%%",
-           d.gamma * d.tropism[2], d.mu, s.k, d.r_tip, d.pipe_exponent, 100 * out->max_error[0], 100 * out->max_error[1],
+           d.gamma * d.tropism[2], d.mu, s.k, d.r_tip, d.pipe_exponent, d.heartwood, 100 * out->max_error[0], 100 * out->max_error[1],
            100 * out->max_error[2], 100 * out->max_error[3]);
   return SYLVA_OK;
 }

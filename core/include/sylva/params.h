@@ -67,6 +67,10 @@ typedef struct sylva_species_def {
   double leaf_size;        /**< m: a leaf's length, the edge of its square card */
   int leaf_density;        /**< leaves per leaf-bearing node */
   int leaf_colour;         /**< 0xRRGGBB, the scenario's "#rrggbb" */
+  double heartwood;        /**< 0..1: each season a node's pipes (r^v) grow by this share
+                                of its functional pipes, the tips' above it: pipes whose
+                                leaves are gone stay in the wood (docs/model.md, "Species
+                                in years"); 0: the pipe model alone */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */
