@@ -192,6 +192,37 @@ static void test_species_snapshot(void) {
   sylva_world_destroy(w);
 }
 
+/* Heartwood alone sets the image's WOOD flag (32) with the three it implies, and its
+ * place is read back; an image with WOOD but not FOLIAGE is refused. A species without
+ * it keeps its images' flags. */
+static void test_heartwood_snapshot(void) {
+  for (int pass = 0; pass < 2; pass++) {
+    sylva_world_def wd = sylva_default_world_def();
+    sylva_world *w = NULL;
+    CHECK_INT(sylva_world_create(&wd, &w), 0);
+    sylva_species_def d = sylva_default_species_def();
+    d.heartwood = pass ? 0.05 : 0.0;
+    CHECK_INT(sylva_world_add_species(w, &d, "h"), 0);
+    uint8_t *img = NULL;
+    size_t n = 0;
+    CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
+    if (img) {
+      CHECK_INT(img[12], pass ? 4 | 8 | 16 | 32 : 0);
+      sylva_world *r = NULL;
+      CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
+      const sylva_species_def *e = r ? sylva_world_species(r, 0) : NULL;
+      CHECK(e && e->heartwood == d.heartwood);
+      sylva_world_destroy(r);
+      if (pass) {
+        img[12] &= (uint8_t)~16u;
+        CHECK_INT(sylva_snapshot_load(img, n, &r), SYLVA_EBADIMAGE);
+      }
+    }
+    sylva_free(img);
+    sylva_world_destroy(w);
+  }
+}
+
 /* Checks every stem's leaf_area against its nodes: leaf-bearing nodes (those whose
  * `leaves` is not 0, each with its species' leaf_density) x leaf_density x
  * SYLVA_LEAF_FILL x leaf_size^2; for a species without years a node bears leaves
@@ -307,7 +338,7 @@ int main(int argc, char **argv) {
 #ifndef NDEBUG
       CHECK_TEST(phase_checks),
 #endif
-      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot),
+      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot), CHECK_TEST(heartwood_snapshot),
       CHECK_TEST(leaf_area)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");

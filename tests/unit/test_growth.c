@@ -1,5 +1,5 @@
 /* Hand-built skeletons: pipe-model radii (and a short tip's share at a rho below
- * ref_rho), shedding of a dark branch (nodes, occupancy and shade removed exactly),
+ * ref_rho, and heartwood), shedding of a dark branch (nodes, occupancy and shade removed exactly),
  * a world that grows, and snapshots. */
 #include <math.h>
 #include <string.h>
@@ -70,6 +70,53 @@ static void test_tip_share(void) {
   CHECK_NEAR(k->radius[3], r, 1e-8); /* the trunk's tip 4 is two nodes from node 1 */
   CHECK_NEAR(k->radius[1], pow(1.5 * pow(r, v), 1 / v), 1e-7);
   sylva_world_destroy(w);
+}
+
+/* Heartwood h (docs/model.md, "Species in years", "Heartwood"): a trunk of four nodes
+ * above its root with one tip, grown no further. Each season every node's r^v grows by
+ * h r_tip^v, the tip's functional pipes: after n seasons r^v = (1 + n h) r_tip^v at
+ * every node below the tip, the same at the root as at the tip's parent (a node's own
+ * share is not added again below it). A lateral with a second tip doubles the
+ * increment below its fork, where a node's pipes are the larger of its own grown and
+ * its children's; h = 0 leaves the radii as the pipe model sets them. */
+static void test_heartwood(void) {
+  for (int pass = 0; pass < 2; pass++) {
+    sylva_species_def sp = sylva_default_species_def();
+    sp.initial_nodes = 4;
+    sp.heartwood = pass ? 0.1 : 0.0;
+    sylva_world *w = one_tree(&sp, 5);
+    CHECK(w != NULL);
+    if (!w) return;
+    CHECK_INT(sylva__reserve_scratch(w), 0);
+    double v = sp.pipe_exponent, r = sp.r_tip, h = sp.heartwood;
+    sylva__skeleton *k = &w->nodes;
+    for (int season = 1; season <= 3; season++) {
+      w->iteration = season;
+      CHECK_INT(sylva__radii(w, season), 0);
+      double inner = r * pow(1.0 + season * h, 1.0 / v);
+      CHECK_NEAR(k->radius[4], r, 1e-8); /* the tip */
+      for (int n = 0; n < 4; n++) CHECK_NEAR(k->radius[n], inner, 1e-7);
+    }
+    /* a one-node lateral on node 2 from season 4: two tips above node 2 */
+    double pc[3] = {0.07, 0, 0.27};
+    w->iteration = 4;
+    int32_t c = sylva__add_node(w, 2, true, pc, 0, 4);
+    CHECK_INT(c, 5);
+    CHECK_INT(sylva__reserve_scratch(w), 0);
+    CHECK_INT(sylva__radii(w, 4), 0);
+    /* node 2: its children's pipes (1 + 4h) + 1 exceed its own (1 + 3h) + 2h */
+    CHECK_NEAR(k->radius[3], r * pow(1.0 + 4 * h, 1.0 / v), 1e-7);
+    CHECK_NEAR(k->radius[2], r * pow(2.0 + 4 * h, 1.0 / v), 1e-7);
+    CHECK_NEAR(k->radius[0], r * pow(2.0 + 4 * h, 1.0 / v), 1e-7);
+    /* a fifth season: its own (2 + 4h) + 2h exceed its children's (1 + 5h) + 1 */
+    w->iteration = 5;
+    CHECK_INT(sylva__radii(w, 5), 0);
+    CHECK_NEAR(k->radius[5], r, 1e-8);
+    CHECK_NEAR(k->radius[3], r * pow(1.0 + 5 * h, 1.0 / v), 1e-7);
+    CHECK_NEAR(k->radius[2], r * pow(2.0 + 6 * h, 1.0 / v), 1e-7);
+    CHECK_NEAR(k->radius[0], r * pow(2.0 + 6 * h, 1.0 / v), 1e-7);
+    sylva_world_destroy(w);
+  }
 }
 
 /* A trunk with two laterals: one in the open, one under a box. Shedding removes the
@@ -285,7 +332,7 @@ static void test_leaves(void) {
 
 int main(int argc, char **argv) {
   static const check_test tests[] = {
-      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
+      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(heartwood), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
       CHECK_TEST(snapshot_bad_images), CHECK_TEST(add_plant_errors)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("growth");
