@@ -320,12 +320,15 @@ static void *grow_one(void *arg) {
   sylva_equation eq = d->growth;
   double reach = sylva_equation_value(&eq, (double)(d->nursery + j->years)) *
                  (d->ref_rho > 0.0 ? d->ref_rho : d->rho);
+  /* Bounds in whole metres: the voxels then stand where they stand in any open world
+   * so bounded around the root (scripts/fidelity's, the species tests'), and the tree
+   * grows there as here, bit for bit. */
   sylva_world_def wd = sylva_default_world_def();
-  double half = 0.75 * reach + 3.0;
+  double half = ceil(0.75 * reach + 3.0);
   wd.min[0] = wd.min[1] = -half;
   wd.max[0] = wd.max[1] = half;
   wd.min[2] = 0.0;
-  wd.max[2] = 1.3 * reach + 3.0;
+  wd.max[2] = ceil(1.3 * reach + 3.0);
   wd.voxel = d->rho / 2.0;
   wd.seed = j->seed;
   sylva_world *w = NULL;

@@ -69,15 +69,26 @@ def grow(exe, species, years, workdir, seeds=SEEDS):
             for age, rows in per_age.items() if len(rows) == len(seeds)}
 
 
-def report_data(path):
-    """The data column of a fit's report (PREFIX.md): {age: {measure: value}}."""
+def report_data(path, column=0):
+    """A column of a fit's report (PREFIX.md), the data (0) or the model (1):
+    {age: {measure: value}}."""
     data = {}
     with open(path) as f:
         for line in f:
             cells = [c.strip() for c in line.strip().strip('|').split('|')]
             if len(cells) == 5 and cells[0].isdigit():
-                data[int(cells[0])] = {m: float(c.split('/')[0]) for m, c in zip(MEASURES, cells[1:])}
+                data[int(cells[0])] = {m: float(c.split('/')[column].split('(')[0])
+                                       for m, c in zip(MEASURES, cells[1:])}
     return data
+
+
+def same_as_report(title, grown, report, ages):
+    """The failures where a tree grown here differs from the model column of the fit's
+    report: the fit grows its trees in an open world bounded in whole metres around
+    the root, as grow() does, so they are the same trees (docs/model.md,
+    "Calibration"); the report rounds to 2 decimals."""
+    return [f'{title}: age {a}, {m}: grown {grown[a][m]:.2f}, the fit\'s report {report[a][m]:.2f}'
+            for a in ages for m in MEASURES if f'{grown[a][m]:.2f}' != f'{report[a][m]:.2f}']
 
 
 def compare(title, got, want, tolerances, ages=AGES):
