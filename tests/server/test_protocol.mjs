@@ -347,13 +347,19 @@ function nearStreet() {
   return s;
 }
 
+// Nodes inside the box by the streamed positions. The protocol gives positions to 4
+// decimals (docs/protocol.md), so a node within 0.00005 m of a face may be on
+// either side of it on the server: such a node counts as outside.
 function nodesInside(model, box) {
+  const e = 0.00005;
   let n = 0;
   for (const p of model.plants) {
     for (const s of p.stems) {
       for (const [, parent, x, y, z] of s.nodes.values()) {
-        if (parent >= 0 && x >= box.min[0] && x <= box.max[0] && y >= box.min[1] && y <= box.max[1] &&
-            z >= box.min[2] && z <= box.max[2]) n++;
+        if (parent >= 0 && x >= box.min[0] + e && x <= box.max[0] - e && y >= box.min[1] + e &&
+            y <= box.max[1] - e && z >= box.min[2] + e && z <= box.max[2] - e) {
+          n++;
+        }
       }
     }
   }
