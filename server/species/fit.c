@@ -804,7 +804,7 @@ static int grow_error(search *s, double gamma, double *e, double *dbh) {
  * tolerances, is least (the present one on a tie). */
 #define POLISH_STEP 0.15
 #define POLISH_STEPS 3
-static int polish_crown(search *s, double gamma, double *error) {
+static int polish_crown(search *s, double gamma) {
   double c0 = s->crown, best_c = c0, best = INFINITY;
   for (int i = 0; i <= 2 * POLISH_STEPS; i++) {
     /* 0 first, then -1, +1, -2, +2, ... steps */
@@ -820,15 +820,11 @@ static int polish_crown(search *s, double gamma, double *error) {
   }
   s->crown = best_c;
   set_crown(&s->def, best_c);
-  *error = best;
   return SYLVA_OK;
 }
 
 /* The laterals' reach (docs/model.md, "Calibration", step 6): a young crown that the
- * leader's cap keeps narrower than the data may let its laterals grow further. Tried
- * only when the largest error of height, crown diameter and crown height after
- * polish_crown (polished, in tolerances) exceeds REACH_FROM: the trials grow the
- * largest trees of the calibration, and over all species they doubled its time. Each
+ * leader's cap keeps narrower than the data may let its laterals grow further. Each
  * reach is tried with the height's scale and the crown's control found again for it
  * (REACH_ROUNDS rounds of scale_height). Its error is the largest of height, crown
  * diameter and crown height, in tolerances, and of the dbh as the trunk's fit would
@@ -838,9 +834,7 @@ static int polish_crown(search *s, double gamma, double *error) {
 static const double REACH[] = {1.5, 2.0, 3.0};
 #define REACH_GAIN 0.02
 #define REACH_ROUNDS 2
-#define REACH_FROM 0.8
-static int fit_reach(search *s, double gamma, double polished) {
-  if (!(polished > REACH_FROM)) return SYLVA_OK;
+static int fit_reach(search *s, double gamma) {
   double e, dbh;
   int rc = grow_error(s, gamma, &e, &dbh);
   if (rc) return rc;
@@ -961,9 +955,8 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   if (gamma > GAMMA_MAX) gamma = GAMMA_MAX;
   s.def.mu = mu < 0.2 ? 0.2 : mu > 4.0 ? 4.0 : mu;
   rc = scale_height(&s, gamma, 3);
-  double polished = INFINITY;
-  if (!rc) rc = polish_crown(&s, gamma, &polished);
-  if (!rc) rc = fit_reach(&s, gamma, polished);
+  if (!rc) rc = polish_crown(&s, gamma);
+  if (!rc) rc = fit_reach(&s, gamma);
   sylva_species_def d;
   if (!rc) rc = species_at(&s, gamma, s.k, &d);
   /* the trunk: tip radius and pipe exponent, then r_tip rescaled (dbh is linear in it)
