@@ -118,7 +118,7 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
   return SYLVA_OK;
 }
 
-static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap, int lateral_cap) {
+static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap) {
   sylva__skeleton *s = &w->nodes;
   int32_t root = w->stems[stem].root_slot;
   w->work.len = w->work_r.len = 0;
@@ -127,7 +127,7 @@ static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap, int l
   while (!rc && w->work.len) {
     int32_t first = w->work.data[--w->work.len];
     double r = w->work_r.data[--w->work_r.len];
-    rc = allocate_axis(w, stem, first, r, false, local, lateral_cap);
+    rc = allocate_axis(w, stem, first, r, false, local, cap);
   }
   return rc;
 }
@@ -143,34 +143,26 @@ static int cmp_sprout(const void *a, const void *b) {
 int sylva__allocate(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   w->sprouts.len = 0;
-  /* the leaders' caps c(T) of the stems that grow this iteration (0: does not grow),
-   * then their laterals' (docs/model.md, "Species in years": lateral_reach) */
-  if (SYLVA__VEC_RESERVE(w->caps, 2 * (size_t)w->stem_count) ||
+  /* caps of the stems that grow this iteration (0: does not grow) */
+  if (SYLVA__VEC_RESERVE(w->caps, (size_t)w->stem_count) ||
       SYLVA__VEC_RESERVE(w->stem_first, (size_t)w->stem_count + 1))
     return SYLVA_ENOMEM;
-  int32_t *caps = w->caps.data, *lateral = caps + w->stem_count;
+  int32_t *caps = w->caps.data;
   bool any_none = false;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
     int local = sylva__stem_local(st, iteration);
-    const sylva__species *sp = &w->species[st->species];
-    caps[k] = st->finished ? 0 : sylva__species_cap(sp, local);
-    lateral[k] = st->finished ? 0 : sylva__lateral_cap(sp, local);
+    caps[k] = st->finished ? 0 : sylva__species_cap(&w->species[st->species], local);
   }
   /* stems that stop at this iteration (phase 2) grow nothing */
-  for (size_t i = 0; i < w->finishing.len; i++) {
-    caps[w->finishing.data[i]] = 0;
-    lateral[w->finishing.data[i]] = 0;
-  }
+  for (size_t i = 0; i < w->finishing.len; i++) caps[w->finishing.data[i]] = 0;
   for (int k = 0; k < w->stem_count; k++)
     if (caps[k] > 0 && w->species[w->stems[k].species].def.allocation == SYLVA_ALLOC_NONE)
       any_none = true;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
-    if ((caps[k] <= 0 && lateral[k] <= 0) ||
-        w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM)
-      continue;
-    int rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k], lateral[k]);
+    if (caps[k] <= 0 || w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM) continue;
+    int rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k]);
     if (rc) return rc;
   }
   if (any_none) {

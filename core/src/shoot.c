@@ -195,13 +195,6 @@ static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_s
   if (!normalize(vo)) vo[0] = vo[1] = vo[2] = 0.0;
 }
 
-/* Whether the slot is on its stem's trunk axis: no lateral's first node below it. */
-static bool on_trunk(const sylva__skeleton *s, int32_t slot) {
-  for (int32_t n = slot; n >= 0; n = s->parent[n])
-    if (s->flags[n] & SYLVA__NODE_LATERAL) return false;
-  return true;
-}
-
 static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int iteration) {
   const sylva__sprout *sp = &w->sprouts.data[item];
   sylva__skeleton *s = &w->nodes;
@@ -216,12 +209,6 @@ static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int ite
     double h = st->stats.height > d->rho ? st->stats.height : d->rho;
     reach = 0.5 * d->crown_max * pow(h, d->crown_max_exp);
   }
-  /* With a lateral reach the leader keeps the top: every other shoot grows level where
-   * it would rise above the stem's height at the season's start (docs/model.md,
-   * "Species in years"). */
-  double ceiling = INFINITY;
-  if (d->lateral_reach != 1.0 && !(sp->apex && on_trunk(s, sp->slot)))
-    ceiling = st->root[2] + st->stats.height;
   w->shoot.len = 0;
   int32_t tip = sp->slot;
   for (int32_t k = 0; k < sp->n; k++) {
@@ -240,10 +227,6 @@ static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int ite
     double vu[3];
     for (int i = 0; i < 3; i++) vu[i] = vd[i] + d->mu * vo[i] + d->gamma * d->tropism[i];
     if (!normalize(vu)) memcpy(vu, vd, sizeof vu);
-    if (p0[2] + d->rho * vu[2] > ceiling) {
-      vu[2] = 0.0;
-      if (!normalize(vu)) break; /* straight up against the ceiling: the shoot stops */
-    }
     double p[3] = {p0[0] + d->rho * vu[0], p0[1] + d->rho * vu[1], p0[2] + d->rho * vu[2]};
     double dx = p[0] - st->root[0], dy = p[1] - st->root[1];
     if (dx * dx + dy * dy > reach * reach) break; /* beyond the crown's reach: stops */

@@ -215,38 +215,6 @@ static void test_allocation_cap(void) {
   sylva_world_destroy(w);
 }
 
-/* The laterals' reach (docs/model.md, "Species in years"): a shoot on an axis other
- * than the trunk grows up to round(f X(T)) - round(f X(T-1)) internodes. With ref_rho
- * and the logistic X0 2, Xm 60, r 0.3: X(2) = 3.547, X(3) = 4.692. The leader's cap at
- * T = 3 is round(4.692) - round(3.547) = 5 - 4 = 1; reach 2: round(9.384) -
- * round(7.094) = 9 - 7 = 2; reach 3: round(14.08) - round(10.64) = 14 - 11 = 3. A
- * one-node lateral d on b, with resources to spare, grows its reach's cap; the apex 1. */
-static void test_allocation_lateral_reach(void) {
-  const double reach[3] = {1.0, 2.0, 3.0};
-  for (int i = 0; i < 3; i++) {
-    sylva_world *w = trunk();
-    sylva_species_def *d = &w->species[0].def;
-    d->ref_rho = d->rho;
-    d->growth = (sylva_equation){SYLVA_EQ_LOGISTIC, {2.0, 60.0, 0.3}};
-    d->lateral_reach = reach[i];
-    double pd[3] = {0.07, 0, 0.2};
-    CHECK_INT(sylva__add_node(w, 2, true, pd, 0, 0), 4);
-    CHECK_INT(sylva__reserve_scratch(w), 0);
-    set_flows(w, (const double[]){1, 2, 4}, (const double[]){100, 15, 14, 4});
-    w->light[4] = 4.0;
-    w->q[4] = 4.0;
-    CHECK_INT(sylva__allocate(w, 3), 0);
-    int32_t apex = -1, lateral = -1;
-    for (size_t k = 0; k < w->sprouts.len; k++) {
-      if (w->sprouts.data[k].slot == 3) apex = w->sprouts.data[k].n;
-      if (w->sprouts.data[k].slot == 4) lateral = w->sprouts.data[k].n;
-    }
-    CHECK_INT(apex, 1);
-    CHECK_INT(lateral, i + 1);
-    sylva_world_destroy(w);
-  }
-}
-
 /* Apical control (T <= tau): the apex is ranked first even with the least light. */
 static void test_allocation_apical_control(void) {
   sylva_world *w = trunk();
@@ -373,7 +341,7 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(derivatives), CHECK_TEST(cap_and_stop), CHECK_TEST(bh_and_priority),
       CHECK_TEST(light_sensitivity), CHECK_TEST(lateral_direction), CHECK_TEST(rng),
-      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap), CHECK_TEST(allocation_lateral_reach),
+      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap),
       CHECK_TEST(allocation_apical_control), CHECK_TEST(allocation_apical_flow),
       CHECK_TEST(allocation_no_apical_flow), CHECK_TEST(allocation_no_rest),
       CHECK_TEST(allocation_apical_zone), CHECK_TEST(shade_base)};

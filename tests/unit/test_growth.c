@@ -1,7 +1,6 @@
 /* Hand-built skeletons: pipe-model radii (and a short tip's share at a rho below
- * ref_rho, and heartwood), the laterals' ceiling under a lateral reach, shedding of a
- * dark branch (nodes, occupancy and shade removed exactly), a world that grows, and
- * snapshots. */
+ * ref_rho, and heartwood), shedding of a dark branch (nodes, occupancy and shade removed exactly),
+ * a world that grows, and snapshots. */
 #include <math.h>
 #include <string.h>
 
@@ -118,49 +117,6 @@ static void test_heartwood(void) {
     CHECK_NEAR(k->radius[0], r * pow(2.0 + 6 * h, 1.0 / v), 1e-7);
     sylva_world_destroy(w);
   }
-}
-
-/* Whether slot n is on the trunk axis: no lateral's first node from it to the root. */
-static bool on_trunk(const sylva__skeleton *k, int32_t n) {
-  for (; n >= 0; n = k->parent[n])
-    if (k->flags[n] & SYLVA__NODE_LATERAL) return false;
-  return true;
-}
-
-/* The laterals' reach (docs/model.md, "Species in years"): with lateral_reach 2 no node
- * off the trunk rises above the stem's height at the start of the season it grew in;
- * some grow level there (the ceiling acts: a node exactly as high as its parent,
- * which no shoot of the same tree with reach 1, and no ceiling, grows); and the reach
- * lets the laterals grow more. */
-static void test_lateral_ceiling(void) {
-  size_t nodes[2] = {0, 0};
-  int over[2] = {0, 0}, level[2] = {0, 0};
-  for (int pass = 0; pass < 2; pass++) {
-    sylva_species_def sp = sylva_default_species_def();
-    sp.lateral_reach = pass ? 2.0 : 1.0;
-    sp.gamma = 2.0;       /* laterals turn up fast */
-    sp.node_cost = 0.05; /* resources to spare: the caps bind */
-    sylva_world *w = one_tree(&sp, 12);
-    CHECK(w != NULL);
-    if (!w) return;
-    const sylva__skeleton *k = &w->nodes;
-    for (int i = 0; i < 14; i++) {
-      double before = w->stems[0].stats.height;
-      size_t old = k->count;
-      CHECK_INT(sylva_world_step(w, NULL), 0);
-      for (size_t n = old; n < k->count; n++) {
-        if (!(k->flags[n] & SYLVA__NODE_ALIVE) || on_trunk(k, (int32_t)n)) continue;
-        over[pass] += k->z[n] > before + 1e-9;
-        level[pass] += k->z[n] == k->z[k->parent[n]];
-      }
-    }
-    nodes[pass] = k->live;
-    sylva_world_destroy(w);
-  }
-  CHECK_INT(over[1], 0);
-  CHECK(level[1] > 0);
-  CHECK_INT(level[0], 0);
-  CHECK(nodes[1] > nodes[0]);
 }
 
 /* A trunk with two laterals: one in the open, one under a box. Shedding removes the
@@ -376,8 +332,7 @@ static void test_leaves(void) {
 
 int main(int argc, char **argv) {
   static const check_test tests[] = {
-      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(heartwood),
-      CHECK_TEST(lateral_ceiling), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
+      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(heartwood), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
       CHECK_TEST(snapshot_bad_images), CHECK_TEST(add_plant_errors)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("growth");
