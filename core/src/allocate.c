@@ -30,6 +30,24 @@ static int push_sprout(sylva_world *w, int32_t slot, int32_t stem, int32_t n, do
   return SYLVA_OK;
 }
 
+/* The cap of a shoot off the trunk from node n: the reach graded by the node's depth
+ * in the crown, f = 1 + (lateral_reach - 1) min(1, (top - z) / crown height), top the
+ * stem's height at the season's start, and no more than the full reach's cap (docs/model.md,
+ * "Species in years"). */
+static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int local, int32_t full) {
+  const sylva__stem *st = &w->stems[stem];
+  const sylva__species *sp = &w->species[st->species];
+  double reach = sp->def.lateral_reach;
+  if (reach == 1.0) return full;
+  double h = st->stats.height, depth = st->stats.crown_height;
+  if (!(depth > 0.0)) depth = h;
+  double below = st->root[2] + h - w->nodes.z[n];
+  double share = depth > 0.0 ? below / depth : 1.0;
+  share = share < 0.0 ? 0.0 : share > 1.0 ? 1.0 : share;
+  int32_t c = sylva__lateral_cap(sp, local, 1.0 + (reach - 1.0) * share);
+  return c < full ? c : full;
+}
+
 /* Distributes r_b over the axis starting at slot first; laterals go on the stack. */
 static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b, bool trunk,
                          int local, int cap) {
@@ -108,7 +126,8 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
       w->work_r.data[w->work_r.len++] = r_i;
     } else if (apex || !(s->flags[n] & SYLVA__NODE_SCAR)) {
       double y = floor(r_i / d->node_cost);
-      int32_t grow = y < (double)cap ? (int32_t)y : cap;
+      int32_t c = trunk ? cap : graded_cap(w, stem, n, local, cap);
+      int32_t grow = y < (double)c ? (int32_t)y : c;
       if (grow >= 1) {
         int rc = push_sprout(w, n, stem, grow, r_i, apex);
         if (rc) return rc;
@@ -118,7 +137,7 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
   return SYLVA_OK;
 }
 
-static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap) {
+static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap, int lateral_cap) {
   sylva__skeleton *s = &w->nodes;
   int32_t root = w->stems[stem].root_slot;
   w->work.len = w->work_r.len = 0;
@@ -127,7 +146,7 @@ static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap) {
   while (!rc && w->work.len) {
     int32_t first = w->work.data[--w->work.len];
     double r = w->work_r.data[--w->work_r.len];
-    rc = allocate_axis(w, stem, first, r, false, local, cap);
+    rc = allocate_axis(w, stem, first, r, false, local, lateral_cap);
   }
   return rc;
 }
@@ -143,26 +162,34 @@ static int cmp_sprout(const void *a, const void *b) {
 int sylva__allocate(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   w->sprouts.len = 0;
-  /* caps of the stems that grow this iteration (0: does not grow) */
-  if (SYLVA__VEC_RESERVE(w->caps, (size_t)w->stem_count) ||
+  /* the leaders' caps c(T) of the stems that grow this iteration (0: does not grow),
+   * then their laterals' (docs/model.md, "Species in years": lateral_reach) */
+  if (SYLVA__VEC_RESERVE(w->caps, 2 * (size_t)w->stem_count) ||
       SYLVA__VEC_RESERVE(w->stem_first, (size_t)w->stem_count + 1))
     return SYLVA_ENOMEM;
-  int32_t *caps = w->caps.data;
+  int32_t *caps = w->caps.data, *lateral = caps + w->stem_count;
   bool any_none = false;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
     int local = sylva__stem_local(st, iteration);
-    caps[k] = st->finished ? 0 : sylva__species_cap(&w->species[st->species], local);
+    const sylva__species *sp = &w->species[st->species];
+    caps[k] = st->finished ? 0 : sylva__species_cap(sp, local);
+    lateral[k] = st->finished ? 0 : sylva__lateral_cap(sp, local, sp->def.lateral_reach);
   }
   /* stems that stop at this iteration (phase 2) grow nothing */
-  for (size_t i = 0; i < w->finishing.len; i++) caps[w->finishing.data[i]] = 0;
+  for (size_t i = 0; i < w->finishing.len; i++) {
+    caps[w->finishing.data[i]] = 0;
+    lateral[w->finishing.data[i]] = 0;
+  }
   for (int k = 0; k < w->stem_count; k++)
     if (caps[k] > 0 && w->species[w->stems[k].species].def.allocation == SYLVA_ALLOC_NONE)
       any_none = true;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
-    if (caps[k] <= 0 || w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM) continue;
-    int rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k]);
+    if ((caps[k] <= 0 && lateral[k] <= 0) ||
+        w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM)
+      continue;
+    int rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k], lateral[k]);
     if (rc) return rc;
   }
   if (any_none) {

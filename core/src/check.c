@@ -96,7 +96,7 @@ static void check_stems(const sylva_world *w) {
 static void check_sprouts(const sylva_world *w) {
   const sylva__skeleton *s = &w->nodes;
   SYLVA_ASSERT(w->stem_first.cap >= (size_t)w->stem_count + 1 &&
-               w->caps.cap >= (size_t)w->stem_count);
+               w->caps.cap >= 2 * (size_t)w->stem_count);
   SYLVA_ASSERT(w->stem_first.data[0] == 0);
   SYLVA_ASSERT((size_t)w->stem_first.data[w->stem_count] == w->sprouts.len);
   /* a stem that stops at this step grows nothing, and is marked finished only once
@@ -110,7 +110,8 @@ static void check_sprouts(const sylva_world *w) {
       const sylva__sprout *sp = &w->sprouts.data[i];
       SYLVA_ASSERT(sp->stem == k && sp->slot >= 0 && (size_t)sp->slot < s->count);
       SYLVA_ASSERT((s->flags[sp->slot] & SYLVA__NODE_ALIVE) && s->stem[sp->slot] == k);
-      SYLVA_ASSERT(sp->n >= 1 && sp->n <= w->caps.data[k] && !w->stems[k].finished);
+      int32_t cap = w->caps.data[k], lateral = w->caps.data[w->stem_count + k];
+      SYLVA_ASSERT(sp->n >= 1 && sp->n <= (cap > lateral ? cap : lateral) && !w->stems[k].finished);
       SYLVA_ASSERT(sp->apex == (s->axis_child[sp->slot] < 0));
     }
   }

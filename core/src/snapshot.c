@@ -7,8 +7,8 @@
  * carries its kind, each stem its pruned count, and the entered zones and the
  * schedules follow the nodes; SCALED when a species has ref_rho, acclimation, years
  * or a nursery: every species record then has those four places too; CROWN with a
- * crown limit, FOLIAGE with foliage not the default, WOOD with heartwood
- * (sylva/species_fields.h). The voxel grid is not stored: shade is an exact
+ * crown limit, FOLIAGE with foliage not the default, WOOD with heartwood, REACH
+ * with a lateral reach (sylva/species_fields.h). The voxel grid is not stored: shade is an exact
  * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -21,23 +21,28 @@
 #include "world_impl.h"
 
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
-enum { HEADER = 32, SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8, FOLIAGE = 16, WOOD = 32 };
+enum { HEADER = 32 };
+/* the header's flags */
+enum { SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8, FOLIAGE = 16, WOOD = 32, REACH = 64 };
 /* Places of the species record that every image has; those up to 42 only with SCALED,
  * 43 and 44 only with CROWN (which implies SCALED), 45 to 47 only with FOLIAGE (which
- * implies both), the rest only with WOOD (which implies all three). */
+ * implies both), 48 only with WOOD (which implies all three), the rest only with REACH
+ * (which implies all four). */
 enum {
   PLACES_BEFORE_SCALED = 37,
   PLACES_BEFORE_CROWN = 43,
   PLACES_BEFORE_FOLIAGE = 45,
-  PLACES_BEFORE_WOOD = 48
+  PLACES_BEFORE_WOOD = 48,
+  PLACES_BEFORE_REACH = 49
 };
 
-static int species_places(bool scaled, bool crown, bool foliage, bool wood) {
-  return wood      ? SYLVA_SPECIES_SNAPSHOT_FIELDS
-         : foliage ? PLACES_BEFORE_WOOD
-         : crown   ? PLACES_BEFORE_FOLIAGE
-         : scaled  ? PLACES_BEFORE_CROWN
-                   : PLACES_BEFORE_SCALED;
+static int species_places(uint32_t flags) {
+  return (flags & REACH)     ? SYLVA_SPECIES_SNAPSHOT_FIELDS
+         : (flags & WOOD)    ? PLACES_BEFORE_REACH
+         : (flags & FOLIAGE) ? PLACES_BEFORE_WOOD
+         : (flags & CROWN)   ? PLACES_BEFORE_FOLIAGE
+         : (flags & SCALED)  ? PLACES_BEFORE_CROWN
+                             : PLACES_BEFORE_SCALED;
 }
 
 typedef struct writer {
@@ -169,18 +174,22 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   if (w->status) return w->status;
   writer o = {0};
   bool conflicts = has_conflicts(w);
-  bool scaled = false, crown = false, foliage = false, wood = false;
+  bool scaled = false, crown = false, foliage = false, wood = false, reach = false;
   const sylva_species_def plain = sylva_default_species_def();
   for (int i = 0; i < w->species_count; i++) {
     const sylva_species_def *d = &w->species[i].given;
-    wood = wood || d->heartwood != 0.0;
+    reach = reach || d->lateral_reach != 1.0;
+    wood = wood || reach || d->heartwood != 0.0;
     foliage = foliage || wood || d->leaf_size != plain.leaf_size ||
               d->leaf_density != plain.leaf_density || d->leaf_colour != plain.leaf_colour;
     crown = crown || foliage || d->crown_max != 0.0 || d->crown_max_exp != 1.0;
     scaled = scaled || crown || d->ref_rho != 0.0 || d->acclimation != 0.0 || d->years ||
              d->nursery || d->shade_weight != 1.0 || d->lift != 0.0;
   }
-  int places = species_places(scaled, crown, foliage, wood);
+  uint32_t flags =
+      (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0) |
+      (crown ? CROWN : 0) | (foliage ? FOLIAGE : 0) | (wood ? WOOD : 0) | (reach ? REACH : 0);
+  int places = species_places(flags);
   uint8_t zero[HEADER] = {0};
   put(&o, zero, HEADER);
   for (int a = 0; a < 3; a++) put_f64(&o, w->def.min[a]);
@@ -279,9 +288,6 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   uint8_t *h = o.buf + 8;
   uint32_t version = SYLVA_SNAPSHOT_VERSION;
   for (int i = 0; i < 4; i++) h[i] = (uint8_t)(version >> (8 * i));
-  uint32_t flags =
-      (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0) |
-      (crown ? CROWN : 0) | (foliage ? FOLIAGE : 0) | (wood ? WOOD : 0);
   for (int i = 0; i < 4; i++) h[4 + i] = (uint8_t)(flags >> (8 * i));
   for (int i = 0; i < 8; i++) h[8 + i] = (uint8_t)(payload >> (8 * i));
   uint64_t sum = fnv1a(o.buf + HEADER, payload);
@@ -380,8 +386,8 @@ static void get_species(reader *r, sylva_species_def *d, int places) {
     goto fail;            \
   } while (0)
 
-static int read_world(reader *r, bool has_sky, bool conflicts, bool scaled, bool crown,
-                      bool foliage, bool wood, sylva_world **out) {
+static int read_world(reader *r, uint32_t flags, sylva_world **out) {
+  bool has_sky = flags & SKY, conflicts = flags & CONFLICTS;
   int rc = SYLVA_OK;
   sylva_world *w = NULL;
   sylva_world_def def = sylva_default_world_def();
@@ -423,7 +429,7 @@ static int read_world(reader *r, bool has_sky, bool conflicts, bool scaled, bool
     sylva_species_def d = sylva_default_species_def();
     d.growth.kind = (sylva_equation_kind)get_u32(r);
     d.allocation = (sylva_allocation)get_u32(r);
-    get_species(r, &d, species_places(scaled, crown, foliage, wood));
+    get_species(r, &d, species_places(flags));
     if (r->bad) break;
     int id = sylva_world_add_species(w, &d, label);
     if (id < 0) SYLVA__FAIL(id == SYLVA_ENOMEM ? id : SYLVA_EBADIMAGE);
@@ -616,15 +622,14 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD))
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH))
     return SYLVA_EBADIMAGE;
   if ((reserved & CROWN) && !(reserved & SCALED)) return SYLVA_EBADIMAGE;
   if ((reserved & FOLIAGE) && !(reserved & CROWN)) return SYLVA_EBADIMAGE;
   if ((reserved & WOOD) && !(reserved & FOLIAGE)) return SYLVA_EBADIMAGE;
+  if ((reserved & REACH) && !(reserved & WOOD)) return SYLVA_EBADIMAGE;
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};
-  return read_world(&r, (reserved & SKY) != 0, (reserved & CONFLICTS) != 0, (reserved & SCALED) != 0,
-                    (reserved & CROWN) != 0, (reserved & FOLIAGE) != 0, (reserved & WOOD) != 0,
-                    out);
+  return read_world(&r, reserved, out);
 }

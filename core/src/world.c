@@ -172,6 +172,19 @@ int sylva__species_cap(const sylva__species *sp, int local) {
   return a > b ? (int)(a - b) : 0;
 }
 
+int sylva__lateral_cap(const sylva__species *sp, int local, double f) {
+  if (f == 1.0) return sylva__species_cap(sp, local);
+  /* f times the leader's path: the rate scaled, or the rounded lengths' difference
+   * (docs/model.md, "Species in years") */
+  if (!(sp->def.ref_rho > 0.0)) {
+    double r = f * sylva_equation_rate(&sp->def.growth, (double)(local - 1));
+    return r > 0.0 ? (r > 1e6 ? 1000000 : (int)floor(r + 0.5)) : 0;
+  }
+  double a = floor(f * sylva_equation_value(&sp->def.growth, (double)local) + 0.5);
+  double b = floor(f * sylva_equation_value(&sp->def.growth, (double)(local - 1)) + 0.5);
+  return a > b ? (int)(a - b) : 0;
+}
+
 bool sylva__species_stops(const sylva__species *sp, int local) {
   /* A tree in years lives on: it grows as long as its equation and its light let it,
    * however slowly (the rule's one internode a season is 25 cm a year at a

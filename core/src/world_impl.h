@@ -145,7 +145,8 @@ struct sylva_world {
   SYLVA__VEC(int32_t) finishing;  /* stop: the stems whose equation stops at this step;
                                      they grow nothing and are marked finished once the
                                      step can no longer fail */
-  SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0 */
+  SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0; then
+                                   * the laterals' caps (stem_count + k) */
   SYLVA__VEC(int32_t) stem_first; /* allocation: first sprout of each stem, stem_count + 1 */
   SYLVA__VEC(int32_t) stem_top;   /* shedding: each stem's highest live node; stats: its
                                      leaf-bearing nodes (stem_count + 1, kept reserved) */
@@ -192,6 +193,8 @@ static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
 /** c(T) of a stem's species at local iteration T (docs/model.md, "Cap" and "Species
  *  in years"). */
 int sylva__species_cap(const sylva__species *sp, int local);
+/* The cap of a shoot off the trunk with the reach f: f times the leader's path. */
+int sylva__lateral_cap(const sylva__species *sp, int local, double f);
 /** Does a stem of this species stop growing at local iteration T ("Stop")? */
 bool sylva__species_stops(const sylva__species *sp, int local);
 /** Height bins of the crown base's measure for a world of this height (stats.c). */

@@ -523,6 +523,15 @@ static int species_at(search *s, double gamma, double k, sylva_species_def *d) {
   return rc;
 }
 
+/* Grows the species at the search's point (its tropism's signed weight, the height's
+ * scale s->k) over the seeds: the species in d, the trees' sizes in g. */
+static int grow_at(search *s, double gamma, sylva_species_def *d, sylva_fit_targets *g) {
+  int rc = species_at(s, gamma, s->k, d);
+  if (!rc) rc = sylva_fit_grow(d, s->years, s->o->seeds, s->o->threads, g);
+  s->trees += s->o->seeds;
+  return rc;
+}
+
 /* Weighted mean squared log error of the crown diameter over the check ages: the
  * decades up to 40 years, which planners ask about most, count four times as much
  * as the other ages. */
@@ -546,7 +555,7 @@ static double search_error(const sylva_fit_targets *t, const sylva_fit_targets *
 
 static double search_f(const gsl_vector *x, void *ctx) {
   search *s = ctx;
-  double gamma = gsl_vector_get(x, 0), mu = gsl_vector_get(x, 1), k = s->k;
+  double gamma = gsl_vector_get(x, 0), mu = gsl_vector_get(x, 1);
   /* outside the box the error grows with the distance: the simplex turns back */
   double penalty = 0.0;
   if (gamma < GAMMA_MIN) penalty += (GAMMA_MIN - gamma) * (GAMMA_MIN - gamma) * 10.0, gamma = GAMMA_MIN;
@@ -556,10 +565,8 @@ static double search_f(const gsl_vector *x, void *ctx) {
   sylva_species_def d;
   sylva_fit_targets g;
   s->def.mu = mu;
-  int rc = species_at(s, gamma, k, &d);
-  if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
+  int rc = grow_at(s, gamma, &d, &g);
   s->evals++;
-  s->trees += s->o->seeds;
   if (rc) {
     if (!s->rc && rc == SYLVA_ENOMEM) s->rc = rc;
     return 1e6;
@@ -633,9 +640,7 @@ static int scale_height(search *s, double gamma, int rounds) {
   for (int i = 0; i < rounds; i++) {
     sylva_species_def d;
     sylva_fit_targets g;
-    int rc = species_at(s, gamma, s->k, &d);
-    if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
-    s->trees += s->o->seeds;
+    int rc = grow_at(s, gamma, &d, &g);
     if (rc) return rc;
     double ratio[SYLVA_FIT_MAX_YEARS / 5 + 1], shift[SYLVA_FIT_MAX_YEARS / 5 + 1];
     int n = 0, m = 0;
@@ -739,7 +744,7 @@ static double balanced_dbh_error(const sylva_fit_targets *t, const sylva_fit_tar
   return worst;
 }
 
-/* The heartwood tried after the pipe model (docs/model.md, "Calibration", step 6): the
+/* The heartwood tried after the pipe model (docs/model.md, "Calibration", step 7): the
  * least whose balanced dbh error is at least HEARTWOOD_GAIN below the pipe model's and
  * every smaller one's is kept. */
 static const double HEARTWOOD[] = {0.02, 0.05, 0.1, 0.2};
@@ -766,30 +771,97 @@ static int fit_heartwood(const sylva_fit_targets *t, int years, const sylva_fit_
   return SYLVA_OK;
 }
 
+/* The dbh's largest error once the pipe fit (fit_pipe) and the trunk's scale balance
+ * it, predicted from trees grown at r_tip r0 and exponent v0 without growing them
+ * again: each dbh becomes 2 r_tip (dbh0 / (2 r0))^(v0 / v). */
+static double fitted_dbh_error(const sylva_fit_targets *t, const sylva_fit_targets *g,
+                               const search *s, const sylva_species_def *d) {
+  double r, v;
+  fit_pipe(t, g, s->ages, s->nages, d->r_tip, d->pipe_exponent, &r, &v);
+  sylva_fit_targets p = *g;
+  for (int a = 0; a <= s->years; a++)
+    if (p.at[a].dbh_cm > 0.0)
+      p.at[a].dbh_cm = 200.0 * r * pow(p.at[a].dbh_cm / (200.0 * d->r_tip), d->pipe_exponent / v);
+  return balanced_dbh_error(t, &p, s->years);
+}
+
+/* Grows the species at the search's point and measures its largest error of height,
+ * crown diameter and crown height, in tolerances; with dbh, also fitted_dbh_error's in
+ * its tolerance. */
+static int grow_error(search *s, double gamma, double *e, double *dbh) {
+  sylva_species_def d;
+  sylva_fit_targets g;
+  int rc = grow_at(s, gamma, &d, &g);
+  if (rc) return rc;
+  *e = tolerance_error(s->t, &g, s->years, 1u | 4u | 8u);
+  if (dbh) *dbh = fitted_dbh_error(s->t, &g, s, &d) / TOLERANCE[1];
+  return SYLVA_OK;
+}
+
 /* The crown base's control, last: the rounds of scale_height centre the crown height's
  * errors on their median; this tries the control a few steps either side and keeps
  * the one whose largest error of height, crown diameter and crown height, in
  * tolerances, is least (the present one on a tie). */
 #define POLISH_STEP 0.15
 #define POLISH_STEPS 3
-static int polish_crown(search *s, double gamma) {
+static int polish_crown(search *s, double gamma, double *error) {
   double c0 = s->crown, best_c = c0, best = INFINITY;
   for (int i = 0; i <= 2 * POLISH_STEPS; i++) {
     /* 0 first, then -1, +1, -2, +2, ... steps */
     int k = (i + 1) / 2 * (i % 2 ? -1 : 1);
     double c = c0 + POLISH_STEP * k;
     if (c < CROWN_MIN || c > CROWN_MAX) continue;
-    sylva_species_def d;
-    sylva_fit_targets g;
     set_crown(&s->def, c);
-    int rc = species_at(s, gamma, s->k, &d);
-    if (!rc) rc = sylva_fit_grow(&d, s->years, s->o->seeds, s->o->threads, &g);
-    s->trees += s->o->seeds;
+    double e;
+    int rc = grow_error(s, gamma, &e, NULL);
     if (rc) return rc;
-    double e = tolerance_error(s->t, &g, s->years, 1u | 4u | 8u);
     progress(s->o, "fit: crown control %+.2f: largest error %.2f tolerances", c, e);
     if (e < best) best = e, best_c = c;
   }
+  s->crown = best_c;
+  set_crown(&s->def, best_c);
+  *error = best;
+  return SYLVA_OK;
+}
+
+/* The laterals' reach (docs/model.md, "Calibration", step 6): a young crown that the
+ * leader's cap keeps narrower than the data may let its laterals grow further. Tried
+ * only when the largest error of height, crown diameter and crown height after
+ * polish_crown (polished, in tolerances) exceeds REACH_FROM: the trials grow the
+ * largest trees of the calibration, and over all species they doubled its time. Each
+ * reach is tried with the height's scale and the crown's control found again for it
+ * (REACH_ROUNDS rounds of scale_height). Its error is the largest of height, crown
+ * diameter and crown height, in tolerances, and of the dbh as the trunk's fit would
+ * leave it (fitted_dbh_error): more laterals make more tips, and a crown that fills
+ * its reach early stops adding them. The least is kept if it is at least REACH_GAIN
+ * below the leader's cap's. */
+static const double REACH[] = {1.5, 2.0, 3.0};
+#define REACH_GAIN 0.02
+#define REACH_ROUNDS 2
+#define REACH_FROM 0.8
+static int fit_reach(search *s, double gamma, double polished) {
+  if (!(polished > REACH_FROM)) return SYLVA_OK;
+  double e, dbh;
+  int rc = grow_error(s, gamma, &e, &dbh);
+  if (rc) return rc;
+  double best = e > dbh ? e : dbh, least = best;
+  double k0 = s->k, c0 = s->crown, best_k = k0, best_c = c0, best_f = 1.0;
+  for (size_t i = 0; i < sizeof REACH / sizeof REACH[0]; i++) {
+    s->def.lateral_reach = REACH[i];
+    s->k = k0;
+    s->crown = c0;
+    set_crown(&s->def, c0);
+    rc = scale_height(s, gamma, REACH_ROUNDS);
+    if (!rc) rc = grow_error(s, gamma, &e, &dbh);
+    if (rc) return rc;
+    double err = e > dbh ? e : dbh;
+    progress(s->o, "fit: lateral reach %.1f: largest error %.2f tolerances (dbh %.2f; leader's cap %.2f)",
+             REACH[i], err, dbh, best);
+    if (err < least) least = err, best_f = REACH[i], best_k = s->k, best_c = s->crown;
+  }
+  if (!(least <= best - REACH_GAIN)) best_f = 1.0, best_k = k0, best_c = c0;
+  s->def.lateral_reach = best_f;
+  s->k = best_k;
   s->crown = best_c;
   set_crown(&s->def, best_c);
   return SYLVA_OK;
@@ -889,7 +961,9 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   if (gamma > GAMMA_MAX) gamma = GAMMA_MAX;
   s.def.mu = mu < 0.2 ? 0.2 : mu > 4.0 ? 4.0 : mu;
   rc = scale_height(&s, gamma, 3);
-  if (!rc) rc = polish_crown(&s, gamma);
+  double polished = INFINITY;
+  if (!rc) rc = polish_crown(&s, gamma, &polished);
+  if (!rc) rc = fit_reach(&s, gamma, polished);
   sylva_species_def d;
   if (!rc) rc = species_at(&s, gamma, s.k, &d);
   /* the trunk: tip radius and pipe exponent, then r_tip rescaled (dbh is linear in it)
@@ -919,9 +993,11 @@ int sylva_fit_calibrate(const sylva_fit_targets *t, const sylva_fit_options *opt
   out->grown.first = t->first;
   out->evaluations = s.trees;
   decade_errors(t, &g, years, out->max_error);
-  progress(&o, "fit: gamma %.3f, mu %.3f, height x%.3f, r_tip %.4f m, pipe exponent %.2f, heartwood %.2f; largest error "
-           "over the decades: height %.0f%%, dbh %.0f%%, crown diameter %.0f%%, crown height %.0f%%",
-           d.gamma * d.tropism[2], d.mu, s.k, d.r_tip, d.pipe_exponent, d.heartwood, 100 * out->max_error[0], 100 * out->max_error[1],
+  progress(&o, "fit: gamma %.3f, mu %.3f, height x%.3f, lateral reach %.1f, r_tip %.4f m, pipe exponent %.2f, "
+           "heartwood %.2f; largest error over the decades: height %.0f%%, dbh %.0f%%, crown diameter %.0f%%, "
+           "crown height %.0f%%",
+           d.gamma * d.tropism[2], d.mu, s.k, d.lateral_reach, d.r_tip, d.pipe_exponent, d.heartwood,
+           100 * out->max_error[0], 100 * out->max_error[1],
            100 * out->max_error[2], 100 * out->max_error[3]);
   return SYLVA_OK;
 }

@@ -192,29 +192,31 @@ static void test_species_snapshot(void) {
   sylva_world_destroy(w);
 }
 
-/* Heartwood alone sets the image's WOOD flag (32) with the three it implies, and its
- * place is read back; an image with WOOD but not FOLIAGE is refused. A species without
- * it keeps its images' flags. */
+/* Heartwood alone sets the image's WOOD flag (32) with the three it implies, and a
+ * lateral reach the REACH flag (64) with all four; their places are read back; an
+ * image with WOOD but not FOLIAGE, or REACH but not WOOD, is refused. A species
+ * without them keeps its images' flags. */
 static void test_heartwood_snapshot(void) {
-  for (int pass = 0; pass < 2; pass++) {
+  for (int pass = 0; pass < 3; pass++) {
     sylva_world_def wd = sylva_default_world_def();
     sylva_world *w = NULL;
     CHECK_INT(sylva_world_create(&wd, &w), 0);
     sylva_species_def d = sylva_default_species_def();
-    d.heartwood = pass ? 0.05 : 0.0;
+    d.heartwood = pass == 1 ? 0.05 : 0.0;
+    d.lateral_reach = pass == 2 ? 1.5 : 1.0;
     CHECK_INT(sylva_world_add_species(w, &d, "h"), 0);
     uint8_t *img = NULL;
     size_t n = 0;
     CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
     if (img) {
-      CHECK_INT(img[12], pass ? 4 | 8 | 16 | 32 : 0);
+      CHECK_INT(img[12], pass == 2 ? 4 | 8 | 16 | 32 | 64 : pass ? 4 | 8 | 16 | 32 : 0);
       sylva_world *r = NULL;
       CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
       const sylva_species_def *e = r ? sylva_world_species(r, 0) : NULL;
-      CHECK(e && e->heartwood == d.heartwood);
+      CHECK(e && e->heartwood == d.heartwood && e->lateral_reach == d.lateral_reach);
       sylva_world_destroy(r);
       if (pass) {
-        img[12] &= (uint8_t)~16u;
+        img[12] &= (uint8_t)~(pass == 2 ? 32u : 16u);
         CHECK_INT(sylva_snapshot_load(img, n, &r), SYLVA_EBADIMAGE);
       }
     }

@@ -215,6 +215,47 @@ static void test_allocation_cap(void) {
   sylva_world_destroy(w);
 }
 
+/* The laterals' reach (docs/model.md, "Species in years"): a shoot on an axis other
+ * than the trunk grows up to round(f X(T)) - round(f X(T-1)) internodes, f graded by
+ * its node's depth below the stem's top, 1 + (lateral_reach - 1) min(1, depth / crown
+ * height). With ref_rho and the logistic X0 2, Xm 60, r 0.3: X(2) = 3.547, X(3) =
+ * 4.692. The leader's cap at T = 3 is round(4.692) - round(3.547) = 5 - 4 = 1. The
+ * stem 1 m tall with a crown 0.8 m high; a one-node lateral d on b, with resources to
+ * spare. d at z 0.2 (0.8 below the top: the full reach): reach 2, round(9.384) -
+ * round(7.094) = 9 - 7 = 2; reach 3, round(14.08) - round(10.64) = 14 - 11 = 3. d at
+ * z 0.6 (half the crown below the top) with reach 3: f = 2, 2 internodes; at z 1.1
+ * (above the top): f = 1, 1. The apex grows 1 in every case. */
+static void test_allocation_lateral_reach(void) {
+  const struct {
+    double reach, z;
+    int32_t n;
+  } cases[] = {{1.0, 0.2, 1}, {2.0, 0.2, 2}, {3.0, 0.2, 3}, {3.0, 0.6, 2}, {3.0, 1.1, 1}};
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    sylva_world *w = trunk();
+    sylva_species_def *d = &w->species[0].def;
+    d->ref_rho = d->rho;
+    d->growth = (sylva_equation){SYLVA_EQ_LOGISTIC, {2.0, 60.0, 0.3}};
+    d->lateral_reach = cases[i].reach;
+    w->stems[0].stats.height = 1.0;
+    w->stems[0].stats.crown_height = 0.8;
+    double pd[3] = {0.07, 0, cases[i].z};
+    CHECK_INT(sylva__add_node(w, 2, true, pd, 0, 0), 4);
+    CHECK_INT(sylva__reserve_scratch(w), 0);
+    set_flows(w, (const double[]){1, 2, 4}, (const double[]){100, 15, 14, 4});
+    w->light[4] = 4.0;
+    w->q[4] = 4.0;
+    CHECK_INT(sylva__allocate(w, 3), 0);
+    int32_t apex = -1, lateral = -1;
+    for (size_t k = 0; k < w->sprouts.len; k++) {
+      if (w->sprouts.data[k].slot == 3) apex = w->sprouts.data[k].n;
+      if (w->sprouts.data[k].slot == 4) lateral = w->sprouts.data[k].n;
+    }
+    CHECK_INT(apex, 1);
+    CHECK_INT(lateral, cases[i].n);
+    sylva_world_destroy(w);
+  }
+}
+
 /* Apical control (T <= tau): the apex is ranked first even with the least light. */
 static void test_allocation_apical_control(void) {
   sylva_world *w = trunk();
@@ -341,7 +382,7 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(derivatives), CHECK_TEST(cap_and_stop), CHECK_TEST(bh_and_priority),
       CHECK_TEST(light_sensitivity), CHECK_TEST(lateral_direction), CHECK_TEST(rng),
-      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap),
+      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap), CHECK_TEST(allocation_lateral_reach),
       CHECK_TEST(allocation_apical_control), CHECK_TEST(allocation_apical_flow),
       CHECK_TEST(allocation_no_apical_flow), CHECK_TEST(allocation_no_rest),
       CHECK_TEST(allocation_apical_zone), CHECK_TEST(shade_base)};

@@ -1,6 +1,6 @@
 /* Hand-built skeletons: pipe-model radii (and a short tip's share at a rho below
- * ref_rho, and heartwood), shedding of a dark branch (nodes, occupancy and shade removed exactly),
- * a world that grows, and snapshots. */
+ * ref_rho, and heartwood), shedding of a dark branch (nodes, occupancy and shade
+ * removed exactly), a world that grows, and snapshots. */
 #include <math.h>
 #include <string.h>
 
@@ -332,7 +332,8 @@ static void test_leaves(void) {
 
 int main(int argc, char **argv) {
   static const check_test tests[] = {
-      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(heartwood), CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
+      CHECK_TEST(leaves), CHECK_TEST(radii), CHECK_TEST(tip_share), CHECK_TEST(heartwood),
+      CHECK_TEST(shedding), CHECK_TEST(snapshot_lockstep),
       CHECK_TEST(snapshot_bad_images), CHECK_TEST(add_plant_errors)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("growth");

@@ -32,9 +32,10 @@
  * counts), places 43 and 44 (crown_max, crown_max_exp) only in images with the CROWN
  * flag, places 45 to 47 (leaf_size, leaf_density, leaf_colour) only in images with
  * the FOLIAGE flag (a species whose foliage is not the default), place 48 (heartwood)
- * only in images with the WOOD flag, so images of worlds without such species keep
- * their bytes. The foliage changes no growth: it is what
- * the leaf-bearing nodes carry (leaf_area, pictures, glTF).
+ * only in images with the WOOD flag, place 49 (lateral_reach) only in images with the
+ * REACH flag, so images of worlds without such species keep their bytes. The foliage
+ * changes no growth: it is what the leaf-bearing nodes carry (leaf_area, pictures,
+ * glTF).
  *
  * Adding a field: add it to sylva_species_def and here (at the end of its group,
  * with the next place, 37 for the first), raise SYLVA_SPECIES_SNAPSHOT_FIELDS and
@@ -88,6 +89,7 @@
   X(leaf_density,  int,    6,     0,    1000,   SYLVA_FIELD_CLOSED,        species, 46)          \
   X(leaf_colour,   int,    0x4a7f35, 0, 0xffffff, SYLVA_FIELD_CLOSED,      species, 47)          \
   X(heartwood,     double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 48)          \
+  X(lateral_reach, double, 1,     1,    4,      SYLVA_FIELD_CLOSED,        species, 49)          \
   X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
   X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
   X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
@@ -96,6 +98,6 @@
 
 /** Places in a snapshot's species record: the list's fields and the hand-written
  *  growth.p[3] and tropism[3]. */
-#define SYLVA_SPECIES_SNAPSHOT_FIELDS 49
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 50
 
 #endif
