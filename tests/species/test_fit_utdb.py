@@ -14,12 +14,12 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from species_grow import AGES, compare, finish, fit, grow, report_data, same_as_report, sylva  # noqa: E402
 
 # Chinese pistache (Sacramento Valley), green ash (Temperate Interior West), hackberry
-# (Midwest). PacfNW:ACPL (Norway maple) was tried first: its young crowns miss (-29% at
-# 10 years, -21% at 20), as several library species' do (docs/species.md).
+# (Midwest). PacfNW:ACPL (Norway maple) was tried first, before the fit had the
+# laterals' reach (docs/model.md, "Calibration", step 6): its young crowns missed (-29%
+# at 10 years, -21% at 20).
 KEYS = ('SacVal:PICH', 'TpIntW:FRPE', 'MidWst:CEOC')
 TOLERANCES = {'height': 0.15, 'dbh': 0.20, 'crown_diameter': 0.20, 'crown_height': 0.25}
-# Known misses, as data/species/known-misses.json is for the library (docs/species.md):
-# none since the crown's control moves the column shade with the shedding threshold
+# Known misses: none since the crown's control moves the column shade with the shedding threshold
 # (docs/model.md, "Calibration"). A miss listed here that meets its tolerance fails
 # too, so the list cannot go stale.
 KNOWN = set()
