@@ -32,9 +32,10 @@ static int push_sprout(sylva_world *w, int32_t slot, int32_t stem, int32_t n, do
 
 /* The cap of a shoot off the trunk from node n: the reach graded by the node's depth
  * in the crown, f = 1 + (lateral_reach - 1) min(1, (top - z) / crown height), top the
- * stem's height at the season's start, and no more than the full reach's cap (docs/model.md,
- * "Species in years"). */
-static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int local, int32_t full) {
+ * stem's height at the season's start, and no more than the full reach's cap (the
+ * rounded caps are not monotone in f; docs/model.md, "Species in years"). */
+static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int local,
+                          int32_t full) {
   const sylva__stem *st = &w->stems[stem];
   const sylva__species *sp = &w->species[st->species];
   double reach = sp->def.lateral_reach;
@@ -44,7 +45,7 @@ static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int loc
   double below = st->root[2] + h - w->nodes.z[n];
   double share = depth > 0.0 ? below / depth : 1.0;
   share = share < 0.0 ? 0.0 : share > 1.0 ? 1.0 : share;
-  int32_t c = sylva__lateral_cap(sp, local, 1.0 + (reach - 1.0) * share);
+  int32_t c = sylva__scaled_cap(sp, local, 1.0 + (reach - 1.0) * share);
   return c < full ? c : full;
 }
 
@@ -174,7 +175,7 @@ int sylva__allocate(sylva_world *w, int iteration) {
     int local = sylva__stem_local(st, iteration);
     const sylva__species *sp = &w->species[st->species];
     caps[k] = st->finished ? 0 : sylva__species_cap(sp, local);
-    lateral[k] = st->finished ? 0 : sylva__lateral_cap(sp, local, sp->def.lateral_reach);
+    lateral[k] = st->finished ? 0 : sylva__scaled_cap(sp, local, sp->def.lateral_reach);
   }
   /* stems that stop at this iteration (phase 2) grow nothing */
   for (size_t i = 0; i < w->finishing.len; i++) {

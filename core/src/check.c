@@ -111,7 +111,8 @@ static void check_sprouts(const sylva_world *w) {
       SYLVA_ASSERT(sp->stem == k && sp->slot >= 0 && (size_t)sp->slot < s->count);
       SYLVA_ASSERT((s->flags[sp->slot] & SYLVA__NODE_ALIVE) && s->stem[sp->slot] == k);
       int32_t cap = w->caps.data[k], lateral = w->caps.data[w->stem_count + k];
-      SYLVA_ASSERT(sp->n >= 1 && sp->n <= (cap > lateral ? cap : lateral) && !w->stems[k].finished);
+      SYLVA_ASSERT(sp->n >= 1 && sp->n <= (cap > lateral ? cap : lateral) &&
+                   !w->stems[k].finished);
       SYLVA_ASSERT(sp->apex == (s->axis_child[sp->slot] < 0));
     }
   }

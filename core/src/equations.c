@@ -46,7 +46,11 @@ double sylva_equation_limit(const sylva_equation *eq) {
 }
 
 int sylva_equation_cap(const sylva_equation *eq, int iteration) {
-  double r = sylva_equation_rate(eq, (double)(iteration - 1));
+  return sylva_equation_cap_scaled(eq, iteration, 1.0);
+}
+
+int sylva_equation_cap_scaled(const sylva_equation *eq, int iteration, double f) {
+  double r = f * sylva_equation_rate(eq, (double)(iteration - 1));
   if (!(r > 0.0)) return 0;
   if (r > 1e6) return 1000000;
   return (int)floor(r + 0.5);

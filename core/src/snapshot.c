@@ -8,8 +8,8 @@
  * schedules follow the nodes; SCALED when a species has ref_rho, acclimation, years
  * or a nursery: every species record then has those four places too; CROWN with a
  * crown limit, FOLIAGE with foliage not the default, WOOD with heartwood, REACH
- * with a lateral reach (sylva/species_fields.h). The voxel grid is not stored: shade is an exact
- * integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
+ * with a lateral reach (sylva/species_fields.h). The voxel grid is not stored: shade
+ * is an exact integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>

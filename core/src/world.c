@@ -163,23 +163,14 @@ static void scale_counts(sylva__species *sp) {
 }
 
 int sylva__species_cap(const sylva__species *sp, int local) {
-  if (!(sp->def.ref_rho > 0.0)) return sylva_equation_cap(&sp->def.growth, local);
-  /* the difference of the rounded path lengths: over the years the caps add up to
-   * X(T) to within half an internode at any rho, where rounding each year's rate
-   * would lose or gain up to half an internode a year */
-  double a = floor(sylva_equation_value(&sp->def.growth, (double)local) + 0.5);
-  double b = floor(sylva_equation_value(&sp->def.growth, (double)(local - 1)) + 0.5);
-  return a > b ? (int)(a - b) : 0;
+  return sylva__scaled_cap(sp, local, 1.0);
 }
 
-int sylva__lateral_cap(const sylva__species *sp, int local, double f) {
-  if (f == 1.0) return sylva__species_cap(sp, local);
-  /* f times the leader's path: the rate scaled, or the rounded lengths' difference
-   * (docs/model.md, "Species in years") */
-  if (!(sp->def.ref_rho > 0.0)) {
-    double r = f * sylva_equation_rate(&sp->def.growth, (double)(local - 1));
-    return r > 0.0 ? (r > 1e6 ? 1000000 : (int)floor(r + 0.5)) : 0;
-  }
+int sylva__scaled_cap(const sylva__species *sp, int local, double f) {
+  if (!(sp->def.ref_rho > 0.0)) return sylva_equation_cap_scaled(&sp->def.growth, local, f);
+  /* the difference of the rounded path lengths: over the years the caps add up to
+   * f X(T) to within half an internode at any rho, where rounding each year's rate
+   * would lose or gain up to half an internode a year */
   double a = floor(f * sylva_equation_value(&sp->def.growth, (double)local) + 0.5);
   double b = floor(f * sylva_equation_value(&sp->def.growth, (double)(local - 1)) + 0.5);
   return a > b ? (int)(a - b) : 0;

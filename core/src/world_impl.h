@@ -193,8 +193,9 @@ static inline int sylva__stem_local(const sylva__stem *s, int world_iteration) {
 /** c(T) of a stem's species at local iteration T (docs/model.md, "Cap" and "Species
  *  in years"). */
 int sylva__species_cap(const sylva__species *sp, int local);
-/* The cap of a shoot off the trunk with the reach f: f times the leader's path. */
-int sylva__lateral_cap(const sylva__species *sp, int local, double f);
+/* The cap of f times the leader's path: a shoot off the trunk with the reach f
+ *  (allocate.c); f = 1 is c(T). */
+int sylva__scaled_cap(const sylva__species *sp, int local, double f);
 /** Does a stem of this species stop growing at local iteration T ("Stop")? */
 bool sylva__species_stops(const sylva__species *sp, int local);
 /** Height bins of the crown base's measure for a world of this height (stats.c). */

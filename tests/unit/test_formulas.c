@@ -382,7 +382,8 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(derivatives), CHECK_TEST(cap_and_stop), CHECK_TEST(bh_and_priority),
       CHECK_TEST(light_sensitivity), CHECK_TEST(lateral_direction), CHECK_TEST(rng),
-      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap), CHECK_TEST(allocation_lateral_reach),
+      CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap),
+      CHECK_TEST(allocation_lateral_reach),
       CHECK_TEST(allocation_apical_control), CHECK_TEST(allocation_apical_flow),
       CHECK_TEST(allocation_no_apical_flow), CHECK_TEST(allocation_no_rest),
       CHECK_TEST(allocation_apical_zone), CHECK_TEST(shade_base)};

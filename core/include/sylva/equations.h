@@ -27,6 +27,8 @@ double sylva_equation_rate(const sylva_equation *eq, double t);
 double sylva_equation_limit(const sylva_equation *eq);
 /** c(T) = round half up of dX/dt(T - 1), never below 0. */
 int sylva_equation_cap(const sylva_equation *eq, int iteration);
+/** The cap of f times the equation: round half up of f dX/dt(T - 1), never below 0. */
+int sylva_equation_cap_scaled(const sylva_equation *eq, int iteration, double f);
 /** True when dX/dt is decreasing at t = T - 1 (past the inflection point). */
 bool sylva_equation_decreasing(const sylva_equation *eq, int iteration);
 /** The stopping rule: cap 0 while the rate is already decreasing. */

@@ -71,9 +71,10 @@ typedef struct sylva_species_def {
                                 of its functional pipes, the tips' above it: pipes whose
                                 leaves are gone stay in the wood (docs/model.md, "Species
                                 in years"); 0: the pipe model alone */
-  double lateral_reach;    /**< 1..4: a shoot off the trunk may grow this many times the
-                                leader's path a season (LGTM allocation; docs/model.md,
-                                "Species in years"); 1: the leader's cap */
+  double lateral_reach;    /**< 1..4: a shoot off the trunk may grow up to this many times
+                                the leader's path a season, graded from 1 at the stem's top
+                                to this a crown height below it (LGTM allocation;
+                                docs/model.md, "Species in years"); 1: the leader's cap */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */
