@@ -38,8 +38,10 @@
  * glTF).
  *
  * Adding a field: add it to sylva_species_def and here (at the end of its group,
- * with the next place, 37 for the first), raise SYLVA_SPECIES_SNAPSHOT_FIELDS and
- * SYLVA_SNAPSHOT_VERSION, and document its key in docs/scenario.md. */
+ * with the next place), raise SYLVA_SPECIES_SNAPSHOT_FIELDS, and document its key in
+ * docs/scenario.md. Its place is written under a new header flag that implies the
+ * others (core/src/snapshot.c), so older images keep their bytes and
+ * SYLVA_SNAPSHOT_VERSION stays; without such a flag, raise the version. */
 #ifndef SYLVA_SPECIES_FIELDS_H
 #define SYLVA_SPECIES_FIELDS_H
 
