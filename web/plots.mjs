@@ -20,6 +20,11 @@ export const MEASURES = [
   { key: 'cap', title: 'Growth cap c(T)' },
 ];
 
+// The x axis (iterations or calendar years) ticks at whole numbers only, and
+// prints them without uPlot's thousands separators: 2030, not "2,030".
+const WHOLE_INCRS = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000];
+export const wholeNumbers = (u, splits) => splits.map((v) => (v == null ? null : String(Math.round(v))));
+
 export class Plots {
   constructor(container) {
     this.container = container;
@@ -107,6 +112,7 @@ export class Plots {
     return Object.fromEntries(this.charts.map((c, k) => [measures[k].key, {
       iterations: this.iterations.slice(0, c.data[0].length),
       axis: c.axes[0].label,
+      ticks: (c.axes[0]._values || []).slice(),   // the x axis's labels as drawn (uPlot's own array)
       x: Array.from(c.data[0]),
       stems: Object.fromEntries(stems.map((s, i) => [s, Array.from(c.data[i + 1] || [])])),
     }]));
@@ -134,7 +140,7 @@ export class Plots {
         legend: { show: false },
         cursor: { drag: { x: false, y: false } },
         scales: { x: { time: false } },
-        axes: [{ label: axis, size: 36 }, { size: 60 }],
+        axes: [{ label: axis, size: 36, incrs: WHOLE_INCRS, values: wholeNumbers }, { size: 60 }],
         series: [{ label: axis }, ...stems.map((s) => ({
           label: s.label, stroke: plantColor(this.plantIndex.get(s.plant) ?? 0), width: 1.5, spanGaps: false,
         }))],

@@ -270,6 +270,9 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
       assert.equal(plots[key].axis, 'year', key);
       assert.deepEqual(plots[key].iterations, its, key);
       assert.deepEqual(plots[key].x, its.map((t) => 2027 + t), key);
+      // the axis's labels are whole years without a thousands separator
+      assert.ok(plots[key].ticks.includes('2030'), `${key}: ticks ${plots[key].ticks}`);
+      assert.ok(plots[key].ticks.every((t) => /^\d{4}$/.test(t)), `${key}: ticks ${plots[key].ticks}`);
     }
     const snap = await serverSnapshot(d, run);
     assert.deepEqual(plots.crown_diameter.stems['old/0'].at(-1), snap.stats[1].crown_diameter);
