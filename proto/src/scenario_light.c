@@ -8,8 +8,8 @@
 #include "scenario_parts.h"
 #include "strbuf.h"
 
-static const char *const light_keys[] = {"sky",    "latitude", "north",
-                                         "season", "diffuse",  "samples"};
+static const char *const light_keys[] = {"sky",     "latitude", "north",     "season",
+                                         "diffuse", "samples",  "longitude", "utc_offset"};
 
 /* A member that only a site sky has: every key of light_keys but the first, "sky". */
 static int only_site(sylva__parser *p, const cJSON *item) {
@@ -58,6 +58,30 @@ static int parse_season(sylva__parser *p, const cJSON *v, int *first, int *last)
   return rc;
 }
 
+/* "longitude" and "utc_offset": both or neither (clock times for `sylva shade`). */
+static int parse_clock(sylva__parser *p, const cJSON *item, sylva_scenario_light *out) {
+  const cJSON *lon = cJSON_GetObjectItemCaseSensitive(item, "longitude");
+  const cJSON *utc = cJSON_GetObjectItemCaseSensitive(item, "utc_offset");
+  if (!lon && !utc) return 0;
+  if (!lon || !utc)
+    return sylva__fail_at_key(p, lon ? "utc_offset" : "longitude",
+                              "required with \"%s\": the site's clock needs both",
+                              lon ? "longitude" : "utc_offset");
+  size_t old = sylva__ptr_push(p, "longitude");
+  int rc = sylva__want_number(p, lon, &out->longitude);
+  if (!rc && !(out->longitude >= -180.0 && out->longitude <= 180.0))
+    rc = sylva__fail(p, "must be from -180 to 180 degrees (east positive), got %g", out->longitude);
+  sylva__ptr_pop(p, old);
+  if (rc) return rc;
+  old = sylva__ptr_push(p, "utc_offset");
+  rc = sylva__want_number(p, utc, &out->utc_offset);
+  if (!rc && !(out->utc_offset >= -14.0 && out->utc_offset <= 14.0))
+    rc = sylva__fail(p, "must be from -14 to 14 hours, got %g", out->utc_offset);
+  sylva__ptr_pop(p, old);
+  out->clock = rc == 0;
+  return rc;
+}
+
 int sylva__parse_light(sylva__parser *p, const cJSON *item, sylva_scenario_light *out) {
   *out = (sylva_scenario_light){.site = false};
   size_t old = sylva__ptr_push(p, "light");
@@ -100,6 +124,7 @@ int sylva__parse_light(sylva__parser *p, const cJSON *item, sylva_scenario_light
         rc = sylva__fail(p, "must be from 0 to 1 (the overcast sky's share), got %g", d->diffuse);
       sylva__ptr_pop(p, o2);
     }
+    if (!rc) rc = parse_clock(p, item, out);
     if (!rc && (v = cJSON_GetObjectItemCaseSensitive(item, "samples"))) {
       size_t o2 = sylva__ptr_push(p, "samples");
       double n = 0;
@@ -122,5 +147,12 @@ void sylva__put_light(sylva__strbuf *b, const sylva_scenario_light *l) {
   sylva__strbuf_shortest(b, d->north[1]);
   sylva__strbuf_printf(b, "], \"season\": [%d, %d], \"diffuse\": ", d->first_day, d->last_day);
   sylva__strbuf_shortest(b, d->diffuse);
-  sylva__strbuf_printf(b, ", \"samples\": %d}", d->samples);
+  sylva__strbuf_printf(b, ", \"samples\": %d", d->samples);
+  if (l->clock) {
+    sylva__strbuf_puts(b, ", \"longitude\": ");
+    sylva__strbuf_shortest(b, l->longitude);
+    sylva__strbuf_puts(b, ", \"utc_offset\": ");
+    sylva__strbuf_shortest(b, l->utc_offset);
+  }
+  sylva__strbuf_puts(b, "}");
 }

@@ -42,6 +42,10 @@ int cmd_sweep(int argc, char **argv);
  *  runs compared at chosen years. */
 int cmd_report(int argc, char **argv);
 
+/** `sylva shade (--db FILE --name NAME [--iteration T | --year Y] | SCENARIO.json)
+ *  --date MM-DD -o OUT.csv|json|png`: a day's hours of sun on ground and facades. */
+int cmd_shade(int argc, char **argv);
+
 /** `sylva serve [options]`: the daemon. */
 int cmd_serve(int argc, char **argv);
 

@@ -38,6 +38,8 @@ static void usage(FILE *f) {
         "                          as a Slurm array job\n"
         "  report --db FILE [--sweep NAME] [--years LIST] -o OUT.csv|html|pdf\n"
         "                          a sweep's runs compared at chosen years\n"
+        "  shade (--db FILE --name NAME | SCENARIO.json) --date MM-DD -o OUT.csv|json|png\n"
+        "                          a day's hours of sun on the ground and facades\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -74,6 +76,7 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "import") == 0) return cmd_import(argc - 1, argv + 1);
   if (strcmp(cmd, "sweep") == 0) return cmd_sweep(argc - 1, argv + 1);
   if (strcmp(cmd, "report") == 0) return cmd_report(argc - 1, argv + 1);
+  if (strcmp(cmd, "shade") == 0) return cmd_shade(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else

@@ -68,6 +68,11 @@ typedef struct sylva_scenario_plant {
 typedef struct sylva_scenario_light {
   bool site;         /**< "sky": "site"; false: "zenith" */
   sylva_sky_def sky; /**< when site: latitude, north, season, diffuse, samples */
+  /** When site, optional and together: the site's longitude (degrees, east
+   *  positive) and its clock's offset from UTC (hours), for clock times (sylva
+   *  shade); clock false without them (times are local solar time). */
+  bool clock;
+  double longitude, utc_offset;
 } sylva_scenario_light;
 
 /** Defaults of a site's sky. */

@@ -1,0 +1,599 @@
+/* The site's sun hours (shade.h; docs/model.md, "Shade on the site"): cells, the
+ * sun's samples, rays past the boxes and through the leaves' voxels. */
+#include "shade.h"
+
+#include <libnova/julian_day.h>
+#include <libnova/sidereal_time.h>
+#include <libnova/solar.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "foliage.h"
+#include "server_error.h"
+#include "sylva/sun.h"
+
+#define DEG (3.14159265358979323846 / 180.0)
+
+static const char *const face_names[SHADE_FACE_COUNT] = {"+x", "-x", "+y", "-y"};
+static const int month_days[12] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+
+const char *shade_face_name(shade_face f) {
+  return f >= 0 && f < SHADE_FACE_COUNT ? face_names[f] : "?";
+}
+
+shade_day shade_default_day(void) {
+  return (shade_day){.month = 1, .day = 1, .year = 2025, .from = 0, .to = SHADE_DAY_MINUTES,
+                     .step = 10};
+}
+
+int shade_day_of_year(int month, int day) {
+  if (month < 1 || month > 12 || day < 1 || day > month_days[month - 1]) return 0;
+  int doy = day;
+  for (int m = 0; m < month - 1; m++) doy += month_days[m];
+  return doy;
+}
+
+/* Reads exactly `digits` decimal digits. */
+static int read_digits(const char *s, int digits, int *out) {
+  int v = 0;
+  for (int i = 0; i < digits; i++) {
+    if (s[i] < '0' || s[i] > '9') return -1;
+    v = v * 10 + (s[i] - '0');
+  }
+  *out = v;
+  return 0;
+}
+
+int shade_parse_date(const char *text, int *month, int *day, char *err, size_t errlen) {
+  int m = 0, d = 0;
+  if (!text || strlen(text) != 5 || text[2] != '-' || read_digits(text, 2, &m) ||
+      read_digits(text + 3, 2, &d))
+    return server_fail(err, errlen, SERVER_EINPUT, "expected MM-DD (e.g. 06-21), got '%s'",
+                       text ? text : "");
+  if (!shade_day_of_year(m, d))
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "'%s' is not a date (of a common year: no 02-29)", text);
+  *month = m;
+  *day = d;
+  return SERVER_OK;
+}
+
+int shade_parse_time(const char *text, int *minutes, char *err, size_t errlen) {
+  int h = 0, m = 0;
+  if (!text || strlen(text) != 5 || text[2] != ':' || read_digits(text, 2, &h) ||
+      read_digits(text + 3, 2, &m) || h > 24 || m > 59 || (h == 24 && m != 0))
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "expected HH:MM from 00:00 to 24:00 (e.g. 09:30), got '%s'",
+                       text ? text : "");
+  *minutes = h * 60 + m;
+  return SERVER_OK;
+}
+
+int shade_parse_surface(const sylva_world *w, const char *text, shade_filter *out, char *err,
+                        size_t errlen) {
+  if (strcmp(text, "ground") == 0) {
+    *out = (shade_filter){.ground = true, .faces = false, .obstacle = -1, .face = -1};
+    return SERVER_OK;
+  }
+  const char *colon = strrchr(text, ':');
+  if (!colon || colon == text)
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "expected 'ground' or OBSTACLE_ID:FACE (FACE +x, -x, +y or -y), got '%s'",
+                       text);
+  int face = -1;
+  for (int f = 0; f < SHADE_FACE_COUNT; f++)
+    if (strcmp(colon + 1, face_names[f]) == 0) face = f;
+  if (face < 0)
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "'%s': unknown face '%s' (a box's vertical faces are +x, -x, +y and -y)",
+                       text, colon + 1);
+  char id[SYLVA_LABEL_MAX];
+  size_t len = (size_t)(colon - text);
+  int obstacle = SYLVA_ENOTFOUND;
+  if (len < sizeof id) {
+    memcpy(id, text, len);
+    id[len] = '\0';
+    obstacle = sylva_world_find_obstacle(w, id);
+  }
+  sylva_obstacle_def def;
+  if (obstacle < 0 || sylva_world_obstacle(w, obstacle, &def) != 0)
+    return server_fail(err, errlen, SERVER_EINPUT, "'%s': the world has no obstacle '%.*s'",
+                       text, (int)len, text);
+  if (def.kind != SYLVA_OBSTACLE_SOLID)
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "'%s': obstacle '%s' is a zone, which has no faces (only boxes do)", text,
+                       def.label);
+  *out = (shade_filter){.ground = false, .faces = true, .obstacle = obstacle, .face = face};
+  return SERVER_OK;
+}
+
+int shade_check(const shade_site *site, const shade_day *day, char *err, size_t errlen) {
+  if (!(site->latitude >= -90.0 && site->latitude <= 90.0))
+    return server_fail(err, errlen, SERVER_EINPUT, "latitude must be from -90 to 90, got %g",
+                       site->latitude);
+  if (!(hypot(site->north[0], site->north[1]) > 1e-9))
+    return server_fail(err, errlen, SERVER_EINPUT, "the direction of north has no length");
+  if (site->clock && !(site->longitude >= -180.0 && site->longitude <= 180.0 &&
+                       site->utc_offset >= -14.0 && site->utc_offset <= 14.0))
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "longitude must be from -180 to 180 and utc_offset from -14 to 14");
+  if (!shade_day_of_year(day->month, day->day))
+    return server_fail(err, errlen, SERVER_EINPUT, "%02d-%02d is not a date (of a common year)",
+                       day->month, day->day);
+  if (day->from < 0 || day->to > SHADE_DAY_MINUTES || day->from >= day->to)
+    return server_fail(err, errlen, SERVER_EINPUT,
+                       "the times must run forwards within the day: from %02d:%02d to %02d:%02d",
+                       day->from / 60, day->from % 60, day->to / 60, day->to % 60);
+  if (day->step < 1 || day->step > SHADE_DAY_MINUTES)
+    return server_fail(err, errlen, SERVER_EINPUT, "the step must be 1 to %d minutes, got %d",
+                       SHADE_DAY_MINUTES, day->step);
+  return SERVER_OK;
+}
+
+/* The equation of time (apparent minus mean solar time) in hours on day `doy` of
+ * proto's year: the sun's hour angle at Greenwich at 12:00 UT, from libnova's
+ * sidereal time and apparent right ascension. */
+static double equation_of_time(int doy) {
+  struct ln_date date = {.years = 2025, .months = 1, .days = 1, .hours = 12};
+  double jd = ln_get_julian_day(&date) + (double)(doy - 1);
+  struct ln_equ_posn sun;
+  ln_get_solar_equ_coords(jd, &sun);
+  double h = fmod(ln_get_apparent_sidereal_time(jd) * 15.0 - sun.ra, 360.0);
+  if (h > 180.0) h -= 360.0;
+  if (h <= -180.0) h += 360.0;
+  return h / 15.0;
+}
+
+/* The leaves' density as a dense grid over the box of the voxels that hold leaves:
+ * k times the leaf area density, m^-1, so that a path's optical depth is the sum of
+ * kd * length. */
+typedef struct leaf_grid {
+  int lo[3], n[3];   /* first voxel (world indices) and voxels per axis */
+  double bmin[3], bmax[3];
+  double *kd;        /* n[0] * n[1] * n[2], x fastest; NULL without leaves */
+  double area;
+} leaf_grid;
+
+/* The index of node id among ids[0 .. count) (sorted), or -1. */
+static long find_id(const int32_t *ids, size_t count, int32_t id) {
+  size_t lo = 0, hi = count;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (ids[mid] < id) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < count && ids[lo] == id ? (long)lo : -1;
+}
+
+/* One leaf card's centre as a world voxel, clamped into the world so that every
+ * leaf the world reports is counted. */
+static void leaf_voxel(const sylva_world_def *def, const int dims[3], const double c[3],
+                       int v[3]) {
+  for (int a = 0; a < 3; a++) {
+    double f = floor((c[a] - def->min[a]) / def->voxel);
+    v[a] = f < 0 ? 0 : f >= dims[a] ? dims[a] - 1 : (int)f;
+  }
+}
+
+/* Visits every leaf of w: pass 0 finds the box of their voxels, pass 1 adds their
+ * areas into g->kd. */
+static void leaf_pass(const sylva_world *w, const sylva_node_info *nodes, const int32_t *ids,
+                      size_t count, int pass, leaf_grid *g) {
+  const sylva_world_def *def = sylva_world_get_def(w);
+  int dims[3];
+  sylva_world_dims(w, dims);
+  double vol = def->voxel * def->voxel * def->voxel;
+  for (size_t i = 0; i < count; i++) {
+    const sylva_node_info *nd = &nodes[i];
+    if (nd->leaves <= 0) continue;
+    const sylva_species_def *sp =
+        sylva_world_species(w, sylva_world_plant_species(w, nd->plant));
+    if (!sp) continue;
+    double q[3] = {nd->x, nd->y, nd->z}, p[3] = {0, 0, 0};
+    long parent = nd->parent >= 0 ? find_id(ids, count, nd->parent) : -1;
+    if (parent >= 0) {
+      p[0] = nodes[parent].x;
+      p[1] = nodes[parent].y;
+      p[2] = nodes[parent].z;
+    }
+    double area = SYLVA_LEAF_FILL * sp->leaf_size * sp->leaf_size;
+    for (int k = 0; k < nd->leaves; k++) {
+      foliage_leaf leaf;
+      foliage_place(parent >= 0 ? p : NULL, q, k, nd->leaves, sp->leaf_size, &leaf);
+      int v[3];
+      leaf_voxel(def, dims, leaf.centre, v);
+      if (pass == 0) {
+        for (int a = 0; a < 3; a++) {
+          if (g->n[a] == 0 || v[a] < g->lo[a]) {
+            int hi = g->n[a] ? g->lo[a] + g->n[a] - 1 : v[a];
+            g->lo[a] = v[a];
+            g->n[a] = hi - v[a] + 1;
+          } else if (v[a] >= g->lo[a] + g->n[a]) {
+            g->n[a] = v[a] - g->lo[a] + 1;
+          }
+        }
+        g->area += area;
+      } else {
+        size_t at = (size_t)(v[0] - g->lo[0]) +
+                    (size_t)g->n[0] * ((size_t)(v[1] - g->lo[1]) +
+                                       (size_t)g->n[1] * (size_t)(v[2] - g->lo[2]));
+        g->kd[at] += SHADE_K * area / vol;
+      }
+    }
+  }
+}
+
+static int leaf_grid_build(const sylva_world *w, leaf_grid *g, char *err, size_t errlen) {
+  *g = (leaf_grid){.kd = NULL};
+  size_t count = sylva_world_node_count(w);
+  if (count == 0) return SERVER_OK;
+  sylva_node_info *nodes = malloc(count * sizeof *nodes);
+  int32_t *ids = malloc(count * sizeof *ids);
+  if (!nodes || !ids) {
+    free(nodes);
+    free(ids);
+    return server_fail(err, errlen, SERVER_ENOMEM, "out of memory for %zu nodes", count);
+  }
+  for (size_t i = 0; i < count; i++) {
+    sylva_world_node_at(w, i, &nodes[i]);
+    ids[i] = nodes[i].id;
+  }
+  leaf_pass(w, nodes, ids, count, 0, g);
+  int rc = SERVER_OK;
+  if (g->n[0] > 0) {
+    size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
+    g->kd = calloc(cells, sizeof *g->kd);
+    if (!g->kd) {
+      rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for %zu leaf voxels", cells);
+    } else {
+      leaf_pass(w, nodes, ids, count, 1, g);
+      const sylva_world_def *def = sylva_world_get_def(w);
+      for (int a = 0; a < 3; a++) {
+        g->bmin[a] = def->min[a] + g->lo[a] * def->voxel;
+        g->bmax[a] = def->min[a] + (g->lo[a] + g->n[a]) * def->voxel;
+      }
+    }
+  }
+  free(nodes);
+  free(ids);
+  return rc;
+}
+
+/* The entry and exit of the ray o + t d (t > 0) through the box [lo, hi]: true when
+ * it crosses its inside (t0 < t1). */
+static bool ray_box(const double o[3], const double d[3], const double lo[3],
+                    const double hi[3], double *t0, double *t1) {
+  double a = 0.0, b = INFINITY;
+  for (int k = 0; k < 3; k++) {
+    if (d[k] == 0.0) {
+      if (o[k] <= lo[k] || o[k] >= hi[k]) return false;
+      continue;
+    }
+    double ta = (lo[k] - o[k]) / d[k], tb = (hi[k] - o[k]) / d[k];
+    if (ta > tb) {
+      double s = ta;
+      ta = tb;
+      tb = s;
+    }
+    if (ta > a) a = ta;
+    if (tb < b) b = tb;
+    if (a >= b) return false;
+  }
+  *t0 = a;
+  *t1 = b;
+  return true;
+}
+
+/* The share of the sun the leaves pass along o + t d: exp(-sum of kd * length)
+ * over the voxels the ray crosses (an exact walk through the grid, Amanatides and
+ * Woo 1987), inside the leaves' box only. */
+static double transmission(const leaf_grid *g, double voxel, const double o[3],
+                           const double d[3]) {
+  double t0, t1;
+  if (!g->kd || !ray_box(o, d, g->bmin, g->bmax, &t0, &t1)) return 1.0;
+  int idx[3], step[3];
+  double tmax[3], tdelta[3];
+  for (int k = 0; k < 3; k++) {
+    double x = o[k] + d[k] * t0;
+    int i = (int)floor((x - g->bmin[k]) / voxel);
+    if (i < 0) i = 0;
+    if (i >= g->n[k]) i = g->n[k] - 1;
+    idx[k] = i;
+    if (d[k] > 0.0) {
+      step[k] = 1;
+      tmax[k] = (g->bmin[k] + (i + 1) * voxel - o[k]) / d[k];
+      tdelta[k] = voxel / d[k];
+    } else if (d[k] < 0.0) {
+      step[k] = -1;
+      tmax[k] = (g->bmin[k] + i * voxel - o[k]) / d[k];
+      tdelta[k] = -voxel / d[k];
+    } else {
+      step[k] = 0;
+      tmax[k] = INFINITY;
+      tdelta[k] = INFINITY;
+    }
+  }
+  size_t sx = 1, sy = (size_t)g->n[0], sz = (size_t)g->n[0] * (size_t)g->n[1];
+  const double *kd = g->kd;
+  double depth = 0.0, t = t0;
+  for (;;) {
+    int k = tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2);
+    double next = tmax[k] < t1 ? tmax[k] : t1;
+    double v = kd[(size_t)idx[0] * sx + (size_t)idx[1] * sy + (size_t)idx[2] * sz];
+    if (v != 0.0) depth += v * (next - t);
+    if (tmax[k] >= t1) break;
+    t = next;
+    idx[k] += step[k];
+    if (idx[k] < 0 || idx[k] >= g->n[k]) break;
+    tmax[k] += tdelta[k];
+  }
+  return exp(-depth);
+}
+
+/* A solid box of the world, with its id. */
+typedef struct shade_box {
+  int id;
+  double min[3], max[3];
+} shade_box;
+
+/* Is the ray from o towards d stopped by a box other than `own`? */
+static bool blocked(const shade_box *boxes, int count, int own, const double o[3],
+                    const double d[3]) {
+  for (int b = 0; b < count; b++) {
+    if (boxes[b].id == own) continue;
+    double t0, t1;
+    if (ray_box(o, d, boxes[b].min, boxes[b].max, &t0, &t1)) return true;
+  }
+  return false;
+}
+
+/* A cell waiting for its hours: its normal axis and sign, its own box. */
+typedef struct cell_work {
+  int axis;   /* 0 x, 1 y, 2 z (the ground) */
+  double sign;
+  int own;    /* obstacle id, -1 for the ground */
+} cell_work;
+
+/* Grows r->cells to hold `more` more. */
+static int reserve_cells(shade_result *r, size_t *cap, size_t more) {
+  if (r->cell_count + more <= *cap) return SERVER_OK;
+  size_t want = *cap ? *cap : 1024;
+  while (want < r->cell_count + more) want *= 2;
+  shade_cell *c = realloc(r->cells, want * sizeof *c);
+  if (!c) return SERVER_ENOMEM;
+  r->cells = c;
+  *cap = want;
+  return SERVER_OK;
+}
+
+static int add_surface(shade_result *r, const char *label, int obstacle, int face) {
+  shade_surface *s = realloc(r->surfaces, (size_t)(r->surface_count + 1) * sizeof *s);
+  if (!s) return SERVER_ENOMEM;
+  r->surfaces = s;
+  shade_surface *n = &s[r->surface_count++];
+  *n = (shade_surface){.obstacle = obstacle, .face = face, .first = r->cell_count};
+  if (face < 0) snprintf(n->name, sizeof n->name, "%s", label);
+  else snprintf(n->name, sizeof n->name, "%s:%s", label, face_names[face]);
+  return SERVER_OK;
+}
+
+/* The first voxel centre index along an axis at or above x (centres at min +
+ * (i + 0.5) v), and the last at or below y, clamped to the world's voxels. */
+static void centre_range(double min, double voxel, int dim, double x, double y, int *first,
+                         int *last) {
+  double a = ceil((x - min) / voxel - 0.5), b = floor((y - min) / voxel - 0.5);
+  *first = a < 0 ? 0 : a > dim ? dim : (int)a;
+  *last = b >= dim ? dim - 1 : b < -1 ? -1 : (int)b;
+}
+
+/* The cells of one face of box o, in the world's voxel grid. */
+static int add_face(shade_result *r, size_t *cap, const sylva_world_def *def,
+                    const int dims[3], const sylva_obstacle_def *o, int id, int face) {
+  int axis = face < 2 ? 0 : 1, across = 1 - axis;
+  double plane = face % 2 == 0 ? o->max[axis] : o->min[axis];
+  int rc = add_surface(r, o->label, id, face);
+  if (rc) return rc;
+  if (plane < def->min[axis] || plane > def->max[axis]) return SERVER_OK;
+  int u0, u1, z0, z1;
+  centre_range(def->min[across], def->voxel, dims[across], o->min[across], o->max[across], &u0,
+               &u1);
+  centre_range(def->min[2], def->voxel, dims[2], o->min[2], o->max[2], &z0, &z1);
+  if (u1 < u0 || z1 < z0) return SERVER_OK;
+  size_t n = (size_t)(u1 - u0 + 1) * (size_t)(z1 - z0 + 1);
+  if (reserve_cells(r, cap, n)) return SERVER_ENOMEM;
+  for (int k = z0; k <= z1; k++)
+    for (int u = u0; u <= u1; u++) {
+      shade_cell *c = &r->cells[r->cell_count++];
+      *c = (shade_cell){.surface = r->surface_count - 1};
+      c->p[axis] = plane;
+      c->p[across] = def->min[across] + (u + 0.5) * def->voxel;
+      c->p[2] = def->min[2] + (k + 0.5) * def->voxel;
+    }
+  r->surfaces[r->surface_count - 1].count = n;
+  return SERVER_OK;
+}
+
+/* The cells the filter asks for, the ground's first. */
+static int make_cells(const sylva_world *w, const shade_filter *f, shade_result *r) {
+  const sylva_world_def *def = sylva_world_get_def(w);
+  int dims[3];
+  sylva_world_dims(w, dims);
+  size_t cap = 0;
+  if (f->ground) {
+    if (add_surface(r, "ground", -1, -1)) return SERVER_ENOMEM;
+    size_t n = (size_t)dims[0] * (size_t)dims[1];
+    if (reserve_cells(r, &cap, n)) return SERVER_ENOMEM;
+    for (int j = 0; j < dims[1]; j++)
+      for (int i = 0; i < dims[0]; i++) {
+        shade_cell *c = &r->cells[r->cell_count++];
+        *c = (shade_cell){.p = {def->min[0] + (i + 0.5) * def->voxel,
+                                def->min[1] + (j + 0.5) * def->voxel, def->min[2]},
+                          .surface = 0};
+      }
+    r->surfaces[0].count = n;
+    r->nx = dims[0];
+    r->ny = dims[1];
+  }
+  if (!f->faces) return SERVER_OK;
+  int count = sylva_world_obstacle_count(w);
+  for (int i = 0; i < count; i++) {
+    int id;
+    sylva_obstacle_def o;
+    if (sylva_world_obstacle_at(w, i, &id, &o) != 0 || o.kind != SYLVA_OBSTACLE_SOLID) continue;
+    if (f->obstacle >= 0 && id != f->obstacle) continue;
+    for (int face = 0; face < SHADE_FACE_COUNT; face++) {
+      if (f->face >= 0 && face != f->face) continue;
+      int rc = add_face(r, &cap, def, dims, &o, id, face);
+      if (rc) return rc;
+    }
+  }
+  return SERVER_OK;
+}
+
+/* The solid boxes of w (NULL and 0 when there are none). */
+static int collect_boxes(const sylva_world *w, shade_box **out, int *count) {
+  int n = sylva_world_obstacle_count(w);
+  *out = NULL;
+  *count = 0;
+  if (n <= 0) return SERVER_OK;
+  shade_box *b = malloc((size_t)n * sizeof *b);
+  if (!b) return SERVER_ENOMEM;
+  for (int i = 0; i < n; i++) {
+    int id;
+    sylva_obstacle_def o;
+    if (sylva_world_obstacle_at(w, i, &id, &o) != 0 || o.kind != SYLVA_OBSTACLE_SOLID) continue;
+    shade_box *x = &b[(*count)++];
+    x->id = id;
+    memcpy(x->min, o.min, sizeof x->min);
+    memcpy(x->max, o.max, sizeof x->max);
+  }
+  *out = b;
+  return SERVER_OK;
+}
+
+/* The unit vector towards elevation el and azimuth az (degrees clockwise from
+ * north) with north along n (unit) and east (n.y, -n.x), as proto's sky maps its
+ * sun (proto/src/sky.c). */
+static void sun_direction(const double n[2], double el, double az, double d[3]) {
+  double h = cos(el * DEG), c = cos(az * DEG), s = sin(az * DEG);
+  d[0] = h * (c * n[0] + s * n[1]);
+  d[1] = h * (c * n[1] - s * n[0]);
+  d[2] = sin(el * DEG);
+}
+
+/* The means of cells[first .. first + count) into s. */
+static void summarise(const shade_cell *cells, size_t first, size_t count, shade_surface *s) {
+  double open = 0.0, with = 0.0;
+  size_t dim = 0;
+  for (size_t i = first; i < first + count; i++) {
+    open += cells[i].open;
+    with += cells[i].with;
+    if (cells[i].with < SHADE_DIM_HOURS) dim++;
+  }
+  s->count = count;
+  s->mean_open = count ? open / (double)count : 0.0;
+  s->mean_with = count ? with / (double)count : 0.0;
+  s->mean_added = s->mean_open - s->mean_with;
+  s->share_dim = count ? (double)dim / (double)count : 0.0;
+}
+
+void shade_obstacle_summary(const shade_result *r, int obstacle, shade_surface *out) {
+  *out = (shade_surface){.obstacle = obstacle, .face = -1};
+  double open = 0.0, with = 0.0, dim = 0.0;
+  size_t n = 0;
+  for (int s = 0; s < r->surface_count; s++) {
+    const shade_surface *x = &r->surfaces[s];
+    if (x->obstacle != obstacle || x->face < 0) continue;
+    if (!out->name[0]) snprintf(out->name, sizeof out->name, "%.*s",
+                                (int)(strrchr(x->name, ':') - x->name), x->name);
+    open += x->mean_open * (double)x->count;
+    with += x->mean_with * (double)x->count;
+    dim += x->share_dim * (double)x->count;
+    n += x->count;
+  }
+  out->count = n;
+  out->mean_open = n ? open / (double)n : 0.0;
+  out->mean_with = n ? with / (double)n : 0.0;
+  out->mean_added = out->mean_open - out->mean_with;
+  out->share_dim = n ? dim / (double)n : 0.0;
+}
+
+int shade_compute(const sylva_world *w, const shade_site *site, const shade_day *day,
+                  const shade_filter *filter, shade_result *out, char *err, size_t errlen) {
+  const sylva_world_def *def = sylva_world_get_def(w);
+  *out = (shade_result){.voxel = def->voxel, .site = *site, .day = *day};
+  memcpy(out->min, def->min, sizeof out->min);
+  memcpy(out->max, def->max, sizeof out->max);
+  int rc = shade_check(site, day, err, errlen);
+  if (rc) return rc;
+  shade_filter all = {.ground = true, .faces = true, .obstacle = -1, .face = -1};
+  if (make_cells(w, filter ? filter : &all, out))
+    return server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the cells");
+
+  /* the sun's samples, as hours after its transit */
+  int doy = shade_day_of_year(day->month, day->day);
+  int count = (day->to - day->from + day->step - 1) / day->step;
+  double transit = 12.0;
+  if (site->clock) transit = 12.0 - site->longitude / 15.0 + site->utc_offset - equation_of_time(doy);
+  double *hours = malloc((size_t)count * sizeof *hours);
+  sylva_sun *sun = malloc((size_t)count * sizeof *sun);
+  shade_box *boxes = NULL;
+  int box_count = 0;
+  leaf_grid g = {.kd = NULL};
+  if (!hours || !sun || collect_boxes(w, &boxes, &box_count)) {
+    rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the sun's samples");
+    goto done;
+  }
+  for (int i = 0; i < count; i++) hours[i] = (day->from + i * day->step) / 60.0 - transit;
+  sylva_sun_day(site->latitude, doy, hours, count, sun);
+  out->samples = count;
+  rc = leaf_grid_build(w, &g, err, errlen);
+  if (rc) goto done;
+  out->leaf_area = g.area;
+
+  double len = hypot(site->north[0], site->north[1]);
+  double north[2] = {site->north[0] / len, site->north[1] / len};
+  double dt = day->step / 60.0;
+  for (int i = 0; i < count; i++) {
+    if (!(sun[i].elevation > 0.0)) continue;
+    double d[3];
+    sun_direction(north, sun[i].elevation, sun[i].azimuth, d);
+    for (int s = 0; s < out->surface_count; s++) {
+      const shade_surface *sf = &out->surfaces[s];
+      cell_work cw = {.axis = 2, .sign = 1.0, .own = sf->obstacle};
+      if (sf->face >= 0) {
+        cw.axis = sf->face < 2 ? 0 : 1;
+        cw.sign = sf->face % 2 == 0 ? 1.0 : -1.0;
+      }
+      if (!(cw.sign * d[cw.axis] > 0.0)) continue;
+      for (size_t c = sf->first; c < sf->first + sf->count; c++) {
+        shade_cell *cell = &out->cells[c];
+        if (blocked(boxes, box_count, cw.own, cell->p, d)) continue;
+        cell->open += dt;
+        cell->with += dt * transmission(&g, def->voxel, cell->p, d);
+      }
+    }
+  }
+  for (int s = 0; s < out->surface_count; s++)
+    summarise(out->cells, out->surfaces[s].first, out->surfaces[s].count, &out->surfaces[s]);
+done:
+  free(hours);
+  free(sun);
+  free(boxes);
+  free(g.kd);
+  return rc;
+}
+
+void shade_result_free(shade_result *r) {
+  free(r->cells);
+  free(r->surfaces);
+  *r = (shade_result){.cells = NULL};
+}
+
+int shade_ground_added(const shade_result *r, double *out) {
+  if (r->surface_count < 1 || r->surfaces[0].face >= 0 || r->nx <= 0) return SERVER_EINPUT;
+  size_t n = (size_t)r->nx * (size_t)r->ny;
+  for (size_t i = 0; i < n; i++) out[i] = r->cells[i].open - r->cells[i].with;
+  return SERVER_OK;
+}
