@@ -29,6 +29,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "server_error.h"
 #include "sylva/world.h"
 
 /** Extinction coefficient of a spherical leaf angle distribution (Campbell and
