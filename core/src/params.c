@@ -53,6 +53,7 @@ int sylva_species_check(const sylva_species_def *d, const char **field) {
   /* What the list does not hold (sylva/species_fields.h). */
   SYLVA__REQUIRE(d->b_max >= d->b_min, "b_max");
   SYLVA__REQUIRE(d->m_min <= d->m0, "markers");
+  SYLVA__REQUIRE(d->biomass_form != 1 || d->wood_density > 0, "wood_density");
   SYLVA__REQUIRE((unsigned)d->growth.kind < SYLVA_EQ_COUNT, "growth");
   for (int i = 0; i < 3; i++) SYLVA__REQUIRE(isfinite(d->growth.p[i]), "growth");
   switch (d->growth.kind) {

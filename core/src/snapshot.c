@@ -8,7 +8,7 @@
  * schedules follow the nodes; SCALED when a species has ref_rho, acclimation, years
  * or a nursery: every species record then has those four places too; CROWN with a
  * crown limit, FOLIAGE with foliage not the default, WOOD with heartwood, REACH
- * with a lateral reach (sylva/species_fields.h). The voxel grid is not stored: shade
+ * with a lateral reach, CARBON with a wood density or a biomass allometry (sylva/species_fields.h). The voxel grid is not stored: shade
  * is an exact integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -23,21 +23,24 @@
 static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
 enum { HEADER = 32 };
 /* the header's flags */
-enum { SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8, FOLIAGE = 16, WOOD = 32, REACH = 64 };
+enum { SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8, FOLIAGE = 16, WOOD = 32, REACH = 64,
+       CARBON = 128 };
 /* Places of the species record that every image has; those up to 42 only with SCALED,
  * 43 and 44 only with CROWN (which implies SCALED), 45 to 47 only with FOLIAGE (which
- * implies both), 48 only with WOOD (which implies all three), the rest only with REACH
- * (which implies all four). */
+ * implies both), 48 only with WOOD (which implies all three), 49 only with REACH
+ * (which implies all four), the rest only with CARBON (which implies all five). */
 enum {
   PLACES_BEFORE_SCALED = 37,
   PLACES_BEFORE_CROWN = 43,
   PLACES_BEFORE_FOLIAGE = 45,
   PLACES_BEFORE_WOOD = 48,
-  PLACES_BEFORE_REACH = 49
+  PLACES_BEFORE_REACH = 49,
+  PLACES_BEFORE_CARBON = 50
 };
 
 static int species_places(uint32_t flags) {
-  return (flags & REACH)     ? SYLVA_SPECIES_SNAPSHOT_FIELDS
+  return (flags & CARBON)    ? SYLVA_SPECIES_SNAPSHOT_FIELDS
+         : (flags & REACH)   ? PLACES_BEFORE_CARBON
          : (flags & WOOD)    ? PLACES_BEFORE_REACH
          : (flags & FOLIAGE) ? PLACES_BEFORE_WOOD
          : (flags & CROWN)   ? PLACES_BEFORE_FOLIAGE
@@ -147,7 +150,7 @@ static void put_species(writer *o, const sylva_species_def *d, int places) {
   }
 }
 
-static void put_stats(writer *o, const sylva_stem_stats *s) {
+static void put_stats(writer *o, const sylva_stem_stats *s, bool carbon) {
   put_f64(o, s->height);
   put_f64(o, s->dbh);
   put_f64(o, s->crown_width);
@@ -156,6 +159,7 @@ static void put_stats(writer *o, const sylva_stem_stats *s) {
   put_u64(o, (uint64_t)s->nodes);
   put_u64(o, (uint64_t)s->shed);
   put_i32(o, s->cap);
+  if (carbon) put_f64(o, s->co2_sequestered);
 }
 
 /* Does the image need the CONFLICTS parts? */
@@ -174,11 +178,15 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   if (w->status) return w->status;
   writer o = {0};
   bool conflicts = has_conflicts(w);
-  bool scaled = false, crown = false, foliage = false, wood = false, reach = false;
+  bool scaled = false, crown = false, foliage = false, wood = false, reach = false,
+       carbon = false;
   const sylva_species_def plain = sylva_default_species_def();
   for (int i = 0; i < w->species_count; i++) {
     const sylva_species_def *d = &w->species[i].given;
-    reach = reach || d->lateral_reach != 1.0;
+    carbon = carbon || d->wood_density != 0.0 || d->biomass_form != 0 ||
+             d->biomass_a != 0.0 || d->biomass_b != 0.0 || d->biomass_c != 0.0 ||
+             d->biomass_p != 0.0 || d->biomass_q != 0.0 || d->biomass_factor != 1.0;
+    reach = reach || carbon || d->lateral_reach != 1.0;
     wood = wood || reach || d->heartwood != 0.0;
     foliage = foliage || wood || d->leaf_size != plain.leaf_size ||
               d->leaf_density != plain.leaf_density || d->leaf_colour != plain.leaf_colour;
@@ -188,7 +196,8 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   }
   uint32_t flags =
       (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0) |
-      (crown ? CROWN : 0) | (foliage ? FOLIAGE : 0) | (wood ? WOOD : 0) | (reach ? REACH : 0);
+      (crown ? CROWN : 0) | (foliage ? FOLIAGE : 0) | (wood ? WOOD : 0) | (reach ? REACH : 0) |
+      (carbon ? CARBON : 0);
   int places = species_places(flags);
   uint8_t zero[HEADER] = {0};
   put(&o, zero, HEADER);
@@ -236,7 +245,7 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     put_i32(&o, st->born);
     for (int a = 0; a < 3; a++) put_f64(&o, st->root[a]);
     put_u8(&o, st->finished);
-    put_stats(&o, &st->stats);
+    put_stats(&o, &st->stats, carbon);
     if (conflicts) put_u64(&o, (uint64_t)st->stats.pruned);
   }
   /* live nodes, links as indices among live nodes */
@@ -356,7 +365,7 @@ static bool get_label(reader *r, char out[SYLVA_LABEL_MAX]) {
   return true;
 }
 
-static void get_stats(reader *r, sylva_stem_stats *s) {
+static void get_stats(reader *r, sylva_stem_stats *s, bool carbon) {
   s->height = get_f64(r);
   s->dbh = get_f64(r);
   s->crown_width = get_f64(r);
@@ -365,6 +374,7 @@ static void get_stats(reader *r, sylva_stem_stats *s) {
   s->nodes = (int64_t)get_u64(r);
   s->shed = (int64_t)get_u64(r);
   s->cap = get_i32(r);
+  s->co2_sequestered = carbon ? get_f64(r) : NAN;
 }
 
 static void get_species(reader *r, sylva_species_def *d, int places) {
@@ -488,7 +498,7 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
       for (int a = 0; a < 3; a++) st->root[a] = get_f64(r);
       uint8_t fin = get_u8(r);
       st->finished = fin != 0;
-      get_stats(r, &st->stats);
+      get_stats(r, &st->stats, flags & CARBON);
       st->stats.pruned = conflicts ? (int64_t)get_u64(r) : 0;
       st->stats.plant = i;
       st->stats.stem = k;
@@ -602,8 +612,12 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
   }
   rc = sylva__conflicts_update(w, 0); /* the zone lines and clearances, as saved */
   if (rc) SYLVA__FAIL(rc);
+  /* the canopy's scratch: slots and stems */
+  if (sylva__reserve_scratch(w) || SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1))
+    SYLVA__FAIL(SYLVA_ENOMEM);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   sylva__stats_leaf_area(w);
+  sylva__stats_loaded(w);
   *out = w;
   return SYLVA_OK;
 fail:
@@ -622,12 +636,13 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH))
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH | CARBON))
     return SYLVA_EBADIMAGE;
   if ((reserved & CROWN) && !(reserved & SCALED)) return SYLVA_EBADIMAGE;
   if ((reserved & FOLIAGE) && !(reserved & CROWN)) return SYLVA_EBADIMAGE;
   if ((reserved & WOOD) && !(reserved & FOLIAGE)) return SYLVA_EBADIMAGE;
   if ((reserved & REACH) && !(reserved & WOOD)) return SYLVA_EBADIMAGE;
+  if ((reserved & CARBON) && !(reserved & REACH)) return SYLVA_EBADIMAGE;
   if (payload != size - HEADER) return SYLVA_ETRUNCATED;
   if (fnv1a(data + HEADER, payload) != sum) return SYLVA_ECHECKSUM;
   reader r = {data + HEADER, payload, 0, false};

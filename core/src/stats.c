@@ -1,9 +1,24 @@
 /* Per-stem measures of docs/model.md: height, dbh, crown width and base, nodes, light. */
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "light.h"
 #include "world_impl.h"
+
+/* The tapered cylinder (a frustum) of the internode from slot p to slot n. */
+static double internode_volume(const sylva__skeleton *s, int32_t p, int32_t n) {
+  double dx = (double)s->x[n] - s->x[p], dy = (double)s->y[n] - s->y[p],
+         dz = (double)s->z[n] - s->z[p];
+  double r1 = s->radius[p], r2 = s->radius[n];
+  return (3.14159265358979323846 / 3.0) * sqrt(dx * dx + dy * dy + dz * dz) *
+         (r1 * r1 + r1 * r2 + r2 * r2);
+}
+
+/* Adds live node i's internode (none for a root) to its stem's wood. */
+static void add_wood(sylva__stem *st, const sylva__skeleton *s, size_t i) {
+  if (s->parent[i] >= 0) st->stats.wood_volume += internode_volume(s, s->parent[i], (int32_t)i);
+}
 
 /* Starts a stem's measures: counters zero, extents empty. */
 static void stats_reset(sylva__stem *st) {
@@ -14,6 +29,7 @@ static void stats_reset(sylva__stem *st) {
   o->age = -1;
   o->crown_height = NAN;
   o->leaf_area = 0.0;
+  o->wood_volume = 0.0;
   o->finished = st->finished;
   st->ext[0] = st->ext[2] = INFINITY;
   st->ext[1] = st->ext[3] = st->ext[4] = -INFINITY;
@@ -110,6 +126,7 @@ void sylva__stats(sylva_world *w, int iteration) {
     }
     st->stats.nodes++;
     extend(st, s, i);
+    add_wood(st, s, i);
     if (leafy(s, d, i, iteration)) first[s->stem[i] + 1]++;
   }
   for (int k = 0; k < w->stem_count; k++) first[k + 1] += first[k];
@@ -134,7 +151,9 @@ void sylva__stats(sylva_world *w, int iteration) {
     st->stats.light = w->q[st->root_slot];
     int local = sylva__stem_local(st, iteration);
     st->stats.cap = local >= 1 ? sylva__species_cap(&w->species[st->species], local) : 0;
+    sylva__stats_carbon(w, k, st->stats.co2); /* the co2 before this pass */
   }
+  sylva__canopy(w);
 }
 
 void sylva__stats_planted(sylva_world *w, int stem) {
@@ -153,6 +172,7 @@ void sylva__stats_planted(sylva_world *w, int stem) {
     if (s->stem[n] != stem || !(s->flags[n] & SYLVA__NODE_ALIVE)) continue;
     st->stats.nodes++;
     extend(st, s, n);
+    add_wood(st, s, n);
     int age = sylva__leaf_age(s, &sp->def, n, next);
     if (age < 0) continue;
     z[leaves++] = s->z[n];
@@ -166,6 +186,9 @@ void sylva__stats_planted(sylva_world *w, int stem) {
   set_crown_base(st, crown_base_of(z, leaves, s->z[st->root_slot], st->ext[4], w->crown_bins.data));
   st->stats.age = stem_age(w, st, w->iteration);
   st->stats.leaf_area = (double)leaves * sylva__node_leaf_area(&sp->def);
+  sylva__stats_carbon(w, stem, NAN);
+  st->stats.co2_sequestered = isnan(st->stats.co2) ? NAN : 0.0; /* 0 at planting */
+  st->stats.crown_area = 0.0; /* the canopy pass after planting measures it */
 }
 
 void sylva__stats_leaf_area(sylva_world *w) {
@@ -182,3 +205,168 @@ void sylva__stats_leaf_area(sylva_world *w) {
   for (int k = 0; k < w->stem_count; k++)
     w->stems[k].stats.leaf_area *= sylva__node_leaf_area(&w->species[w->stems[k].species].def);
 }
+
+/* ---- wood and carbon (docs/model.md, "Wood and carbon") ---------------------------- */
+
+/* Carbon is half the dry weight (GTR-253's biomass appendix), CO2 44/12 of carbon. */
+#define CARBON_SHARE 0.5
+#define CO2_PER_C (44.0 / 12.0)
+
+/* Above-ground dry weight (kg) by the species' allometry at dbh D cm and height H m;
+ * NaN without an allometry or a dbh. Never below 0: a form less the foliage turns
+ * negative far below the dbh its equation was fitted on. */
+static double biomass_of(const sylva_species_def *d, double dbh_m, double height) {
+  if (!d->biomass_form || !(dbh_m > 0.0) || !(height > 0.0)) return NAN;
+  double D = 100.0 * dbh_m;
+  double v = d->biomass_a * pow(D, d->biomass_b);
+  if (d->biomass_c != 0.0) v *= pow(height, d->biomass_c);
+  if (d->biomass_form == 1) v *= d->wood_density;
+  if (d->biomass_form == 3) v -= exp(d->biomass_p + d->biomass_q / D);
+  v *= d->biomass_factor;
+  return v > 0.0 ? v : 0.0;
+}
+
+void sylva__stats_carbon(sylva_world *w, int stem, double prev_co2) {
+  sylva__stem *st = &w->stems[stem];
+  const sylva_species_def *d = &w->species[st->species].def;
+  sylva_stem_stats *o = &st->stats;
+  o->biomass_model = d->wood_density > 0.0 ? o->wood_volume * d->wood_density : NAN;
+  o->biomass = biomass_of(d, o->dbh, o->height);
+  o->carbon = o->biomass * CARBON_SHARE;
+  o->co2 = o->carbon * CO2_PER_C;
+  o->co2_sequestered = isnan(o->co2) ? NAN : o->co2 - (isnan(prev_co2) ? 0.0 : prev_co2);
+}
+
+void sylva__stats_loaded(sylva_world *w) {
+  const sylva__skeleton *s = &w->nodes;
+  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.wood_volume = 0.0;
+  for (size_t i = 0; i < s->count; i++)
+    if (s->flags[i] & SYLVA__NODE_ALIVE) add_wood(&w->stems[s->stem[i]], s, i);
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva_stem_stats *o = &w->stems[k].stats;
+    double sequestered = o->co2_sequestered; /* as the image holds it */
+    sylva__stats_carbon(w, k, NAN);
+    o->co2_sequestered = isnan(o->co2) ? NAN : sequestered;
+  }
+  sylva__canopy(w);
+}
+
+/* ---- canopy (docs/model.md, "Canopy cover") ----------------------------------------- */
+
+int sylva__canopy_init(sylva_world *w) {
+  int n[3];
+  sylva_world_dims(w, n);
+  int f = 1;
+  while ((int64_t)((n[0] + f - 1) / f) * ((n[1] + f - 1) / f) > SYLVA__CANOPY_MAX_COLS) f++;
+  w->col_n[0] = (n[0] + f - 1) / f;
+  w->col_n[1] = (n[1] + f - 1) / f;
+  w->col_edge = w->def.voxel * f;
+  size_t cells = (size_t)w->col_n[0] * (size_t)w->col_n[1];
+  w->cols = sylva__calloc(cells, sizeof *w->cols);
+  w->foot = sylva__calloc((cells + 7) / 8, 1);
+  if (!w->cols || !w->foot) return SYLVA_ENOMEM;
+  w->foot_dirty = true;
+  return SYLVA_OK;
+}
+
+/* The cell of coordinate v on axis a, clamped to the grid. */
+static int col_of(const sylva_world *w, int a, double v) {
+  double c = floor((v - w->def.min[a]) / w->col_edge);
+  return c < 0.0 ? 0 : c >= w->col_n[a] ? w->col_n[a] - 1 : (int)c;
+}
+
+/* Marks the cells whose centres lie under a solid obstacle standing on the floor, and
+ * counts the others: the open ground. */
+static void canopy_foot(sylva_world *w) {
+  size_t cells = (size_t)w->col_n[0] * (size_t)w->col_n[1];
+  memset(w->foot, 0, (cells + 7) / 8);
+  int64_t covered = 0;
+  const double e = w->col_edge, floor_z = w->def.min[2] + 0.5 * w->def.voxel;
+  for (int k = 0; k < w->grid.obstacle_slots; k++) {
+    const sylva__obstacle *ob = &w->grid.obstacles[k];
+    if (!ob->live || ob->zone || ob->min[2] > floor_z) continue;
+    /* cells whose centre min + (c + 0.5) e lies in [min, max) */
+    int lo[2], hi[2];
+    for (int a = 0; a < 2; a++) {
+      lo[a] = (int)ceil((ob->min[a] - w->def.min[a]) / e - 0.5);
+      hi[a] = (int)ceil((ob->max[a] - w->def.min[a]) / e - 0.5);
+      if (lo[a] < 0) lo[a] = 0;
+      if (hi[a] > w->col_n[a]) hi[a] = w->col_n[a];
+    }
+    for (int y = lo[1]; y < hi[1]; y++)
+      for (int x = lo[0]; x < hi[0]; x++) {
+        size_t c = (size_t)y * (size_t)w->col_n[0] + (size_t)x;
+        if (!(w->foot[c >> 3] & (1u << (c & 7)))) covered++;
+        w->foot[c >> 3] |= (uint8_t)(1u << (c & 7));
+      }
+  }
+  w->open_cols = (int64_t)cells - covered;
+  w->foot_dirty = false;
+}
+
+/* Counts the cells within r of the segment a-b (x, y) not yet stamped by this stem's
+ * pass (stamp); the first stamp of the whole pass is first. */
+static void cover_segment(sylva_world *w, const double a[2], const double b[2], double r,
+                          uint32_t stamp, uint32_t first, int64_t *area, int64_t *cover) {
+  const double e = w->col_edge;
+  int lo[2], hi[2];
+  for (int k = 0; k < 2; k++) {
+    lo[k] = col_of(w, k, fmin(a[k], b[k]) - r);
+    hi[k] = col_of(w, k, fmax(a[k], b[k]) + r);
+  }
+  double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
+  for (int y = lo[1]; y <= hi[1]; y++) {
+    double cy = w->def.min[1] + (y + 0.5) * e;
+    for (int x = lo[0]; x <= hi[0]; x++) {
+      double cx = w->def.min[0] + (x + 0.5) * e;
+      double t = len2 > 0.0 ? ((cx - a[0]) * dx + (cy - a[1]) * dy) / len2 : 0.0;
+      t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+      double px = a[0] + t * dx - cx, py = a[1] + t * dy - cy;
+      if (px * px + py * py > r * r) continue;
+      size_t c = (size_t)y * (size_t)w->col_n[0] + (size_t)x;
+      if (w->cols[c] == stamp) continue;
+      if (w->cols[c] < first && !(w->foot[c >> 3] & (1u << (c & 7)))) (*cover)++;
+      w->cols[c] = stamp;
+      (*area)++;
+    }
+  }
+}
+
+void sylva__canopy(sylva_world *w) {
+  const sylva__skeleton *s = &w->nodes;
+  if (w->foot_dirty) canopy_foot(w);
+  /* the leaf-bearing slots grouped by stem: first[k] .. first[k + 1] */
+  int32_t *first = w->stem_top.data;
+  for (int k = 0; k <= w->stem_count; k++) first[k] = 0;
+  for (size_t i = 0; i < s->count; i++)
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && sylva__node_leaves(w, i) > 0) first[s->stem[i] + 1]++;
+  for (int k = 0; k < w->stem_count; k++) first[k + 1] += first[k];
+  for (size_t i = 0; i < s->count; i++)
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && sylva__node_leaves(w, i) > 0)
+      w->canopy[first[s->stem[i]]++] = (int32_t)i;
+  /* first[k] now ends stem k's slots */
+  if (w->col_stamp > UINT32_MAX - (uint32_t)w->stem_count - 1) { /* stamps wrap: start over */
+    memset(w->cols, 0, (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof *w->cols);
+    w->col_stamp = 0;
+  }
+  uint32_t pass = w->col_stamp + 1;
+  int64_t cover = 0;
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva__stem *st = &w->stems[k];
+    /* a leaf reaches about its length from its internode (docs/model.md, "Foliage");
+     * half a cell's diagonal more, so that the cell holding a leaf-bearing node counts */
+    double r = w->species[st->species].def.leaf_size + w->col_edge * 0.7071067811865476;
+    uint32_t stamp = ++w->col_stamp;
+    int64_t area = 0;
+    for (int32_t j = k ? first[k - 1] : 0; j < first[k]; j++) {
+      int32_t n = w->canopy[j], p = s->parent[n];
+      double b[2] = {s->x[n], s->y[n]};
+      double a[2] = {p >= 0 ? s->x[p] : b[0], p >= 0 ? s->y[p] : b[1]};
+      cover_segment(w, a, b, r, stamp, pass, &area, &cover);
+    }
+    st->stats.crown_area = (double)area * w->col_edge * w->col_edge;
+  }
+  w->canopy_cover = w->open_cols > 0 ? (double)cover / (double)w->open_cols : 0.0;
+}
+
+double sylva_world_canopy_cover(const sylva_world *w) { return w->canopy_cover; }

@@ -64,7 +64,8 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
   }
   w->def.sky = w->grid.sky; /* the world's own copy */
   w->def.sky_count = w->grid.sky_count;
-  if (SYLVA__VEC_RESERVE(w->crown_bins, 2 * sylva__crown_bins(def->max[2] - def->min[2]))) {
+  if (SYLVA__VEC_RESERVE(w->crown_bins, 2 * sylva__crown_bins(def->max[2] - def->min[2])) ||
+      sylva__canopy_init(w)) {
     sylva_world_destroy(w);
     return SYLVA_ENOMEM;
   }
@@ -88,6 +89,9 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->sap);
   sylva__free(w->leaves);
   sylva__free(w->remap);
+  sylva__free(w->canopy);
+  sylva__free(w->cols);
+  sylva__free(w->foot);
   sylva__free(w->sprouts.data);
   sylva__free(w->order.data);
   sylva__free(w->axis.data);
@@ -534,6 +538,7 @@ static int finish_plant(sylva_world *w, const sylva_plant_def *def, int stems) {
   for (size_t i = w->mark.count; i < w->nodes.count; i++)
     w->nodes.leaves[i] = (uint16_t)sylva__node_leaves(w, i);
   for (int r = 0; r < stems; r++) sylva__stats_planted(w, pl->first_stem + r);
+  sylva__canopy(w);
   sylva__conflicts(w, w->iteration);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   return pid;
@@ -752,6 +757,7 @@ int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def) {
     w->grid.next_obstacle_id = next - 1; /* as if never added */
     return SYLVA_ENOMEM;
   }
+  w->foot_dirty = true; /* the canopy's open ground, measured at the next step */
   return id;
 }
 
@@ -762,6 +768,7 @@ int sylva_world_remove_obstacle(sylva_world *w, int obstacle) {
   /* fewer obstacles near fewer stems: the room reserved before is enough */
   rc = sylva__conflicts_update(w, 0);
   SYLVA_ASSERT(rc == SYLVA_OK);
+  w->foot_dirty = true;
   return rc ? w->status = rc : SYLVA_OK;
 }
 
@@ -815,9 +822,10 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   if (n) {
     sylva__light_collect(w, T + 1, NULL); /* as after a step's shedding */
     /* the measures anew (stats.pruned goes on counting until the next step) */
-    if (T == 0)
+    if (T == 0) {
       for (int k = 0; k < w->stem_count; k++) sylva__stats_planted(w, k);
-    else
+      sylva__canopy(w);
+    } else
       sylva__stats(w, T);
   }
   sylva__conflicts(w, T);
@@ -857,7 +865,8 @@ static int reserve_scratch(sylva_world *w) {
       grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
       grow_scratch((void **)&w->sap, n, sizeof *w->sap) ||
       grow_scratch((void **)&w->leaves, n, sizeof *w->leaves) ||
-      grow_scratch((void **)&w->remap, n, sizeof *w->remap))
+      grow_scratch((void **)&w->remap, n, sizeof *w->remap) ||
+      grow_scratch((void **)&w->canopy, n, sizeof *w->canopy))
     return SYLVA_ENOMEM;
   w->scratch_cap = n;
   return SYLVA_OK;
@@ -974,6 +983,7 @@ static int finish_step(sylva_world *w, int T) {
   sylva__stats(w, T);
   sylva__conflicts(w, T);
   for (int s = 0; s < w->stem_count; s++) w->stats.data[s] = w->stems[s].stats;
+  j->canopy_cover = w->canopy_cover;
   /* Keep the skeleton dense after every step: slots are node order, so queries
    * index live nodes directly. */
   compact_nodes(w);
@@ -1162,7 +1172,9 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->site = sylva__grid_site_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (4 * sizeof(double) + 2 * sizeof(int32_t)) +
+  out->other = w->scratch_cap * (4 * sizeof(double) + 3 * sizeof(int32_t)) +
+               (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof(uint32_t) +
+               ((size_t)w->col_n[0] * (size_t)w->col_n[1] + 7) / 8 +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +

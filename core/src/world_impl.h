@@ -140,6 +140,7 @@ struct sylva_world {
   double *sap;           /* radii: the functional pipes of the node's tips, sum of r_tip^v */
   int32_t *leaves;       /* shedding: leaf-bearing nodes of the node's subtree */
   int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped */
+  int32_t *canopy;       /* canopy: leaf-bearing slots grouped by stem */
   size_t scratch_cap;
   /* by stem */
   SYLVA__VEC(int32_t) finishing;  /* stop: the stems whose equation stops at this step;
@@ -178,7 +179,35 @@ struct sylva_world {
   SYLVA__VEC(float) cell_pos;        /* their positions, x y z */
   SYLVA__VEC(int32_t) cell_of;       /* cell of each sprout while building */
   sylva_journal journal;
+
+  /* Canopy (stats.c, docs/model.md "Canopy cover"): the floor's cells, the voxel's
+   * squares (or squares of col_edge when the floor has more than
+   * SYLVA__CANOPY_MAX_COLS of them), from creation. cols[c] is the stamp of the last
+   * stem pass that counted cell c; foot marks the cells under a solid obstacle that
+   * stands on the floor, rebuilt when foot_dirty. */
+  uint32_t *cols;
+  uint8_t *foot;
+  int col_n[2];
+  double col_edge;
+  uint32_t col_stamp;
+  int64_t open_cols;
+  bool foot_dirty;
+  double canopy_cover;
 };
+
+/** Most cells of the canopy's floor grid. */
+#define SYLVA__CANOPY_MAX_COLS (1 << 22)
+/** Sets up the canopy's floor grid of a new world; 0 or SYLVA_ENOMEM. */
+int sylva__canopy_init(sylva_world *w);
+/** Every stem's crown_area and the world's canopy cover, from the leaf-bearing nodes
+ *  as the next iteration counts them (as the stats do). */
+void sylva__canopy(sylva_world *w);
+/** A stem's carbon measures from its wood_volume, dbh and height; co2_sequestered
+ *  against prev_co2, the co2 it had before (NaN: none). */
+void sylva__stats_carbon(sylva_world *w, int stem, double prev_co2);
+/** The measures an image does not hold, of a world just read from one: every stem's
+ *  wood and carbon (co2_sequestered as the image gave it) and the canopy. */
+void sylva__stats_loaded(sylva_world *w);
 
 /** Grows a scratch vector to hold n elements; 0 or SYLVA_ENOMEM. */
 int sylva__vec_reserve(void **data, size_t *cap, size_t n, size_t elem);

@@ -150,6 +150,22 @@ void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_s
   }
   put_key(b, false, "leaf_area", compact); /* m^2 (docs/model.md, "Foliage") */
   sylva__strbuf_fixed(b, s->leaf_area, 4);
+  put_key(b, false, "crown_area", compact); /* m^2 (docs/model.md, "Canopy cover") */
+  sylva__strbuf_fixed(b, s->crown_area, 4);
+  put_key(b, false, "wood_volume", compact); /* m^3 (docs/model.md, "Wood and carbon") */
+  sylva__strbuf_fixed(b, s->wood_volume, 6);
+  /* kg; absent where they do not apply (no allometry, no density, no dbh) */
+  const struct {
+    const char *key;
+    double v;
+  } carbon[] = {{"biomass", s->biomass},   {"biomass_model", s->biomass_model},
+                {"carbon", s->carbon},     {"co2", s->co2},
+                {"co2_sequestered", s->co2_sequestered}};
+  for (size_t i = 0; i < sizeof carbon / sizeof *carbon; i++) {
+    if (!isfinite(carbon[i].v)) continue;
+    put_key(b, false, carbon[i].key, compact);
+    sylva__strbuf_fixed(b, carbon[i].v, 3);
+  }
   put_key(b, false, "nodes", compact);
   sylva__strbuf_printf(b, "%" PRId64, s->nodes);
   put_key(b, false, "shed", compact);
@@ -187,7 +203,9 @@ char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, doub
     if (i) sylva__strbuf_puts(&b, ", ");
     sylva__put_stem_stats(&b, w, &j->stats[i], &form, false);
   }
-  sylva__strbuf_puts(&b, "]}");
+  sylva__strbuf_puts(&b, "], \"canopy_cover\": "); /* docs/model.md, "Canopy cover" */
+  sylva__strbuf_fixed(&b, j->canopy_cover, 4);
+  sylva__strbuf_putc(&b, '}');
   return sylva__strbuf_finish(&b);
 }
 

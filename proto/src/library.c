@@ -1,5 +1,6 @@
 /* The species library built into the binary (sylva/library.h), with the foliage of
- * data/species/foliage.csv added to its species (docs/species.md, "Foliage"). The text is parsed
+ * data/species/foliage.csv added to its species (docs/species.md, "Foliage") and
+ * the wood and carbon of data/species/carbon.csv (docs/model.md, "Wood and carbon"). The text is parsed
  * at each lookup: it is small, and a parse per scenario keeps the library free of
  * shared state between the daemon's threads. */
 #include "sylva/library.h"
@@ -16,6 +17,8 @@ extern const char sylva__library_json[];
 extern const size_t sylva__library_json_len;
 extern const char sylva__foliage_csv[];
 extern const size_t sylva__foliage_csv_len;
+extern const char sylva__carbon_csv[];
+extern const size_t sylva__carbon_csv_len;
 
 const char *sylva_library_text(size_t *len) {
   if (len) *len = sylva__library_json_len;
@@ -67,6 +70,41 @@ static int add_foliage(cJSON *species, const char *code) {
   return SYLVA_OK;
 }
 
+const char *sylva_library_carbon_text(size_t *len) {
+  if (len) *len = sylva__carbon_csv_len;
+  return sylva__carbon_csv;
+}
+
+/* The carbon table's columns that are species keys, in its order after the code. */
+static const char *const carbon_keys[] = {"wood_density", "biomass_form", "biomass_a",
+                                          "biomass_b",    "biomass_c",    "biomass_p",
+                                          "biomass_q",    "biomass_factor"};
+enum { CARBON_KEYS = sizeof carbon_keys / sizeof *carbon_keys };
+
+/* Adds the carbon table's row for `code` (data/species/carbon.csv, written by
+ * scripts/carbon-table) to a library species object as its wood density and
+ * biomass allometry, checked as any scenario's keys are (docs/model.md, "Wood and
+ * carbon"). A code without a row keeps the defaults: no carbon. No field before the
+ * table's last two holds a comma or a quote. 0, or SYLVA_ENOMEM. */
+static int add_carbon(cJSON *species, const char *code) {
+  const char *line = strchr(sylva__carbon_csv, '\n'); /* past the header */
+  size_t code_len = strlen(code);
+  for (; line; line = strchr(line, '\n')) {
+    line++;
+    if (strncmp(line, code, code_len) != 0 || line[code_len] != ',') continue;
+    const char *f = line + code_len + 1;
+    for (int i = 0; i < CARBON_KEYS; i++) {
+      cJSON_DeleteItemFromObjectCaseSensitive(species, carbon_keys[i]);
+      if (!cJSON_AddNumberToObject(species, carbon_keys[i], strtod(f, NULL))) return SYLVA_ENOMEM;
+      size_t k = strcspn(f, ",\n");
+      if (f[k] != ',') return SYLVA_OK; /* a short row: the test suite catches it */
+      f += k + 1;
+    }
+    return SYLVA_OK;
+  }
+  return SYLVA_OK;
+}
+
 int sylva_library_find(const char *name, sylva_species_def *out) {
   cJSON *doc;
   const cJSON *list = library_species(&doc);
@@ -80,6 +118,8 @@ int sylva_library_find(const char *name, sylva_species_def *out) {
     cJSON *species = cJSON_GetObjectItemCaseSensitive(e, "species");
     rc = cJSON_IsString(code) && cJSON_IsObject(species) ? add_foliage(species, code->valuestring)
                                                           : SYLVA_OK;
+    if (!rc && cJSON_IsString(code) && cJSON_IsObject(species))
+      rc = add_carbon(species, code->valuestring);
     if (rc) break;
     sylva_species_def d;
     rc = sylva__species_from_json(species, &d);

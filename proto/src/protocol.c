@@ -636,6 +636,8 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int sta
   put_start_year(&b, start_year);
   put_foliage(&b, w);
   put_node_leaves(&b, w);
+  sylva__strbuf_puts(&b, ",\"canopy_cover\":"); /* docs/model.md, "Canopy cover" */
+  sylva__strbuf_fixed(&b, sylva_world_canopy_cover(w), 4);
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }
@@ -675,7 +677,9 @@ char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylv
     if (i) sylva__strbuf_putc(&b, ',');
     sylva__put_stem_stats(&b, w, &j->stats[i], &form, true);
   }
-  sylva__strbuf_puts(&b, "]}");
+  sylva__strbuf_puts(&b, "],\"canopy_cover\":");
+  sylva__strbuf_fixed(&b, j->canopy_cover, 4);
+  sylva__strbuf_putc(&b, '}');
   return sylva__strbuf_finish(&b);
 }
 

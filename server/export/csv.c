@@ -68,6 +68,18 @@ static int csv_row(const store_stats_row *r, void *ctx) {
     fputc(',', f);
     if (c->years) csv_number(f, r->crown_height, 4);
   }
+  /* what the trees give (docs/model.md): empty in rows stored before schema 6 and
+   * where a measure does not apply */
+  const struct {
+    double v;
+    int decimals;
+  } give[] = {{r->crown_area, 4}, {r->wood_volume, 6}, {r->biomass, 3},
+              {r->biomass_model, 3}, {r->carbon, 3}, {r->co2, 3},
+              {r->co2_sequestered, 3}, {r->canopy_cover, 4}};
+  for (size_t i = 0; i < sizeof give / sizeof *give; i++) {
+    fputc(',', f);
+    csv_number(f, give[i].v, give[i].decimals);
+  }
   fputc('\n', f);
   return ferror(f) ? SERVER_EWRITE : SERVER_OK;
 }
@@ -79,7 +91,9 @@ int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
         "pruned,zones,clearance,leaf_area",
         f);
   /* only in runs with years or a start year: the others keep the columns they had */
-  fputs(c.years || c.start_year ? ",age,year,crown_diameter,crown_height\n" : "\n", f);
+  fputs(c.years || c.start_year ? ",age,year,crown_diameter,crown_height" : "", f);
+  fputs(",crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover\n",
+        f);
   if (ferror(f)) return SERVER_EWRITE;
   return store_each_stats(st, run, to, csv_row, &c);
 }

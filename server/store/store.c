@@ -146,6 +146,17 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "  PRIMARY KEY (run, axis));",
     /* 4 -> 5: foliage (docs/store.md): each stem's leaf area, NULL in older rows */
     "ALTER TABLE stats ADD COLUMN leaf_area REAL;",
+    /* 5 -> 6: what the trees give (docs/store.md): each stem's crown area, wood and
+     * carbon, each iteration's canopy cover; NULL in older rows and where a measure
+     * does not apply */
+    "ALTER TABLE stats ADD COLUMN crown_area REAL;"
+    "ALTER TABLE stats ADD COLUMN wood_volume REAL;"
+    "ALTER TABLE stats ADD COLUMN biomass REAL;"
+    "ALTER TABLE stats ADD COLUMN biomass_model REAL;"
+    "ALTER TABLE stats ADD COLUMN carbon REAL;"
+    "ALTER TABLE stats ADD COLUMN co2 REAL;"
+    "ALTER TABLE stats ADD COLUMN co2_sequestered REAL;"
+    "ALTER TABLE iterations ADD COLUMN canopy_cover REAL;",
 };
 
 static int migrate(store *st) {
@@ -250,8 +261,8 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   }
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
-                         "INSERT INTO iterations (run, iteration, hash, nodes, snapshot)"
-                         " VALUES (?, ?, ?, ?, ?)",
+                         "INSERT INTO iterations (run, iteration, hash, nodes, snapshot,"
+                         " canopy_cover) VALUES (?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     free(img);
     return store__fail(st, "storing iteration %d", it);
@@ -265,6 +276,7 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
     sqlite3_bind_blob64(q, 5, img, size, SQLITE_STATIC);
   else
     sqlite3_bind_null(q, 5);
+  sqlite3_bind_double(q, 6, sylva_world_canopy_cover(w));
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
   free(img);
@@ -495,8 +507,10 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO stats (run, iteration, stem, plant, plant_stem, height, dbh,"
                          " crown_width, crown_base, nodes, shed, light, cap, finished, pruned,"
-                         " zones, clearance, age, crown_height, leaf_area)"
-                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                         " zones, clearance, age, crown_height, leaf_area, crown_area,"
+                         " wood_volume, biomass, biomass_model, carbon, co2, co2_sequestered)"
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
+                         " ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     store__fail(st, "storing iteration %d", it);
     store__rollback(st);
@@ -527,6 +541,13 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
       sqlite3_bind_null(q, 18);
     bind_real_or_null(q, 19, s->crown_height);
     bind_real_or_null(q, 20, s->leaf_area);
+    bind_real_or_null(q, 21, s->crown_area);
+    bind_real_or_null(q, 22, s->wood_volume);
+    bind_real_or_null(q, 23, s->biomass);
+    bind_real_or_null(q, 24, s->biomass_model);
+    bind_real_or_null(q, 25, s->carbon);
+    bind_real_or_null(q, 26, s->co2);
+    bind_real_or_null(q, 27, s->co2_sequestered);
     if (sylva_world_reports_conflicts(w)) {
       zones = sylva_encode_stem_conflicts(w, (int)k, false, start_year);
       clearance = sylva_encode_stem_conflicts(w, (int)k, true, start_year);
@@ -804,10 +825,13 @@ static double column_real(sqlite3_stmt *q, int col) {
 static int each_stats_unlocked(store *st, int64_t run, int to,
                                int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
   sqlite3_stmt *q;
-  if (prepare_run(st, "SELECT iteration, stem, plant, plant_stem, height, dbh, crown_width,"
-                      " crown_base, nodes, shed, light, cap, finished, pruned, zones, clearance,"
-                      " age, crown_height, leaf_area FROM stats"
-                      " WHERE run = ? AND iteration <= ? ORDER BY iteration, stem",
+  if (prepare_run(st, "SELECT s.iteration, stem, plant, plant_stem, height, dbh, crown_width,"
+                      " crown_base, s.nodes, shed, light, cap, finished, pruned, zones, clearance,"
+                      " age, crown_height, leaf_area, crown_area, wood_volume, biomass,"
+                      " biomass_model, carbon, co2, co2_sequestered, i.canopy_cover"
+                      " FROM stats s LEFT JOIN iterations i"
+                      " ON i.run = s.run AND i.iteration = s.iteration"
+                      " WHERE s.run = ? AND s.iteration <= ? ORDER BY s.iteration, stem",
                   run, to, &q))
     return store__fail(st, "reading stats");
   int rc;
@@ -832,6 +856,14 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
         .age = sqlite3_column_type(q, 16) == SQLITE_NULL ? -1 : sqlite3_column_int(q, 16),
         .crown_height = column_real(q, 17),
         .leaf_area = column_real(q, 18),
+        .crown_area = column_real(q, 19),
+        .wood_volume = column_real(q, 20),
+        .biomass = column_real(q, 21),
+        .biomass_model = column_real(q, 22),
+        .carbon = column_real(q, 23),
+        .co2 = column_real(q, 24),
+        .co2_sequestered = column_real(q, 25),
+        .canopy_cover = column_real(q, 26),
     };
     if (!r.plant) r.plant = "";
     if (fn(&r, ctx)) {

@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 5
+#define STORE_SCHEMA_VERSION 6
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 
@@ -136,6 +136,12 @@ typedef struct store_stats_row {
                                       (a species without years) */
   double crown_height;           /**< NaN where null */
   double leaf_area;              /**< m^2; NaN where null (rows stored before schema 5) */
+  /* docs/model.md, "Canopy cover" and "Wood and carbon"; NaN where null (rows stored
+   * before schema 6, and the carbon measures where they do not apply) */
+  double crown_area, wood_volume;          /**< m^2, m^3 */
+  double biomass, biomass_model;           /**< kg */
+  double carbon, co2, co2_sequestered;     /**< kg C, kg CO2, kg CO2 */
+  double canopy_cover;                     /**< the iteration's, 0..1 */
 } store_stats_row;
 
 /** Calls fn for every stats row of a run up to iteration `to`, in iteration then

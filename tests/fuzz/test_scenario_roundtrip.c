@@ -398,7 +398,7 @@ static void test_foliage(void) {
   if (line) {
     char area[SYLVA_FMT_BUFSIZE], want[SYLVA_FMT_BUFSIZE + 64];
     sylva_fmt_fixed(area, sizeof area, first.leaf_area, 4);
-    snprintf(want, sizeof want, "\"leaf_area\": %s, \"nodes\": ", area);
+    snprintf(want, sizeof want, "\"leaf_area\": %s, \"crown_area\": ", area);
     EXPECT(first.leaf_area > 0 && strstr(line, want), "%s in %s", want, line);
   }
   free(line);

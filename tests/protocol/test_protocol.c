@@ -1295,7 +1295,11 @@ static void test_snapshot(void) {
                                "{\"species\":\"big \\\"leaf\\\"\",\"leaf_size\":0.1,"
                                "\"leaf_density\":6,\"leaf_colour\":\"#4a7f35\"}],\"plant_species\":[0,0],"
                                "\"leaves\":[["));
-    CHECK(snap && strstr(snap, "]],\"ref\":\"sub\"}"));
+    CHECK(snap && strstr(snap, "]],\"canopy_cover\":"));
+    CHECK(snap && strstr(snap, ",\"ref\":\"sub\"}"));
+    /* the canopy cover as the world measures it, in [0, 1] */
+    double cover = num_of(sj, "canopy_cover");
+    CHECK(cover >= 0 && cover <= 1 && fabs(cover - sylva_world_canopy_cover(w)) <= 5e-5);
     CHECK(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(sj, "leaves")) > 0);
     model_load_snapshot(&m, sj);
   }

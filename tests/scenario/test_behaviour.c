@@ -13,9 +13,12 @@
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
 
-#define GOLDEN_WALL 0xbac9864901de375full
-#define GOLDEN_STAND 0xa1ee8bbef7f65fb9ull
-#define GOLDEN_SHRUB 0xe4fce69f387cd0b4ull
+/* Last changed when the run lines gained crown_area, wood_volume and canopy_cover:
+ * the trees grew bit for bit as before (the lines of wall, stand, shrub and street
+ * equal those of the earlier binary with those keys taken out). */
+#define GOLDEN_WALL 0x8c5fb982438b619bull
+#define GOLDEN_STAND 0xf0debd8b1d56984dull
+#define GOLDEN_SHRUB 0x232d74294c518b91ull
 
 static sylva_scenario *load(const char *name) {
   return scenario_file(SOURCE_ROOT "/scenarios", name);

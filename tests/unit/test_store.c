@@ -273,8 +273,17 @@ static int first_row(const store_stats_row *r, void *ctx) {
   return 0;
 }
 
-/* The column schema 5 added, dropped: a store of schema 4 again. */
-#define BACK_TO_SCHEMA_4 "ALTER TABLE stats DROP COLUMN leaf_area; PRAGMA user_version = 4;"
+/* The columns schema 6 added, dropped: a store of schema 5 again. */
+#define BACK_TO_SCHEMA_5                                                                  \
+  "ALTER TABLE stats DROP COLUMN crown_area; ALTER TABLE stats DROP COLUMN wood_volume;"    \
+  " ALTER TABLE stats DROP COLUMN biomass; ALTER TABLE stats DROP COLUMN biomass_model;"   \
+  " ALTER TABLE stats DROP COLUMN carbon; ALTER TABLE stats DROP COLUMN co2;"              \
+  " ALTER TABLE stats DROP COLUMN co2_sequestered;"                                       \
+  " ALTER TABLE iterations DROP COLUMN canopy_cover; PRAGMA user_version = 5;"
+
+/* The columns schemas 6 and 5 added, dropped: a store of schema 4 again. */
+#define BACK_TO_SCHEMA_4                                                                  \
+  BACK_TO_SCHEMA_5 " ALTER TABLE stats DROP COLUMN leaf_area; PRAGMA user_version = 4;"
 
 /* The tables schema 4 added and the columns schemas 5 and 3 added, dropped: a store of
  * schema 2 again. */
@@ -389,6 +398,40 @@ static void test_schema4_migrates(void) {
   fixture_close(&f);
 }
 
+/* A stats row's crown area and canopy cover at iterations 1..8 (stem 0), for
+ * test_schema5_migrates. */
+static int canopy_row(const store_stats_row *r, void *ctx) {
+  double(*out)[9] = ctx;
+  if (r->stem == 0 && r->iteration >= 1 && r->iteration <= 8) {
+    out[0][r->iteration] = r->crown_area;
+    out[1][r->iteration] = r->canopy_cover;
+    out[2][r->iteration] = r->wood_volume;
+  }
+  return 0;
+}
+
+/* A store of schema 5 (before crown area, wood and carbon) is migrated in place: its
+ * rows stay and read without them (NaN), and the run grows on into the new columns,
+ * which hold the world's measures. */
+static void test_schema5_migrates(void) {
+  fixture f;
+  fixture_reopen_from(&f, BACK_TO_SCHEMA_5, 5);
+  const sylva_journal *j;
+  CHECK_INT(sylva_world_step(f.w, &j), 0);
+  if (f.st) CHECK_INT(store_save_iteration(f.st, f.run, f.w, j, true), 0);
+  double got[3][9];
+  for (int k = 0; k < 3; k++)
+    for (int i = 0; i < 9; i++) got[k][i] = -1.0;
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 8, canopy_row, got), 0);
+  for (int t = 1; t <= 7; t++) CHECK(isnan(got[0][t]) && isnan(got[1][t]) && isnan(got[2][t]));
+  sylva_stem_stats st;
+  CHECK_INT(sylva_world_stem_stats(f.w, 0, &st), 0);
+  CHECK(st.crown_area > 0 && got[0][8] == st.crown_area);
+  CHECK(st.wood_volume > 0 && got[2][8] == st.wood_volume);
+  CHECK(got[1][8] == sylva_world_canopy_cover(f.w) && got[1][8] > 0);
+  fixture_close(&f);
+}
+
 /* The stats of a run in years as stored, for test_years_round_trip. */
 typedef struct years_rows {
   int count, bad;
@@ -471,7 +514,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(load_world), CHECK_TEST(iteration_hash), CHECK_TEST(stats_rows),
       CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
       CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused),
-      CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(schema4_migrates),
+      CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(schema4_migrates), CHECK_TEST(schema5_migrates),
       CHECK_TEST(years_round_trip)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");

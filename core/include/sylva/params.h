@@ -75,6 +75,17 @@ typedef struct sylva_species_def {
                                 the leader's path a season, graded from 1 at the stem's top
                                 to this a crown height below it (LGTM allocation;
                                 docs/model.md, "Species in years"); 1: the leader's cap */
+  /* Wood and carbon (docs/model.md, "Wood and carbon"). They change no growth. */
+  double wood_density;     /**< kg/m^3 dry weight per fresh volume; 0: none (no
+                                biomass_model, and no volume allometry) */
+  int biomass_form;        /**< the above-ground biomass allometry, D the dbh in cm and H
+                                the height in m: 0 none; 1 volume (m^3) a D^b H^c, times
+                                wood_density; 2 dry weight (kg) a D^b H^c; 3 dry weight
+                                a D^b H^c - exp(p + q / D), less the foliage */
+  double biomass_a, biomass_b, biomass_c, biomass_p; /**< its coefficients */
+  double biomass_q;
+  double biomass_factor;   /**< (0, 1]: times the allometry (0.8 for a rural equation on
+                                an open-grown tree) */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */

@@ -33,7 +33,8 @@
  * flag, places 45 to 47 (leaf_size, leaf_density, leaf_colour) only in images with
  * the FOLIAGE flag (a species whose foliage is not the default), place 48 (heartwood)
  * only in images with the WOOD flag, place 49 (lateral_reach) only in images with the
- * REACH flag, so images of worlds without such species keep their bytes. The foliage
+ * REACH flag, places 50 to 57 (wood_density and the biomass allometry) only in images
+ * with the CARBON flag, so images of worlds without such species keep their bytes. The foliage
  * changes no growth: it is what the leaf-bearing nodes carry (leaf_area, pictures,
  * glTF).
  *
@@ -92,6 +93,14 @@
   X(leaf_colour,   int,    0x4a7f35, 0, 0xffffff, SYLVA_FIELD_CLOSED,      species, 47)          \
   X(heartwood,     double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 48)          \
   X(lateral_reach, double, 1,     1,    4,      SYLVA_FIELD_CLOSED,        species, 49)          \
+  X(wood_density,  double, 0,     0,    2000,   SYLVA_FIELD_CLOSED,        species, 50)          \
+  X(biomass_form,  int,    0,     0,    3,      SYLVA_FIELD_CLOSED,        species, 51)          \
+  X(biomass_a,     double, 0,     0,    1000,   SYLVA_FIELD_CLOSED,        species, 52)          \
+  X(biomass_b,     double, 0,     -10,  10,     SYLVA_FIELD_CLOSED,        species, 53)          \
+  X(biomass_c,     double, 0,     -10,  10,     SYLVA_FIELD_CLOSED,        species, 54)          \
+  X(biomass_p,     double, 0,     -100, 100,    SYLVA_FIELD_CLOSED,        species, 55)          \
+  X(biomass_q,     double, 0,     -100, 100,    SYLVA_FIELD_CLOSED,        species, 56)          \
+  X(biomass_factor, double, 1,    0,    1,      SYLVA_FIELD_MIN_EXCLUSIVE, species, 57)          \
   X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
   X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
   X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
@@ -100,6 +109,6 @@
 
 /** Places in a snapshot's species record: the list's fields and the hand-written
  *  growth.p[3] and tropism[3]. */
-#define SYLVA_SPECIES_SNAPSHOT_FIELDS 50
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 58
 
 #endif

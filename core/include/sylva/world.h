@@ -140,6 +140,19 @@ typedef struct sylva_stem_stats {
   int32_t age;         /**< years since planting (species with years), else -1 */
   double leaf_area;    /**< m^2, one-sided: leaf-bearing nodes x leaf_density x
                             SYLVA_LEAF_FILL x leaf_size^2 (docs/model.md, "Foliage") */
+  double crown_area;   /**< m^2: the ground under its leaves, in vertical projection
+                            (docs/model.md, "Canopy cover") */
+  double wood_volume;  /**< m^3: its internodes' tapered cylinders (docs/model.md,
+                            "Wood and carbon") */
+  /* Wood and carbon (docs/model.md, "Wood and carbon"); NaN where they do not apply */
+  double biomass;         /**< kg above-ground dry weight, by the species' allometry
+                               (biomass_form) at its dbh and height; NaN without one or
+                               without a dbh */
+  double biomass_model;   /**< kg, wood_volume x wood_density; NaN without a density */
+  double carbon;          /**< kg C stored, from biomass */
+  double co2;             /**< kg CO2-equivalent stored, from carbon */
+  double co2_sequestered; /**< kg CO2: co2 now less co2 at the last iteration (0 at
+                               planting; a co2 not known then counts as 0) */
   int64_t nodes, shed;
   int64_t pruned; /**< nodes pruned at this iteration (by schedule or edit) */
   int cap;
@@ -191,6 +204,7 @@ typedef struct sylva_journal {
   const sylva_stem_stats *stats; size_t stem_count;
   const int32_t *order;                           /**< stem order of phase 4 (global stem indices) */
   sylva_conflicts conflicts;                      /**< zones and clearances after the step */
+  double canopy_cover;                            /**< sylva_world_canopy_cover() after the step */
   double phase_seconds[SYLVA_PHASE_COUNT];        /**< only with def.clock */
 } sylva_journal;
 
@@ -273,6 +287,10 @@ int sylva_world_stem_root(const sylva_world *w, int stem, double root[3]);
 /** Current measures of a global stem (as after the last iteration); 0 or
  *  SYLVA_ENOTFOUND (out untouched). */
 int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out);
+/** The share (0..1) of the world's open ground (its floor less the footprints of the
+ *  solid obstacles that stand on it) under any stem's leaves, as after the last step,
+ *  plant or prune (docs/model.md, "Canopy cover"); 0 when there is no open ground. */
+double sylva_world_canopy_cover(const sylva_world *w);
 /** Does the world report conflicts (stems' pruned counts, zones and clearances)?
  *  Once it has held a clearance zone, a pruning schedule or pruned a node; a world
  *  without any reports as worlds did before zones existed. */

@@ -22,8 +22,15 @@ const char *sylva_library_text(size_t *len);
  *  receives its length. */
 const char *sylva_library_foliage_text(size_t *len);
 
+/** The carbon table (data/species/carbon.csv: `code,wood_density,biomass_form,
+ *  biomass_a,biomass_b,biomass_c,biomass_p,biomass_q,biomass_factor,dbh_min,dbh_max,
+ *  equation_species,source`, one row per UTDB species code), NUL-terminated; *len (if
+ *  given) receives its length. */
+const char *sylva_library_carbon_text(size_t *len);
+
 /** The species named `name` ("utdb:REGION:CODE"), with the leaf_size, leaf_density
- *  and leaf_colour of its code's row of the foliage table: 0 and *out,
+ *  and leaf_colour of its code's row of the foliage table and the wood density and
+ *  biomass allometry of its row of the carbon table: 0 and *out,
  *  SYLVA_ENOTFOUND, SYLVA_EINVAL (a value out of its range), or SYLVA_ENOMEM. */
 int sylva_library_find(const char *name, sylva_species_def *out);
 
