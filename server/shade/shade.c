@@ -152,8 +152,13 @@ typedef struct leaf_grid {
   int lo[3], n[3];   /* first voxel (world indices) and voxels per axis */
   double bmin[3], bmax[3];
   double *kd;        /* n[0] * n[1] * n[2], x fastest; NULL without leaves */
+  int nb[3];         /* blocks of SHADE_BLOCK^3 voxels per axis */
+  unsigned char *full; /* nb[0] * nb[1] * nb[2]: 1 where a block holds leaves */
   double area;
 } leaf_grid;
+
+/* Voxels per edge of the blocks the rays skip when empty. */
+#define SHADE_BLOCK 4
 
 /* The index of node id among ids[0 .. count) (sorted), or -1. */
 static long find_id(const int32_t *ids, size_t count, int32_t id) {
@@ -224,6 +229,22 @@ static void leaf_pass(const sylva_world *w, const sylva_node_info *nodes, const 
   }
 }
 
+/* The blocks that hold leaves. */
+static int mark_blocks(leaf_grid *g, char *err, size_t errlen) {
+  for (int a = 0; a < 3; a++) g->nb[a] = (g->n[a] + SHADE_BLOCK - 1) / SHADE_BLOCK;
+  g->full = calloc((size_t)g->nb[0] * (size_t)g->nb[1] * (size_t)g->nb[2], 1);
+  if (!g->full) return server_fail(err, errlen, SERVER_ENOMEM, "out of memory for leaf blocks");
+  size_t at = 0;
+  for (int z = 0; z < g->n[2]; z++)
+    for (int y = 0; y < g->n[1]; y++)
+      for (int x = 0; x < g->n[0]; x++, at++)
+        if (g->kd[at] != 0.0)
+          g->full[(size_t)(x / SHADE_BLOCK) +
+                  (size_t)g->nb[0] * ((size_t)(y / SHADE_BLOCK) +
+                                      (size_t)g->nb[1] * (size_t)(z / SHADE_BLOCK))] = 1;
+  return SERVER_OK;
+}
+
 static int leaf_grid_build(const sylva_world *w, leaf_grid *g, char *err, size_t errlen) {
   *g = (leaf_grid){.kd = NULL};
   size_t count = sylva_world_node_count(w);
@@ -248,6 +269,7 @@ static int leaf_grid_build(const sylva_world *w, leaf_grid *g, char *err, size_t
       rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for %zu leaf voxels", cells);
     } else {
       leaf_pass(w, nodes, ids, count, 1, g);
+      rc = mark_blocks(g, err, errlen);
       const sylva_world_def *def = sylva_world_get_def(w);
       for (int a = 0; a < 3; a++) {
         g->bmin[a] = def->min[a] + g->lo[a] * def->voxel;
@@ -285,48 +307,95 @@ static bool ray_box(const double o[3], const double d[3], const double lo[3],
   return true;
 }
 
+/* The walk of the ray o + t d from t0 to t1 through the cells lo .. hi (indices,
+ * inclusive) of a grid of edge `edge` starting at `base`, exact (Amanatides and
+ * Woo 1987): each cell crossed is visited with the length of its part of the
+ * path. The cell the walk starts in is where o + t0 d lies, clamped into lo .. hi. */
+typedef struct walk {
+  int idx[3], step[3];
+  double tmax[3], tdelta[3];
+} walk;
+
+static void walk_start(walk *k, const double base[3], double edge, const int lo[3],
+                       const int hi[3], const double o[3], const double d[3], double t0) {
+  for (int a = 0; a < 3; a++) {
+    int i = (int)floor((o[a] + d[a] * t0 - base[a]) / edge);
+    if (i < lo[a]) i = lo[a];
+    if (i > hi[a]) i = hi[a];
+    k->idx[a] = i;
+    if (d[a] > 0.0) {
+      k->step[a] = 1;
+      k->tmax[a] = (base[a] + (i + 1) * edge - o[a]) / d[a];
+      k->tdelta[a] = edge / d[a];
+    } else if (d[a] < 0.0) {
+      k->step[a] = -1;
+      k->tmax[a] = (base[a] + i * edge - o[a]) / d[a];
+      k->tdelta[a] = -edge / d[a];
+    } else {
+      k->step[a] = 0;
+      k->tmax[a] = INFINITY;
+      k->tdelta[a] = INFINITY;
+    }
+  }
+}
+
+/* The axis whose boundary the walk meets first. */
+static int walk_axis(const walk *k) {
+  return k->tmax[0] < k->tmax[1] ? (k->tmax[0] < k->tmax[2] ? 0 : 2)
+                                 : (k->tmax[1] < k->tmax[2] ? 1 : 2);
+}
+
+/* Sum of kd * length over the leaf voxels of one block crossed from t0 to t1. */
+static double block_depth(const leaf_grid *g, double voxel, const int lo[3], const int hi[3],
+                          const double o[3], const double d[3], double t0, double t1) {
+  walk k;
+  walk_start(&k, g->bmin, voxel, lo, hi, o, d, t0);
+  size_t sy = (size_t)g->n[0], sz = (size_t)g->n[0] * (size_t)g->n[1];
+  double depth = 0.0, t = t0;
+  for (;;) {
+    int a = walk_axis(&k);
+    double next = k.tmax[a] < t1 ? k.tmax[a] : t1;
+    double v = g->kd[(size_t)k.idx[0] + (size_t)k.idx[1] * sy + (size_t)k.idx[2] * sz];
+    if (v != 0.0) depth += v * (next - t);
+    if (k.tmax[a] >= t1) break;
+    t = next;
+    k.idx[a] += k.step[a];
+    if (k.idx[a] < lo[a] || k.idx[a] > hi[a]) break;
+    k.tmax[a] += k.tdelta[a];
+  }
+  return depth;
+}
+
 /* The share of the sun the leaves pass along o + t d: exp(-sum of kd * length)
- * over the voxels the ray crosses (an exact walk through the grid, Amanatides and
- * Woo 1987), inside the leaves' box only. */
+ * over the voxels the ray crosses, inside the leaves' box only. The walk goes
+ * through blocks of SHADE_BLOCK^3 voxels and into the voxels of those that hold
+ * leaves: the same voxels and lengths, without stepping through empty air. */
 static double transmission(const leaf_grid *g, double voxel, const double o[3],
                            const double d[3]) {
   double t0, t1;
   if (!g->kd || !ray_box(o, d, g->bmin, g->bmax, &t0, &t1)) return 1.0;
-  int idx[3], step[3];
-  double tmax[3], tdelta[3];
-  for (int k = 0; k < 3; k++) {
-    double x = o[k] + d[k] * t0;
-    int i = (int)floor((x - g->bmin[k]) / voxel);
-    if (i < 0) i = 0;
-    if (i >= g->n[k]) i = g->n[k] - 1;
-    idx[k] = i;
-    if (d[k] > 0.0) {
-      step[k] = 1;
-      tmax[k] = (g->bmin[k] + (i + 1) * voxel - o[k]) / d[k];
-      tdelta[k] = voxel / d[k];
-    } else if (d[k] < 0.0) {
-      step[k] = -1;
-      tmax[k] = (g->bmin[k] + i * voxel - o[k]) / d[k];
-      tdelta[k] = -voxel / d[k];
-    } else {
-      step[k] = 0;
-      tmax[k] = INFINITY;
-      tdelta[k] = INFINITY;
-    }
-  }
-  size_t sx = 1, sy = (size_t)g->n[0], sz = (size_t)g->n[0] * (size_t)g->n[1];
-  const double *kd = g->kd;
+  int zero[3] = {0, 0, 0}, top[3];
+  for (int a = 0; a < 3; a++) top[a] = g->nb[a] - 1;
+  walk k;
+  walk_start(&k, g->bmin, voxel * SHADE_BLOCK, zero, top, o, d, t0);
   double depth = 0.0, t = t0;
   for (;;) {
-    int k = tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2);
-    double next = tmax[k] < t1 ? tmax[k] : t1;
-    double v = kd[(size_t)idx[0] * sx + (size_t)idx[1] * sy + (size_t)idx[2] * sz];
-    if (v != 0.0) depth += v * (next - t);
-    if (tmax[k] >= t1) break;
+    int a = walk_axis(&k);
+    double next = k.tmax[a] < t1 ? k.tmax[a] : t1;
+    if (g->full[(size_t)k.idx[0] + (size_t)g->nb[0] * ((size_t)k.idx[1] +
+                                                        (size_t)g->nb[1] * (size_t)k.idx[2])]) {
+      int lo[3], hi[3];
+      for (int b = 0; b < 3; b++) {
+        lo[b] = k.idx[b] * SHADE_BLOCK;
+        hi[b] = lo[b] + SHADE_BLOCK - 1 < g->n[b] - 1 ? lo[b] + SHADE_BLOCK - 1 : g->n[b] - 1;
+      }
+      depth += block_depth(g, voxel, lo, hi, o, d, t, next);
+    }
+    if (k.tmax[a] >= t1) break;
     t = next;
-    idx[k] += step[k];
-    if (idx[k] < 0 || idx[k] >= g->n[k]) break;
-    tmax[k] += tdelta[k];
+    k.idx[a] += k.step[a];
+    if (k.idx[a] < 0 || k.idx[a] > top[a]) break;
+    k.tmax[a] += k.tdelta[a];
   }
   return exp(-depth);
 }
@@ -540,7 +609,7 @@ int shade_compute(const sylva_world *w, const shade_site *site, const shade_day 
   sylva_sun *sun = malloc((size_t)count * sizeof *sun);
   shade_box *boxes = NULL;
   int box_count = 0;
-  leaf_grid g = {.kd = NULL};
+  leaf_grid g = {.kd = NULL, .full = NULL};
   if (!hours || !sun || collect_boxes(w, &boxes, &box_count)) {
     rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the sun's samples");
     goto done;
@@ -582,6 +651,7 @@ done:
   free(sun);
   free(boxes);
   free(g.kd);
+  free(g.full);
   return rc;
 }
 
