@@ -558,6 +558,10 @@ static int parse_species(sylva__parser *p, const cJSON *obj, sylva_species_def *
     return sylva__fail_at_key(p, "b_min", "must be <= b_max (%s), got %s", sylva__num(a, def.b_max),
                               sylva__num(b, def.b_min));
   }
+  if (def.biomass_form == 1 && !(def.wood_density > 0))
+    return sylva__fail_at_key(p, "wood_density",
+                              "must be above 0 with biomass_form 1 (a volume allometry), got %s",
+                              sylva__num((char[SYLVA_FMT_BUFSIZE]){0}, def.wood_density));
   /* The initial trunk follows the final growth equation unless given. */
   if (!member(obj, "initial_nodes")) {
     if (def.growth.kind == SYLVA_EQ_LOGISTIC) {

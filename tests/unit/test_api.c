@@ -192,31 +192,45 @@ static void test_species_snapshot(void) {
   sylva_world_destroy(w);
 }
 
-/* Heartwood alone sets the image's WOOD flag (32) with the three it implies, and a
- * lateral reach the REACH flag (64) with all four; their places are read back; an
- * image with WOOD but not FOLIAGE, or REACH but not WOOD, is refused. A species
- * without them keeps its images' flags. */
+/* Heartwood alone sets the image's WOOD flag (32) with the three it implies, a
+ * lateral reach the REACH flag (64) with all four, a wood density or biomass
+ * allometry the CARBON flag (128) with all five; their places are read back; an
+ * image with WOOD but not FOLIAGE, REACH but not WOOD, or CARBON but not REACH is
+ * refused. A species without them keeps its images' flags. */
 static void test_heartwood_snapshot(void) {
-  for (int pass = 0; pass < 3; pass++) {
+  for (int pass = 0; pass < 4; pass++) {
     sylva_world_def wd = sylva_default_world_def();
     sylva_world *w = NULL;
     CHECK_INT(sylva_world_create(&wd, &w), 0);
     sylva_species_def d = sylva_default_species_def();
     d.heartwood = pass == 1 ? 0.05 : 0.0;
     d.lateral_reach = pass == 2 ? 1.5 : 1.0;
+    if (pass == 3) {
+      d.wood_density = 520;
+      d.biomass_form = 3;
+      d.biomass_a = 0.113, d.biomass_b = 2.4572, d.biomass_c = 0.5;
+      d.biomass_p = -4.0813, d.biomass_q = 5.8816, d.biomass_factor = 0.8;
+    }
     CHECK_INT(sylva_world_add_species(w, &d, "h"), 0);
     uint8_t *img = NULL;
     size_t n = 0;
     CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
     if (img) {
-      CHECK_INT(img[12], pass == 2 ? 4 | 8 | 16 | 32 | 64 : pass ? 4 | 8 | 16 | 32 : 0);
+      CHECK_INT(img[12], pass == 3   ? 4 | 8 | 16 | 32 | 64 | 128
+                         : pass == 2 ? 4 | 8 | 16 | 32 | 64
+                         : pass      ? 4 | 8 | 16 | 32
+                                     : 0);
       sylva_world *r = NULL;
       CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
       const sylva_species_def *e = r ? sylva_world_species(r, 0) : NULL;
       CHECK(e && e->heartwood == d.heartwood && e->lateral_reach == d.lateral_reach);
+      CHECK(e && e->wood_density == d.wood_density && e->biomass_form == d.biomass_form &&
+            e->biomass_a == d.biomass_a && e->biomass_b == d.biomass_b &&
+            e->biomass_c == d.biomass_c && e->biomass_p == d.biomass_p &&
+            e->biomass_q == d.biomass_q && e->biomass_factor == d.biomass_factor);
       sylva_world_destroy(r);
       if (pass) {
-        img[12] &= (uint8_t)~(pass == 2 ? 32u : 16u);
+        img[12] &= (uint8_t)~(pass == 3 ? 64u : pass == 2 ? 32u : 16u);
         CHECK_INT(sylva_snapshot_load(img, n, &r), SYLVA_EBADIMAGE);
       }
     }
