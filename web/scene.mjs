@@ -38,6 +38,12 @@ function skyTexture() {
   return t;
 }
 
+// The order of the opaque things drawn: the ground and its grid, then the
+// see-through boxes of obstacles and zones (tinting the ground behind them), then
+// the branches and leaves (order 0), which draw over the boxes' tint.
+const GROUND_ORDER = -2;
+const SEE_THROUGH_ORDER = -1;
+
 // One colour per plant (by its index in the snapshot), shared with the plots.
 export const PALETTE = ['#2e8b3a', '#c46a1b', '#2f6fb3', '#b8326e', '#7d5bb5', '#1a9a8f', '#a08a12',
   '#d04a3a', '#4f7d1f', '#8a4b2a', '#3d8fd1', '#c27bb0'];
@@ -439,6 +445,7 @@ export class View {
     const rg = new THREE.BufferGeometry();
     rg.setAttribute('position', new THREE.Float32BufferAttribute(ruler, 3));
     this.worldGroup.add(new THREE.LineSegments(rg, new THREE.LineBasicMaterial({ color: 0x555555 })));
+    for (const m of this.worldGroup.children) m.renderOrder = GROUND_ORDER;
     if (first) this.setView('persp');
   }
 
@@ -456,13 +463,23 @@ export class View {
       const zone = isZone(o);
       const size = [0, 1, 2].map((i) => Math.max(o.max[i] - o.min[i], 1e-3));
       const geo = new THREE.BoxGeometry(...size);
+      // Blended over what is behind it, but drawn among the opaque things, before
+      // the branches and leaves (SEE_THROUGH_ORDER) and without writing depth: a tree
+      // behind a facade keeps its own colours. Drawn after them as a transparent
+      // thing, the box's tint took the leaves' green (the street's south crowns seen
+      // from the south looked leafless).
       const box = new THREE.Mesh(geo, new THREE.MeshBasicMaterial({
-        color: zone ? ZONE_COLOR : 0x8c7b6b, transparent: true, opacity: zone ? 0.25 : 0.35, depthWrite: false }));
+        color: zone ? ZONE_COLOR : 0x8c7b6b, opacity: zone ? 0.25 : 0.35, depthWrite: false,
+        transparent: false, blending: THREE.CustomBlending,
+        // (the canvas stays opaque: its alpha is not blended down)
+        blendSrcAlpha: THREE.ZeroFactor, blendDstAlpha: THREE.OneFactor }));
+      box.renderOrder = SEE_THROUGH_ORDER;
       box.position.set(...[0, 1, 2].map((i) => (o.min[i] + o.max[i]) / 2));
       box.name = `${zone ? 'zone' : 'obstacle'}:${o.id}`;
       const edges = new THREE.LineSegments(new THREE.EdgesGeometry(geo),
         new THREE.LineBasicMaterial({ color: zone ? 0xb87400 : 0x5a4a3a }));
       edges.position.copy(box.position);
+      box.userData.id = edges.userData.id = o.id;
       this.obstacleGroup.add(box, edges);
     }
     this.branches.setZones(zonesOf(obstacles));
@@ -508,6 +525,21 @@ export class View {
     this.controls.addEventListener('change', () => this.invalidate());
     this.controls.update();
     this.viewName = name;
+    this.invalidate();
+  }
+
+  // The perspective camera at `from`, looking at `to` (world points [x, y, z]).
+  lookAt(from, to) {
+    this.setView('persp');
+    this.persp.position.set(...from);
+    this.controls.target.set(...to);
+    this.controls.update();
+    this.invalidate();
+  }
+
+  // Shows or hides the box of an obstacle or zone (id), and its edges.
+  setObstacleVisible(id, on) {
+    for (const m of this.obstacleGroup.children) if (m.userData.id === id) m.visible = on;
     this.invalidate();
   }
 

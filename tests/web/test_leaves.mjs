@@ -133,3 +133,41 @@ test('leaves: counted, in the crown, off and on, their shadow, kept by deltas', 
     cleanup(d.dir);
   }
 });
+
+// Leaf-coloured: green well above red and blue (the street's London planes, lit or
+// shaded).
+const isGreen = (r, g, b) => g > r + 10 && g > b + 10;
+
+test('leaves behind a see-through facade keep their colour: the street from the south', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    const c = await connect(d.url);
+    c.send({ type: 'create', scenario: scenario('street.json', { iterations: 8 }), name: 'street', start: true, id: 'c' });
+    const { run } = await c.type('created');
+    c.close();
+    await page.waitForSelector(`#runs tr[data-run="${run}"]`, { timeout: 10000 * SLOW });
+    await page.click(`#runs tr[data-run="${run}"]`);
+    await until(page, (x) => x.run === run && x.status === 'finished' && x.drawnLeaves > 1000 && !x.leafPending,
+      'the street grown, its leaves drawn', 120000 * SLOW);
+    // south of the south facade (y -8 to -7, 12 m high), looking north: it stands in
+    // front of every crown
+    await page.evaluate(() => window.sylva.lookAt([0, -30, 5], [0, 0, 3]));
+    const [[x0, y0], [x1, y1]] = await page.evaluate(() => [window.sylva.project(-14, -8, 12), window.sylva.project(14, -8, 0)]);
+    const facade = [x0, y0, x1, y1];
+    const green = async () => {
+      await page.evaluate(() => window.sylva.render());
+      return countWhere(await pixels(page, await shot(page)), facade, isGreen);
+    };
+    const behind = await green();
+    await page.evaluate(() => window.sylva.setObstacleVisible('facade-south', false));
+    const bare = await green();
+    await page.evaluate(() => window.sylva.setObstacleVisible('facade-south', true));
+    assert.ok(bare > 1000, `leaf pixels without the facade: ${bare}`);
+    assert.ok(behind > 0.9 * bare, `leaf pixels behind the facade: ${behind}, without it: ${bare}`);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
