@@ -1,14 +1,18 @@
 // Live plots of every stem against iteration (or against the calendar year, in a
 // run with a start year): height, DBH, crown width, leaf area (docs/model.md,
-// "Foliage"), internodes and the growth cap c(T), and in a run of species in years
-// the crown diameter and crown height too.
+// "Foliage"), crown area ("Canopy cover"), internodes and the growth cap c(T); in a
+// run of species in years the crown diameter and crown height too; where stems
+// carry carbon ("Wood and carbon") the CO2 they store and sequestered in the
+// iteration. And one run-level curve: the site's canopy cover. A measure a stem
+// lacks at an iteration is a gap, not a zero.
 // One point per iteration and stem, from the run's stored stats (stats.csv,
 // parsed by helpers.mjs) and then from each delta's stats.
 import uPlot from 'uplot';
 import { plantColor } from './scene.mjs';
 import { statsInYears } from './helpers.mjs';
 
-// years: only in a run whose stats carry them (species in years).
+// years: only in a run whose stats carry them (species in years); carbon: only
+// once a stem carries it (a species with an allometry or a wood density).
 export const MEASURES = [
   { key: 'height', title: 'Height (m)' },
   { key: 'dbh', title: 'DBH (m)' },
@@ -16,6 +20,9 @@ export const MEASURES = [
   { key: 'crown_diameter', title: 'Crown diameter (m)', years: true },
   { key: 'crown_height', title: 'Crown height (m)', years: true },
   { key: 'leaf_area', title: 'Leaf area (m²)' },
+  { key: 'crown_area', title: 'Crown area (m²)' },
+  { key: 'co2', title: 'CO₂ stored (kg CO₂e)', carbon: true },
+  { key: 'co2_sequestered', title: 'CO₂ sequestered (kg CO₂e per iteration)', carbon: true },
   { key: 'nodes', title: 'Internodes' },
   { key: 'cap', title: 'Growth cap c(T)' },
 ];
@@ -24,6 +31,9 @@ export const MEASURES = [
 // prints them without uPlot's thousands separators: 2030, not "2,030".
 const WHOLE_INCRS = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000];
 export const wholeNumbers = (u, splits) => splits.map((v) => (v == null ? null : String(Math.round(v))));
+
+// The run-level chart: the share of the site's open ground under leaves, in per cent.
+const COVER = { key: 'canopy_cover', title: 'Canopy cover (%)', stroke: '#333333' };
 
 export class Plots {
   constructor(container) {
@@ -37,6 +47,8 @@ export class Plots {
     this.iterations = [];        // x values (as iterations)
     this.startYear = null;       // the calendar year of iteration 0, when the run has one
     this.years = false;          // the stats carry the measures of species in years
+    this.carbon = false;         // a stem carried carbon
+    this.cover = [];             // the site's canopy cover per iteration (0..1, null: none)
     this.stems = new Map();      // "plant/stem" -> {label, plant, values: {measure: []}}
     this.plantIndex = new Map(); // plant id -> index (colours as in the 3D view)
     for (const c of this.charts) c.destroy();
@@ -57,25 +69,39 @@ export class Plots {
     this.schedule();
   }
 
-  // The measures charted: those of species in years only in a run that has them.
+  // The measures charted: those of species in years and of carbon only in a run
+  // that has them.
   measures() {
-    return MEASURES.filter((m) => !m.years || this.years);
+    return MEASURES.filter((m) => (!m.years || this.years) && (!m.carbon || this.carbon));
   }
 
-  // Adds (or replaces) the stats of one iteration.
-  add(iteration, stats) {
+  // Whether the run-level canopy cover is charted: once an iteration carried it.
+  hasCover() {
+    return this.cover.some((v) => v != null);
+  }
+
+  // Adds (or replaces) the stats of one iteration, and the site's canopy cover
+  // after it (undefined or null: not given).
+  add(iteration, stats, canopyCover) {
     if (!this.years && statsInYears(stats)) {
       this.years = true;
       this.rebuild = true;
     }
+    if (!this.carbon && stats.some((st) => st.co2 != null)) {
+      this.carbon = true;
+      this.rebuild = true;
+    }
+    if (!this.hasCover() && canopyCover != null) this.rebuild = true;
     let i = this.iterations.indexOf(iteration);
     if (i < 0) {
       // iterations arrive in order; one that is older than the newest goes in its place
       i = this.iterations.findIndex((x) => x > iteration);
       if (i < 0) i = this.iterations.length;
       this.iterations.splice(i, 0, iteration);
+      this.cover.splice(i, 0, null);
       for (const s of this.stems.values()) for (const m of MEASURES) s.values[m.key].splice(i, 0, null);
     }
+    this.cover[i] = canopyCover ?? null;
     for (const st of stats) {
       const key = `${st.plant}/${st.stem}`;
       let s = this.stems.get(key);
@@ -95,6 +121,7 @@ export class Plots {
     const i = this.iterations.findIndex((x) => x > iteration);
     if (i < 0) return;
     this.iterations.length = i;
+    this.cover.length = i;
     for (const s of this.stems.values()) for (const m of MEASURES) s.values[m.key].length = i;
     this.schedule();
   }
@@ -107,15 +134,22 @@ export class Plots {
   // What the charts show: per measure, the iterations (and the x axis's name and
   // values: iterations or years) and each stem's values (null where it has none),
   // for the page's state and the tests.
+  // The canopy cover's chart has one series, `site`.
   points() {
-    const stems = [...this.stems.keys()], measures = this.measures();
-    return Object.fromEntries(this.charts.map((c, k) => [measures[k].key, {
+    const stems = [...this.stems.keys()], keys = this.chartKeys();
+    return Object.fromEntries(this.charts.map((c, k) => [keys[k], {
       iterations: this.iterations.slice(0, c.data[0].length),
       axis: c.axes[0].label,
       ticks: (c.axes[0]._values || []).slice(),   // the x axis's labels as drawn (uPlot's own array)
       x: Array.from(c.data[0]),
-      stems: Object.fromEntries(stems.map((s, i) => [s, Array.from(c.data[i + 1] || [])])),
+      stems: Object.fromEntries((keys[k] === COVER.key ? ['site'] : stems)
+        .map((s, i) => [s, Array.from(c.data[i + 1] || [])])),
     }]));
+  }
+
+  // The keys of the charts, in order: the measures, then the canopy cover.
+  chartKeys() {
+    return [...this.measures().map((m) => m.key), ...(this.hasCover() ? [COVER.key] : [])];
   }
 
   schedule() {
@@ -135,21 +169,22 @@ export class Plots {
       this.container.textContent = '';
       const width = Math.max(200, this.container.clientWidth - 8);
       const axis = this.startYear == null ? 'iteration' : 'year';
-      this.charts = measures.map((m) => new uPlot({
-        title: m.title, width, height: 150,
+      const chart = (title, series) => new uPlot({
+        title, width, height: 150,
         legend: { show: false },
         cursor: { drag: { x: false, y: false } },
         scales: { x: { time: false } },
         axes: [{ label: axis, size: 36, incrs: WHOLE_INCRS, values: wholeNumbers }, { size: 60 }],
-        series: [{ label: axis }, ...stems.map((s) => ({
-          label: s.label, stroke: plantColor(this.plantIndex.get(s.plant) ?? 0), width: 1.5, spanGaps: false,
-        }))],
-      }, [[], ...stems.map(() => [])], this.container));
+        series: [{ label: axis }, ...series.map((s) => ({ ...s, width: 1.5, spanGaps: false }))],
+      }, [[], ...series.map(() => [])], this.container);
+      const stemSeries = stems.map((s) => ({ label: s.label, stroke: plantColor(this.plantIndex.get(s.plant) ?? 0) }));
+      this.charts = measures.map((m) => chart(m.title, stemSeries));
+      if (this.hasCover()) this.charts.push(chart(COVER.title, [{ label: 'site', stroke: COVER.stroke }]));
     }
     const xs = this.xs();
     this.charts.forEach((c, k) => {
-      const key = measures[k].key;
-      c.setData([xs, ...stems.map((s) => s.values[key])]);
+      if (k === measures.length) c.setData([xs, this.cover.map((v) => (v == null ? null : 100 * v))]);
+      else c.setData([xs, ...stems.map((s) => s.values[measures[k].key])]);
     });
   }
 }

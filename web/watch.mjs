@@ -69,7 +69,7 @@ export class Watch {
     this.plots.setPlants(this.live.plants.map((p) => p.id));
     this.plots.setStartYear(this.live.startYear);
     this.plots.truncate(msg.iteration);
-    if (msg.iteration > 0) this.plots.add(msg.iteration, msg.stats);
+    if (msg.iteration > 0) this.plots.add(msg.iteration, msg.stats, msg.canopy_cover);
     if (!this.statsLoaded) {
       this.statsLoaded = true;
       this.loadStats();
@@ -100,7 +100,7 @@ export class Watch {
     t.held.push([msg.iteration, this.live.live]);
     for (const a of [t.applyMs, t.parseMs, t.bytes, t.held, t.leafMs]) if (a.length > TIMINGS) a.shift();
     this.run.iteration = msg.iteration;
-    this.plots.add(msg.iteration, msg.stats);
+    this.plots.add(msg.iteration, msg.stats, msg.canopy_cover);
     this.onChange('live');
   }
 
@@ -130,7 +130,7 @@ export class Watch {
       const res = await this.session.fetch(`api/runs/${encodeURIComponent(run.name)}/stats.csv`);
       if (!res.ok || this.run !== run) return;
       const rows = parseStatsCsv(await res.text());
-      for (const [it, stats] of rows) if (it <= this.live.iteration) this.plots.add(it, stats);
+      for (const [it, stats] of rows) if (it <= this.live.iteration) this.plots.add(it, stats, stats[0]?.canopy_cover);
     } catch (e) {
       this.session.message(`stats could not be loaded: ${e.message}`, true);
     }

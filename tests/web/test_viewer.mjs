@@ -79,9 +79,11 @@ test('the wall scenario grows in the page: internodes, pixels, plots, memory', a
       assert.equal(count, want, `internodes held after iteration ${it}`);
     }
     const plots = await page.evaluate(() => window.sylva.plots());
-    // a run without years or a start year: the six plots, against the iteration
-    const keys = ['height', 'dbh', 'crown_width', 'leaf_area', 'nodes', 'cap'];
-    assert.deepEqual(Object.keys(plots), keys);
+    // a run without years, a start year or carbon: the seven plots of its stems and
+    // its canopy cover, against the iteration
+    const keys = ['height', 'dbh', 'crown_width', 'leaf_area', 'crown_area', 'nodes', 'cap'];
+    assert.deepEqual(Object.keys(plots), [...keys, 'canopy_cover']);
+    assert.deepEqual(plots.canopy_cover.stems.site, rows.map((r) => 100 * Number(r.canopy_cover)));
     assert.ok(plots.leaf_area.stems['tree/0'].at(-1) > 0, 'a leaf area');
     for (const key of keys) {
       assert.equal(plots[key].axis, 'iteration', key);

@@ -263,8 +263,8 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
     // the plots: years on the x axis, and the crown's diameter and height
     await page.waitForFunction(() => window.sylva.plots().height?.iterations.length === 8);
     const plots = await page.evaluate(() => window.sylva.plots());
-    assert.deepEqual(Object.keys(plots),
-      ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height', 'leaf_area', 'nodes', 'cap']);
+    assert.deepEqual(Object.keys(plots), ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height',
+      'leaf_area', 'crown_area', 'nodes', 'cap', 'canopy_cover']);
     const its = [1, 2, 3, 4, 5, 6, 7, 8];
     for (const key of Object.keys(plots)) {
       assert.equal(plots[key].axis, 'year', key);
@@ -292,6 +292,43 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
     assert.equal(s.year, first);
     assert.equal(await page.textContent('#timeline-label'), `${first} (iteration ${first - 2027}) (stored)`);
     assert.ok(await page.locator('#conflicts tbody tr.selected[data-zone="lane"]').count() === 1);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('carbon and canopy plots: a library species beside one without carbon, gaps where a stem has none', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    const street = scenario('street.json', { iterations: 3 });
+    street.species.oak = { preset: 'igm-fig11' };
+    street.plants.push({ id: 'oak', species: 'oak', roots: [[-12, 0, 0]] });
+    const run = await createRun(d, street, 'street');
+    await watchRun(page, run);
+    await page.click('#start');
+    await until(page, (x) => x.status === 'finished' && x.iteration === 3, 'three iterations', 120000 * SLOW);
+    await page.waitForFunction(() => window.sylva.plots().co2?.iterations.length === 3);
+    const plots = await page.evaluate(() => window.sylva.plots());
+    assert.deepEqual(Object.keys(plots), ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height',
+      'leaf_area', 'crown_area', 'co2', 'co2_sequestered', 'nodes', 'cap', 'canopy_cover']);
+    const snap = await serverSnapshot(d, run);
+    assert.equal(snap.iteration, 3);
+    // the last point of every stem is the server's, null where the stem has none
+    snap.stats.forEach((st) => {
+      for (const key of ['crown_area', 'co2', 'co2_sequestered'])
+        assert.deepEqual(plots[key].stems[`${st.plant}/${st.stem}`].at(-1), st[key] ?? null, `${key} of ${st.plant}`);
+    });
+    for (const key of ['co2', 'co2_sequestered']) {
+      assert.ok(plots[key].stems['south-west/0'].every((v) => v > 0), `${key}: ${plots[key].stems['south-west/0']}`);
+      assert.deepEqual(plots[key].stems['oak/0'], [null, null, null], `${key} of the oak: gaps`);
+    }
+    assert.ok(plots.crown_area.stems['oak/0'].every((v) => v !== null));
+    assert.deepEqual(plots.canopy_cover.stems.site.at(-1), 100 * snap.canopy_cover);
+    assert.ok(plots.canopy_cover.stems.site.every((v) => v > 0 && v <= 100), `${plots.canopy_cover.stems.site}`);
+    assert.deepEqual(plots.canopy_cover.x, [2028, 2029, 2030]);
     assert.deepEqual(errors, []);
   } finally {
     await stopDaemon(d);
