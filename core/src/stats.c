@@ -317,14 +317,15 @@ static void cover_segment(sylva_world *w, const double a[2], const double b[2], 
   double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
   for (int y = lo[1]; y <= hi[1]; y++) {
     double cy = w->def.min[1] + (y + 0.5) * e;
+    size_t row = (size_t)y * (size_t)w->col_n[0];
     for (int x = lo[0]; x <= hi[0]; x++) {
+      size_t c = row + (size_t)x;
+      if (w->cols[c] == stamp) continue; /* counted already: most cells of a crown */
       double cx = w->def.min[0] + (x + 0.5) * e;
       double t = len2 > 0.0 ? ((cx - a[0]) * dx + (cy - a[1]) * dy) / len2 : 0.0;
       t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
       double px = a[0] + t * dx - cx, py = a[1] + t * dy - cy;
       if (px * px + py * py > r * r) continue;
-      size_t c = (size_t)y * (size_t)w->col_n[0] + (size_t)x;
-      if (w->cols[c] == stamp) continue;
       if (w->cols[c] < first && !(w->foot[c >> 3] & (1u << (c & 7)))) (*cover)++;
       w->cols[c] = stamp;
       (*area)++;
@@ -338,12 +339,15 @@ void sylva__canopy(sylva_world *w) {
   /* the leaf-bearing slots grouped by stem: first[k] .. first[k + 1] */
   int32_t *first = w->stem_top.data;
   for (int k = 0; k <= w->stem_count; k++) first[k] = 0;
+  size_t leafy = 0; /* the leaf-bearing slots, in slot order, then grouped */
   for (size_t i = 0; i < s->count; i++)
-    if ((s->flags[i] & SYLVA__NODE_ALIVE) && sylva__node_leaves(w, i) > 0) first[s->stem[i] + 1]++;
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && sylva__node_leaves(w, i) > 0) {
+      first[s->stem[i] + 1]++;
+      w->canopy[w->scratch_cap + leafy++] = (int32_t)i;
+    }
   for (int k = 0; k < w->stem_count; k++) first[k + 1] += first[k];
-  for (size_t i = 0; i < s->count; i++)
-    if ((s->flags[i] & SYLVA__NODE_ALIVE) && sylva__node_leaves(w, i) > 0)
-      w->canopy[first[s->stem[i]]++] = (int32_t)i;
+  const int32_t *found = w->canopy + w->scratch_cap;
+  for (size_t j = 0; j < leafy; j++) w->canopy[first[s->stem[found[j]]]++] = found[j];
   /* first[k] now ends stem k's slots */
   if (w->col_stamp > UINT32_MAX - (uint32_t)w->stem_count - 1) { /* stamps wrap: start over */
     memset(w->cols, 0, (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof *w->cols);

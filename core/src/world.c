@@ -599,8 +599,8 @@ static int add_measured(sylva_world *w, const sylva_plant_def *def, int *bad) {
     return SYLVA_EINVAL;
   const sylva_species_def *sp = &w->species[def->species].def;
   if (def->age < 0 || def->age > SYLVA_MAX_AGE || (def->age > 0 && !sp->years)) return SYLVA_EINVAL;
-  int roots = 0;
-  int rc = check_measured(w, def, &roots, bad);
+  int roots = 0, unused;
+  int rc = check_measured(w, def, &roots, bad ? bad : &unused); /* bad_root is optional */
   if (rc) return rc;
   if (reserve_plant_room(w, roots)) return SYLVA_ENOMEM;
   int32_t *map = sylva__malloc((size_t)def->node_count * sizeof *map);
@@ -866,7 +866,7 @@ static int reserve_scratch(sylva_world *w) {
       grow_scratch((void **)&w->sap, n, sizeof *w->sap) ||
       grow_scratch((void **)&w->leaves, n, sizeof *w->leaves) ||
       grow_scratch((void **)&w->remap, n, sizeof *w->remap) ||
-      grow_scratch((void **)&w->canopy, n, sizeof *w->canopy))
+      grow_scratch((void **)&w->canopy, 2 * n, sizeof *w->canopy))
     return SYLVA_ENOMEM;
   w->scratch_cap = n;
   return SYLVA_OK;
@@ -1172,7 +1172,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->site = sylva__grid_site_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (4 * sizeof(double) + 3 * sizeof(int32_t)) +
+  out->other = w->scratch_cap * (4 * sizeof(double) + 4 * sizeof(int32_t)) +
                (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof(uint32_t) +
                ((size_t)w->col_n[0] * (size_t)w->col_n[1] + 7) / 8 +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +

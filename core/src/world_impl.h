@@ -140,7 +140,8 @@ struct sylva_world {
   double *sap;           /* radii: the functional pipes of the node's tips, sum of r_tip^v */
   int32_t *leaves;       /* shedding: leaf-bearing nodes of the node's subtree */
   int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped */
-  int32_t *canopy;       /* canopy: leaf-bearing slots grouped by stem */
+  int32_t *canopy;       /* canopy: leaf-bearing slots grouped by stem, then (from
+                            scratch_cap) the same in slot order (2 x scratch_cap) */
   size_t scratch_cap;
   /* by stem */
   SYLVA__VEC(int32_t) finishing;  /* stop: the stems whose equation stops at this step;

@@ -51,7 +51,7 @@ static void test_bad_ids(void) {
     CHECK(oid == 77 && o.label == NULL);
     double plant_root[1][3] = {{-2, -2, 0}};
     sylva_plant_def pd = {id, "late", (const double(*)[3])plant_root, 1, 0, NULL, 0};
-    CHECK_INT(sylva_world_add_plant(w, &pd, NULL), SYLVA_EINVAL);
+    CHECK(sylva_world_add_plant(w, &pd, NULL) < 0);
   }
   /* stems: 0 and 1 exist (the shrub's two roots) */
   int bad_stems[] = {-1, 2, 99};
@@ -107,6 +107,24 @@ static void check_value(const char *name, const char *reported, sylva_species_de
 #define IS_INT_int true
 #define REPORTED_species(name) #name
 #define REPORTED_markers(name) "markers"
+/* bad_root is optional: a measured plant added without it, good and bad. */
+static void test_measured_without_bad_root(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  sylva_species_def d = sylva_default_species_def();
+  int sp = sylva_world_add_species(w, &d, "s");
+  sylva_plant_node nodes[2] = {{.p = {0, 0, 0}, .radius = 0.01, .parent = -1},
+                               {.p = {0, 0, 0.1}, .radius = 0.01, .parent = 0}};
+  sylva_plant_def pd = {.species = sp, .label = "m", .nodes = nodes, .node_count = 2};
+  CHECK_INT(sylva_world_add_plant(w, &pd, NULL), 0);
+  nodes[1].parent = 1; /* its own parent */
+  pd.label = "n";
+  CHECK(sylva_world_add_plant(w, &pd, NULL) < 0);
+  CHECK_INT(sylva_world_plant_count(w), 1);
+  sylva_world_destroy(w);
+}
+
 static void test_species_fields(void) {
   const sylva_species_def def = sylva_default_species_def();
   CHECK_INT(sylva_species_check(&def, NULL), 0);
@@ -354,7 +372,7 @@ int main(int argc, char **argv) {
 #ifndef NDEBUG
       CHECK_TEST(phase_checks),
 #endif
-      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot), CHECK_TEST(heartwood_snapshot),
+      CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot), CHECK_TEST(heartwood_snapshot), CHECK_TEST(measured_without_bad_root),
       CHECK_TEST(leaf_area)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");
