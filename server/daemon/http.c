@@ -3,6 +3,7 @@
 
 #include "runs.h"
 #include "scenarios.h"
+#include "shade_json.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -25,9 +26,10 @@
 #define HTTP_WATCH_USECS 500000
 
 /* What an http_job writes. */
-typedef enum job_kind { JOB_EXPORT, JOB_REPORT } job_kind;
+typedef enum job_kind { JOB_EXPORT, JOB_REPORT, JOB_SHADE } job_kind;
 
-/* An export, or a sweep's report, written off the loop thread into a tmpfile. */
+/* An export, a sweep's report or a shade layer, written off the loop thread into a
+ * tmpfile. */
 struct http_job {
   uv_work_t work;
   server *d;
@@ -38,6 +40,7 @@ struct http_job {
   export_spec spec;
   report_format format; /* a report's */
   int years[REPORT_MAX_YEARS], nyears;
+  shade_request shade;  /* a shade layer's */
   FILE *file;      /* the result, rewound */
   size_t size;
   int failed;
@@ -297,6 +300,8 @@ static void job_work(uv_work_t *req) {
   }
   if (j->kind == JOB_REPORT)
     j->failed = write_report(j);
+  else if (j->kind == JOB_SHADE)
+    j->failed = shade_json_write(j->file, j->d->reader, &j->shade, j->err, sizeof j->err);
   else
     j->failed = export_write(j->file, j->d->reader, &j->spec, log_warning, j->err,
                              sizeof j->err);
@@ -315,13 +320,15 @@ static void job_done(uv_work_t *req, int status) {
   http_job *j = req->data;
   j->d->jobs--;
   if (status == UV_ECANCELED) j->failed = SERVER_OK; /* the client left before it started */
-  /* a report of a sweep the store lacks is the client's mistake, not a failure */
+  /* a report of a sweep the store lacks, or the shade of a run without a site, is
+   * the client's mistake, not a failure */
   bool unknown = j->kind == JOB_REPORT && j->failed == SERVER_EINPUT;
-  if (j->failed && !unknown) {
+  bool refused = j->kind == JOB_SHADE && j->failed == SERVER_EINPUT;
+  if (j->failed && !unknown && !refused) {
     if (j->kind == JOB_REPORT)
       server_log(NULL, "report of sweep \"%s\" failed: %s", j->name, j->err);
     else
-      server_log(j->name, "export failed: %s", j->err);
+      server_log(j->name, "%s failed: %s", j->kind == JOB_SHADE ? "shade" : "export", j->err);
   }
   http_pss *pss = j->pss;
   if (!pss) {
@@ -329,12 +336,15 @@ static void job_done(uv_work_t *req, int status) {
       server_log(NULL, "report of sweep \"%s\": the client left before it was written",
                  j->name);
     else
-      server_log(j->name, "export: the client left before it was written");
+      server_log(j->name, "%s: the client left before it was written",
+                 j->kind == JOB_SHADE ? "shade" : "export");
   } else {
     pss->job = NULL;
     char q[80];
     if (unknown) {
       reply_text(pss, 404, "no sweep \"%s\"", shown(q, sizeof q, j->name));
+    } else if (refused) {
+      reply_text(pss, 400, "%s", j->err);
     } else if (j->failed) {
       reply_text(pss, 500, "%s", j->err);
     } else {
@@ -383,7 +393,7 @@ static http_job *new_job(server *d, http_pss *pss, job_kind kind, const char *na
  * the reply, of content type `type`, follows when it is done. */
 static void queue_job(server *d, struct lws *wsi, http_pss *pss, http_job *j, const char *type) {
   if (uv_queue_work(&d->loop, &j->work, job_work, job_done) != 0) {
-    const char *what = j->kind == JOB_REPORT ? "report" : "export";
+    const char *what = j->kind == JOB_REPORT ? "report" : j->kind == JOB_SHADE ? "shade" : "export";
     free(j->name);
     free(j);
     reply_text(pss, 500, "cannot queue the %s", what);
@@ -421,47 +431,92 @@ static bool parse_iteration(const char *text, int *out) {
   return true;
 }
 
+/* One parameter of a query, its value "" when it has no '='; false after a 400
+ * reply saying why it is bad. */
+typedef bool (*query_arg_fn)(http_pss *pss, const char *key, const char *value, void *ctx);
+
+/* Gives each parameter of the request's query (lws has split it at '&' and
+ * URL-decoded each part) to fn; false with a 400 reply when the query is too long
+ * or fn refuses one. */
+static bool each_query_arg(struct lws *wsi, http_pss *pss, query_arg_fn fn, void *ctx) {
+  char arg[512];
+  if (lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_URI_ARGS) >= (int)sizeof arg) {
+    reply_text(pss, 400, "query: longer than %zu bytes", sizeof arg - 1);
+    return false;
+  }
+  /* every part fits, so a failed copy is the end of the parts; an empty part
+   * ("a=1&&b=2", or a trailing '&' or '?', which lws 4.1.6 gives as "/") is skipped */
+  for (int i = 0; lws_hdr_copy_fragment(wsi, arg, sizeof arg, WSI_TOKEN_HTTP_URI_ARGS, i) >= 0;
+       i++) {
+    if (!arg[0] || strcmp(arg, "/") == 0) continue;
+    char *value = strchr(arg, '=');
+    if (value) *value++ = '\0';
+    if (!fn(pss, arg, value ? value : "", ctx)) return false;
+  }
+  return true;
+}
+
+/* The index of key among a route's parameter names, marked seen; -1 after a 400
+ * reply when it is unknown (naming the known ones) or given again. */
+static int query_key(http_pss *pss, const char *key, const char *const *names, int count,
+                     bool *seen) {
+  int k = 0;
+  while (k < count && strcmp(key, names[k]) != 0) k++;
+  if (k == count) {
+    char known[128] = "", q[80];
+    for (int i = 0; i < count; i++)
+      snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", i ? ", " : "",
+               names[i]);
+    reply_text(pss, 400, "%s: unknown parameter (known: %s)", shown(q, sizeof q, key), known);
+    return -1;
+  }
+  if (seen[k]) {
+    reply_text(pss, 400, "%s: given more than once", names[k]);
+    return -1;
+  }
+  seen[k] = true;
+  return k;
+}
+
+/* An iteration of run r given as `iteration`: 0 to its current one; false after a
+ * 400 reply. */
+static bool query_iteration(http_pss *pss, const run *r, const char *value, int *out) {
+  char q[80];
+  if (!parse_iteration(value, out)) {
+    reply_text(pss, 400, "iteration: expected an integer from 0 to %d, got \"%s\"", r->iteration,
+               shown(q, sizeof q, value));
+    return false;
+  }
+  if (*out <= r->iteration) return true;
+  reply_text(pss, 400, "iteration: run \"%s\" has iterations 0 to %d", shown(q, sizeof q, r->name),
+             r->iteration);
+  return false;
+}
+
 enum { ARG_FORMAT, ARG_ITERATION, ARG_OBSTACLES, ARG_COUNT };
 static const char *const arg_names[ARG_COUNT] = {"format", "iteration", "obstacles"};
 
-/* Reads one parameter "key=value" of an export's query into spec; false with a 400
- * reply when it is bad. */
-static bool export_arg(http_pss *pss, const run *r, char *arg, bool seen[ARG_COUNT],
-                       export_spec *spec) {
-  char q[80], q2[80];
-  char *value = strchr(arg, '=');
-  if (value) *value++ = '\0';
-  int k = 0;
-  while (k < ARG_COUNT && strcmp(arg, arg_names[k]) != 0) k++;
-  if (k == ARG_COUNT) {
-    reply_text(pss, 400, "%s: unknown parameter (known: format, iteration, obstacles)",
-               shown(q, sizeof q, arg));
-    return false;
-  }
-  if (seen[k]) {
-    reply_text(pss, 400, "%s: given more than once", arg_names[k]);
-    return false;
-  }
-  seen[k] = true;
-  if (!value) value = "";
-  switch (k) {
+/* An export's query as it is read. */
+typedef struct export_args {
+  const run *r;
+  export_spec *spec;
+  bool seen[ARG_COUNT];
+} export_args;
+
+/* Reads one parameter of an export's query into its spec (query_arg_fn). */
+static bool export_arg(http_pss *pss, const char *key, const char *value, void *ctx) {
+  export_args *a = ctx;
+  char q[80];
+  switch (query_key(pss, key, arg_names, ARG_COUNT, a->seen)) {
+  case -1: return false;
   case ARG_FORMAT:
-    if (export_format_parse(value, &spec->format)) return true;
+    if (export_format_parse(value, &a->spec->format)) return true;
     reply_text(pss, 400, "format: \"%s\" is not " EXPORT_FORMAT_NAMES, shown(q, sizeof q, value));
     return false;
-  case ARG_ITERATION:
-    if (!parse_iteration(value, &spec->iteration)) {
-      reply_text(pss, 400, "iteration: expected an integer from 0 to %d, got \"%s\"", r->iteration,
-                 shown(q, sizeof q, value));
-      return false;
-    }
-    if (spec->iteration <= r->iteration) return true;
-    reply_text(pss, 400, "iteration: run \"%s\" has iterations 0 to %d",
-               shown(q2, sizeof q2, r->name), r->iteration);
-    return false;
+  case ARG_ITERATION: return query_iteration(pss, a->r, value, &a->spec->iteration);
   default:
     if (strcmp(value, "1") == 0 || strcmp(value, "0") == 0) {
-      spec->obstacles = value[0] == '1';
+      a->spec->obstacles = value[0] == '1';
       return true;
     }
     reply_text(pss, 400, "obstacles: expected 1 or 0, got \"%s\"", shown(q, sizeof q, value));
@@ -469,26 +524,70 @@ static bool export_arg(http_pss *pss, const run *r, char *arg, bool seen[ARG_COU
   }
 }
 
-/* The query of an export (lws has split it at '&' and URL-decoded each part) into
- * spec; false with a 400 reply when it is bad. */
+/* The query of an export into spec; false with a 400 reply when it is bad. */
 static bool export_query(struct lws *wsi, http_pss *pss, const run *r, export_spec *spec) {
-  char arg[512];
-  if (lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_URI_ARGS) >= (int)sizeof arg) {
-    reply_text(pss, 400, "query: longer than %zu bytes", sizeof arg - 1);
-    return false;
-  }
-  bool seen[ARG_COUNT] = {false};
-  /* every part fits, so a failed copy is the end of the parts; an empty part
-   * ("a=1&&b=2", or a trailing '&' or '?', which lws 4.1.6 gives as "/") is skipped */
-  for (int i = 0; lws_hdr_copy_fragment(wsi, arg, sizeof arg, WSI_TOKEN_HTTP_URI_ARGS, i) >= 0;
-       i++)
-    if (arg[0] && strcmp(arg, "/") != 0 && !export_arg(pss, r, arg, seen, spec)) return false;
-  if (!seen[ARG_FORMAT]) {
+  export_args a = {.r = r, .spec = spec};
+  if (!each_query_arg(wsi, pss, export_arg, &a)) return false;
+  if (!a.seen[ARG_FORMAT]) {
     reply_text(pss, 400, "format: required (" EXPORT_FORMAT_NAMES ")");
     return false;
   }
-  if (!seen[ARG_ITERATION]) spec->iteration = r->iteration;
+  if (!a.seen[ARG_ITERATION]) spec->iteration = r->iteration;
   return true;
+}
+
+enum { SHADE_ITERATION, SHADE_DATE, SHADE_FROM, SHADE_TO, SHADE_ARG_COUNT };
+static const char *const shade_arg_names[SHADE_ARG_COUNT] = {"iteration", "date", "from", "to"};
+
+/* A shade layer's query as it is read. */
+typedef struct shade_args {
+  const run *r;
+  shade_request *q;
+  bool seen[SHADE_ARG_COUNT];
+} shade_args;
+
+/* A message that quotes the query, its control characters as '?'. */
+static void reply_quoting(http_pss *pss, char *msg) {
+  for (char *c = msg; *c; c++)
+    if ((unsigned char)*c < 0x20 || *c == 0x7F) *c = '?';
+  reply_text(pss, 400, "%s", msg);
+}
+
+/* Reads one parameter of a shade layer's query (query_arg_fn). */
+static bool shade_arg(http_pss *pss, const char *key, const char *value, void *ctx) {
+  shade_args *a = ctx;
+  char err[300];
+  switch (query_key(pss, key, shade_arg_names, SHADE_ARG_COUNT, a->seen)) {
+  case -1: return false;
+  case SHADE_ITERATION: return query_iteration(pss, a->r, value, &a->q->iteration);
+  default:
+    if (!shade_request_arg(a->q, key, value, err, sizeof err)) return true;
+    reply_quoting(pss, err);
+    return false;
+  }
+}
+
+/* The query of a shade layer into q (the run's current iteration and the route's
+ * day by default); false with a 400 reply when it is bad. */
+static bool shade_query(struct lws *wsi, http_pss *pss, const run *r, shade_request *q) {
+  *q = shade_request_default();
+  q->run = r->id;
+  q->iteration = r->iteration;
+  shade_args a = {.r = r, .q = q};
+  if (!each_query_arg(wsi, pss, shade_arg, &a)) return false;
+  char err[300];
+  if (!shade_request_check(q, err, sizeof err)) return true;
+  reply_text(pss, 400, "%s", err);
+  return false;
+}
+
+/* Starts the shade layer of q off the loop; the reply follows when it is done. */
+static void start_shade(server *d, struct lws *wsi, http_pss *pss, const run *r,
+                        const shade_request *q) {
+  http_job *j = new_job(d, pss, JOB_SHADE, r->name);
+  if (!j) return;
+  j->shade = *q;
+  queue_job(d, wsi, pss, j, "application/json");
 }
 
 /* A name fit for a file name in Content-Disposition: at most 200 bytes, those
@@ -513,38 +612,33 @@ static void export_disposition(http_pss *pss, const run *r, const export_spec *s
 
 /* ---- a sweep's report ----------------------------------------------------------- */
 
-/* The years of a report's query (lws has split it at '&' and URL-decoded each
- * part): "years=10,20,40", or none for REPORT_DEFAULT_YEARS; false with a 400
- * reply when it is bad. */
+/* A report's query as it is read: the text of its years. */
+typedef struct report_args {
+  bool seen;
+  char given[512];
+} report_args;
+
+/* Reads the one parameter of a report's query (query_arg_fn). */
+static bool report_arg(http_pss *pss, const char *key, const char *value, void *ctx) {
+  static const char *const names[] = {"years"};
+  report_args *a = ctx;
+  if (query_key(pss, key, names, 1, &a->seen) < 0) return false;
+  snprintf(a->given, sizeof a->given, "%s", value);
+  return true;
+}
+
+/* The years of a report's query: "years=10,20,40", or none for
+ * REPORT_DEFAULT_YEARS; false with a 400 reply when it is bad. */
 static bool report_query(struct lws *wsi, http_pss *pss, int years[REPORT_MAX_YEARS],
                          int *nyears) {
-  char arg[512], given[512], q[80], err[256];
-  if (lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_URI_ARGS) >= (int)sizeof arg) {
-    reply_text(pss, 400, "query: longer than %zu bytes", sizeof arg - 1);
-    return false;
-  }
-  const char *text = REPORT_DEFAULT_YEARS;
-  for (int i = 0; lws_hdr_copy_fragment(wsi, arg, sizeof arg, WSI_TOKEN_HTTP_URI_ARGS, i) >= 0;
-       i++) {
-    if (!arg[0] || strcmp(arg, "/") == 0) continue; /* empty parts, as export_query */
-    char *value = strchr(arg, '=');
-    if (value) *value++ = '\0';
-    if (strcmp(arg, "years") != 0) {
-      reply_text(pss, 400, "%s: unknown parameter (known: years)", shown(q, sizeof q, arg));
-      return false;
-    }
-    if (text == given) {
-      reply_text(pss, 400, "years: given more than once");
-      return false;
-    }
-    snprintf(given, sizeof given, "%s", value ? value : "");
-    text = given;
-  }
-  if (report_parse_years(text, years, nyears, err, sizeof err)) return true;
-  /* the message quotes the query: its control characters go */
-  for (char *c = err; *c; c++)
-    if ((unsigned char)*c < 0x20 || *c == 0x7F) *c = '?';
-  reply_text(pss, 400, "years: %s", err);
+  report_args a = {.seen = false};
+  if (!each_query_arg(wsi, pss, report_arg, &a)) return false;
+  char err[256], msg[300];
+  if (report_parse_years(a.seen ? a.given : REPORT_DEFAULT_YEARS, years, nyears, err,
+                         sizeof err))
+    return true;
+  snprintf(msg, sizeof msg, "years: %s", err);
+  reply_quoting(pss, msg);
   return false;
 }
 
@@ -645,6 +739,9 @@ static void route(server *d, struct lws *wsi, http_pss *pss, const char *uri) {
         export_disposition(pss, r, &spec);
         start_export(d, wsi, pss, r, &spec);
       }
+    } else if (!shaped && (r = run_of_uri(d, pss, tail, "/shade", &shaped))) {
+      shade_request q;
+      if (shade_query(wsi, pss, r, &q)) start_shade(d, wsi, pss, r, &q);
     }
   }
   if (!pss->status && !pss->job) reply_text(pss, 404, "not found");

@@ -1,11 +1,11 @@
 /* sylva server: the daemon's HTTP routes: /healthz, /metrics, /api/runs,
- * /api/runs/NAME/stats.csv, /api/runs/NAME/export, /api/scenarios/NAME and
- * /api/sweeps/NAME/report.(csv|html|pdf).
+ * /api/runs/NAME/stats.csv, /api/runs/NAME/export, /api/runs/NAME/shade,
+ * /api/scenarios/NAME and /api/sweeps/NAME/report.(csv|html|pdf).
  *
  * Every reply goes out from LWS_CALLBACK_HTTP_WRITEABLE: the headers in one
  * callback, then the body in chunks, from memory or from a file. An export (and
- * stats.csv, its CSV) and a sweep's report (which regrows worlds for its pictures)
- * are written off the loop thread into a tmpfile() by an http_job, on libuv's
+ * stats.csv, its CSV), a shade layer (shade_json.h) and a sweep's report (which
+ * regrow worlds) are written off the loop thread into a tmpfile() by an http_job, on libuv's
  * threadpool under --max-jobs (the store locks itself). The connection waits
  * for it without an lws timeout; a timer closes it when the client leaves. The
  * job may outlive its connection: it is detached when the connection closes

@@ -1,14 +1,15 @@
 // The daemon's HTTP routes for the viewer: /api/runs/NAME/export (the bytes of
-// `sylva export`), /api/scenarios/NAME (a ready scenario file), and the species a
-// snapshot offers. A real daemon on 127.0.0.1; the CLI reads the same store while
+// `sylva export`), /api/runs/NAME/shade (the tree shade of `sylva shade`),
+// /api/scenarios/NAME (a ready scenario file), and the species a snapshot offers. A real daemon on 127.0.0.1; the CLI reads the same store while
 // it runs (SQLite WAL allows a concurrent reader).
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { spawnSync } from 'node:child_process';
 import { withDaemon, connect, scenario, exportBytes, rawGet, askOnly, cleanup, ROOT,
-  SLOW } from './harness.mjs';
+  SLOW, SYLVA } from './harness.mjs';
 
 // Creates run `name` of a scenario file, grows it to the end and returns its id.
 async function grown(d, file, name, iterations) {
@@ -24,6 +25,18 @@ async function grown(d, file, name, iterations) {
 async function get(d, path) {
   const r = await fetch(`${d.http}${path}`);
   return { status: r.status, headers: r.headers, body: Buffer.from(await r.arrayBuffer()) };
+}
+
+// Asks each [path under /api/runs/, status, message] and checks the reply: the
+// status and one text line, the message itself or matching a RegExp.
+async function expectErrors(d, cases) {
+  for (const [path, status, message] of cases) {
+    const r = await get(d, `/api/runs/${path}`);
+    assert.equal(r.status, status, path);
+    assert.match(r.headers.get('content-type'), /^text\/plain/, path);
+    if (message instanceof RegExp) assert.match(r.body.toString(), message, path);
+    else assert.equal(r.body.toString(), `${message}\n`, path);
+  }
 }
 
 const TYPES = { skeleton: /^application\/json/, obj: /^text\/plain/, ply: /^application\/octet-stream/,
@@ -84,12 +97,7 @@ test('export: bad parameters get 400 and unknown runs 404, each with a line nami
     ['nope/export?format=obj', 404, 'no run "nope"'],
     ['nope/stats.csv', 404, 'no run "nope"'],
   ];
-  for (const [path, status, message] of cases) {
-    const r = await get(d, `/api/runs/${path}`);
-    assert.equal(r.status, status, path);
-    assert.match(r.headers.get('content-type'), /^text\/plain/, path);
-    assert.equal(r.body.toString(), `${message}\n`, path);
-  }
+  await expectErrors(d, cases);
   // empty parts of a query are no parameters
   const r = await get(d, '/api/runs/wall/export?&format=csv&&iteration=2&');
   assert.equal(r.status, 200);
@@ -189,4 +197,75 @@ test('snapshot: carries the labels of the run\'s species, in the world\'s order'
   // the skeleton export format is unchanged
   assert.equal(JSON.parse(exportBytes(d.db, 'sp', 'skeleton', 0)).species, undefined);
   c.close();
+}));
+
+// The CLI's cells of a stored iteration's day (`sylva shade ... -o X.csv`):
+// [{x, y, z, surface, open, with}].
+function shadeCells(d, name, iteration, date, from, to) {
+  const out = join(d.dir, 'shade.csv');
+  const r = spawnSync(SYLVA, ['shade', '--db', d.db, '--name', name, '--iteration', String(iteration),
+    '--date', date, '--from', from, '--to', to, '-o', out]);
+  if (r.status !== 0) throw new Error(`shade failed: ${r.stderr}`);
+  return readFileSync(out, 'utf8').trim().split('\n').slice(1).map((l) => {
+    const [x, y, z, surface, open, withTrees] = l.split(',');
+    return { x: Number(x), y: Number(y), z: Number(z), surface, open: Number(open), with: Number(withTrees) };
+  });
+}
+
+// Whether the route's hours (two decimals) are the CLI's open - with (each of four
+// decimals), none below 0.
+const near = (got, cells) => got.length === cells.length &&
+  got.every((v, i) => Math.abs(v - Math.max(0, cells[i].open - cells[i].with)) <= 0.0051);
+
+test('shade: a stored iteration\'s tree shade on the ground and the facades, as the CLI computes it', () => withDaemon({}, async (d) => {
+  await grown(d, 'street.json', 'street', 4);
+  // 3 lies between stored snapshots: regrown, as the CLI does
+  const r = await get(d, '/api/runs/street/shade?iteration=3&date=06-21&from=09:30&to=15:00');
+  assert.equal(r.status, 200, r.body.toString());
+  assert.match(r.headers.get('content-type'), /^application\/json/);
+  const s = JSON.parse(r.body);
+  assert.deepEqual([s.iteration, s.year, s.date, s.from, s.to, s.step], [3, 2030, '06-21', '09:30', '15:00', 10]);
+  assert.deepEqual([s.voxel, s.origin, s.nx, s.ny], [0.125, [-14, -8, 0], 224, 128]);
+  const cells = shadeCells(d, 'street', 3, '06-21', '09:30', '15:00');
+  const ground = cells.filter((c) => c.surface === 'ground');
+  assert.ok(near(s.ground, ground), 'the ground\'s tree shade');
+  assert.ok(s.ground.some((v) => v > 0.5), 'the crowns shade the ground');
+  // every face with cells, in the CLI's order: its grid and values
+  const faces = [...new Set(cells.filter((c) => c.surface !== 'ground').map((c) => c.surface))];
+  assert.deepEqual(s.faces.map((f) => `${f.obstacle}:${f.face}`), faces);
+  for (const f of s.faces) {
+    const mine = cells.filter((c) => c.surface === `${f.obstacle}:${f.face}`);
+    assert.equal(f.nu * f.nz, mine.length, f.obstacle);
+    assert.ok(f.first.every((v, i) => Math.abs(v - [mine[0].x, mine[0].y, mine[0].z][i]) <= 6e-4), f.obstacle);
+    assert.ok(near(f.added, mine), `${f.obstacle}:${f.face}`);
+  }
+  assert.ok(s.faces.find((f) => f.obstacle === 'facade-north' && f.face === '-y').added.some((v) => v > 0),
+    'the crowns shade the north facade');
+  assert.equal(s.max, Math.max(...s.ground, ...s.faces.flatMap((f) => f.added)));
+  // the defaults: the current iteration, 07-21 from 10:00 to 16:00
+  const dflt = JSON.parse((await get(d, '/api/runs/street/shade')).body);
+  assert.deepEqual([dflt.iteration, dflt.date, dflt.from, dflt.to], [4, '07-21', '10:00', '16:00']);
+}));
+
+test('shade: bad parameters get 400, a run without a site 400 and unknown runs 404, each with a line naming the problem', () => withDaemon({}, async (d) => {
+  await grown(d, 'street.json', 'street', 2);
+  const c = await connect(d.url);
+  c.send({ type: 'create', name: 'wall', start: false, scenario: scenario('wall.json') });
+  await c.type('created');
+  c.close();
+  const cases = [
+    ['street/shade?iteration=3', 400, 'iteration: run "street" has iterations 0 to 2'],
+    ['street/shade?iteration=x', 400, 'iteration: expected an integer from 0 to 2, got "x"'],
+    ['street/shade?date=02-30', 400, /^date: .+\n$/],
+    ['street/shade?date=', 400, /^date: .+\n$/],
+    ['street/shade?from=25:00', 400, /^from: .+\n$/],
+    ['street/shade?to=9', 400, /^to: .+\n$/],
+    ['street/shade?from=12:00&to=12:00', 400, 'to: 12:00 is not after from (12:00)'],
+    ['street/shade?from=17:00', 400, 'to: 16:00 is not after from (17:00)'],
+    ['street/shade?date=07-01&date=07-02', 400, 'date: given more than once'],
+    ['street/shade?step=5', 400, 'step: unknown parameter (known: iteration, date, from, to)'],
+    ['wall/shade', 400, 'run: its light has no site (light.latitude, with "sky": "site"): the sun\'s hours need a latitude'],
+    ['nope/shade', 404, 'no run "nope"'],
+  ];
+  await expectErrors(d, cases);
 }));
