@@ -479,7 +479,9 @@ static int add_row(run_pass *p, const store_stats_row *row, const stem_slot *slo
       .run = p->run, .species = slot->species, .key = slot->key, .plant = slot->plant,
       .stem = row->plant_stem, .year = year, .iteration = row->iteration, .age = row->age,
       .height = row->height, .dbh = row->dbh, .crown_diameter = row->crown_width,
-      .crown_height = row->crown_height, .leaf_area = row->leaf_area, .pruned = slot->pruned};
+      .crown_height = row->crown_height, .leaf_area = row->leaf_area, .co2 = row->co2,
+      .co2_sequestered = row->co2_sequestered, .canopy_cover = row->canopy_cover,
+      .pruned = slot->pruned};
   (*n)++;
   int rc = parse_pairs(p, row->zones, true, &o->first, &o->nfirst);
   if (!rc) rc = parse_pairs(p, row->clearance, false, &o->clearance, &o->nclearance);
@@ -625,13 +627,23 @@ static report_stat stat_of(double *v, int n) {
   return s;
 }
 
-static double measure_of(const report_row *row, int m) {
+bool report_measure_per_run(report_measure m) { return m == REPORT_CANOPY_COVER; }
+
+static double measure_of(const report_row *row, report_measure m) {
   switch (m) {
   case REPORT_HEIGHT: return row->height;
   case REPORT_DBH: return row->dbh;
   case REPORT_CROWN_DIAMETER: return row->crown_diameter;
-  default: return row->crown_height;
+  case REPORT_CROWN_HEIGHT: return row->crown_height;
+  case REPORT_CO2: return row->co2;
+  default: return row->canopy_cover;
   }
+}
+
+/* Whether rows[idx[i]] is the first of idx[0..i] from its run (rows are by run, so a
+ * run's rows in a group are consecutive). */
+static bool first_of_run(const report *r, const size_t *idx, size_t i) {
+  return i == 0 || r->rows[idx[i - 1]].run != r->rows[idx[i]].run;
 }
 
 /* Whether a row belongs to the group of axis a's value and species s at year y: for a
@@ -665,10 +677,14 @@ static int summarise_value(report *r, int a, const char *value, double *buf, siz
         if (!g->first) return nomem(err, errlen);
       }
       r->ngroups++;
+      for (size_t i = 0; i < n; i++) g->runs += first_of_run(r, idx, i);
       for (int m = 0; m < REPORT_MEASURES; m++) {
+        /* a run's value is on each of its stems' rows: count it once */
+        bool per_run = report_measure_per_run((report_measure)m);
         int k = 0;
         for (size_t i = 0; i < n; i++) {
-          double v = measure_of(&r->rows[idx[i]], m);
+          if (per_run && !first_of_run(r, idx, i)) continue;
+          double v = measure_of(&r->rows[idx[i]], (report_measure)m);
           if (!isnan(v)) buf[k++] = v;
         }
         g->measure[m] = stat_of(buf, k);

@@ -93,6 +93,10 @@ typedef struct report_row {
   int iteration, age; /**< age -1 where not stored */
   double height, dbh, crown_diameter, crown_height; /**< NAN where not stored */
   double leaf_area;   /**< m^2; NAN where not stored (a store before schema 5) */
+  double co2, co2_sequestered; /**< kg CO2 stored and sequestered since planting; NAN
+                                    where not stored (docs/model.md, "Wood and carbon") */
+  double canopy_cover; /**< the run's share of open ground under leaves at this
+                            iteration; NAN where not stored */
   int64_t pruned;     /**< nodes pruned up to this iteration; -1 without conflicts */
   report_kv *first;   /**< zone index and its stored `first` (a calendar year with a
                            start year, else an iteration) */
@@ -113,14 +117,21 @@ typedef struct report_stat {
   double median, min, max;
 } report_stat;
 
-/** The measures the summary gives, in its order. */
+/** The measures the summary gives, in its order. The per-stem ones pool one value
+ *  per stem of a group, the per-run ones (report_measure_per_run) one per run. */
 typedef enum report_measure {
   REPORT_HEIGHT,
   REPORT_DBH,
   REPORT_CROWN_DIAMETER,
   REPORT_CROWN_HEIGHT,
+  REPORT_CO2,          /**< kg CO2 stored in the stem */
+  REPORT_CANOPY_COVER, /**< the run's canopy cover at that iteration */
   REPORT_MEASURES
 } report_measure;
+
+/** Whether measure m is one value per run and iteration (repeated on its stems' rows)
+ *  rather than one per stem. */
+bool report_measure_per_run(report_measure m);
 
 /** One line of the summary: an axis value and a species at a reported year. */
 typedef struct report_group {
@@ -129,6 +140,7 @@ typedef struct report_group {
   int species;
   int year;           /**< index into report.years */
   int n;              /**< stems (rows) pooled */
+  int runs;           /**< runs pooled (the per-run measures' count) */
   report_stat measure[REPORT_MEASURES];
   report_stat *first; /**< per zone: the first conflict years of the stems that met
                            it (n of them) */

@@ -54,6 +54,9 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
   put_field(f, "crown_diameter", false);
   put_field(f, "crown_height", false);
   put_field(f, "leaf_area", false);
+  put_field(f, "co2", false);
+  put_field(f, "co2_sequestered", false);
+  put_field(f, "canopy_cover", false);
   for (int z = 0; z < r->nzones; z++) put_named(f, "first_", r->zones[z]);
   for (int o = 0; o < r->nobstacles; o++) put_named(f, "clearance_", r->obstacles[o]);
   if (r->conflicts) put_field(f, "pruned", false);
@@ -74,6 +77,9 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
     put_number(f, row->crown_diameter);
     put_number(f, row->crown_height);
     put_number(f, row->leaf_area);
+    put_number(f, row->co2);
+    put_number(f, row->co2_sequestered);
+    put_number(f, row->canopy_cover);
     for (int z = 0; z < r->nzones; z++) put_number(f, pair_value(row->first, row->nfirst, z));
     for (int o = 0; o < r->nobstacles; o++)
       put_number(f, pair_value(row->clearance, row->nclearance, o));

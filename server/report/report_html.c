@@ -56,9 +56,9 @@ static int put_png(FILE *f, const report_png *p, const char *alt, char *err, siz
   return SERVER_OK;
 }
 
-static const char *const measure_heads[REPORT_MEASURES] = {"height (m)", "dbh (m)",
-                                                           "crown diameter (m)",
-                                                           "crown height (m)"};
+static const char *const measure_heads[REPORT_MEASURES] = {
+    "height (m)", "dbh (m)", "crown diameter (m)", "crown height (m)", "CO2 (kg)",
+    "canopy cover"};
 
 static void put_summary(FILE *f, const report *r) {
   fputs("<table class=\"summary\">\n<thead><tr><th>axis</th><th>value</th><th>species</th>"
@@ -83,7 +83,8 @@ static void put_summary(FILE *f, const report *r) {
     report_format_year(cell, sizeof cell, r, g->year);
     fprintf(f, "</td><td>%s</td><td>%d</td>", cell, g->n);
     for (int m = 0; m < REPORT_MEASURES; m++) {
-      report_format_stat(cell, sizeof cell, &g->measure[m], g->n);
+      report_format_stat(cell, sizeof cell, &g->measure[m],
+                         report_measure_per_run((report_measure)m) ? g->runs : g->n);
       fprintf(f, "<td>%s</td>", cell);
     }
     for (int z = 0; z < r->nzones; z++) {
@@ -194,8 +195,9 @@ int report_write_html(FILE *f, store *st, const report *r, const report_draw_opt
   fputs(" (years since planting, the stats of that iteration).</p>\n", f);
 
   fputs("<h2>Summary</h2>\n<p class=\"note\">Per axis value, the seeds (and plants) pooled: "
-        "median (minimum–maximum) over the stems, in metres as stored; \"k of n\" where only k "
-        "of the n stems have a value. First conflict: the stored first year in each zone "
+        "median (minimum–maximum) over the stems, in metres and kilograms as stored; canopy "
+        "cover (the share of open ground under leaves) over the runs, one value each; \"k of n\" "
+        "where only k of the n stems (runs) have a value. First conflict: the stored first year in each zone "
         "(calendar years with a start year) of the stems that met it by that year.</p>\n",
         f);
   put_summary(f, r);

@@ -66,7 +66,8 @@ enum { FIXED_COLUMNS = 5 };
 static void summary_cell(const report *r, const report_group *g, int c, char *buf, size_t n) {
   static const char *const heads[FIXED_COLUMNS + REPORT_MEASURES] = {
       "axis", "value", "species", "years", "stems",
-      "height (m)", "dbh (m)", "crown diameter (m)", "crown height (m)"};
+      "height (m)", "dbh (m)", "crown diameter (m)", "crown height (m)", "CO2 (kg)",
+      "canopy cover"};
   if (!g) {
     if (c < FIXED_COLUMNS + REPORT_MEASURES) snprintf(buf, n, "%s", heads[c]);
     else snprintf(buf, n, "first: %s", r->zones[c - FIXED_COLUMNS - REPORT_MEASURES]);
@@ -80,8 +81,10 @@ static void summary_cell(const report *r, const report_group *g, int c, char *bu
   case 4: snprintf(buf, n, "%d", g->n); return;
   default: break;
   }
-  if (c < FIXED_COLUMNS + REPORT_MEASURES)
-    report_format_stat(buf, n, &g->measure[c - FIXED_COLUMNS], g->n);
+  if (c < FIXED_COLUMNS + REPORT_MEASURES) {
+    report_measure m = (report_measure)(c - FIXED_COLUMNS);
+    report_format_stat(buf, n, &g->measure[m], report_measure_per_run(m) ? g->runs : g->n);
+  }
   else
     report_format_first(buf, n, &g->first[c - FIXED_COLUMNS - REPORT_MEASURES], g->n);
 }
@@ -91,7 +94,7 @@ static int summary_pages(pdf *p, const report *r) {
   int cols = FIXED_COLUMNS + REPORT_MEASURES + r->nzones;
   double *width = calloc((size_t)cols, sizeof *width);
   if (!width) return SERVER_ENOMEM;
-  char cell[200];
+  char cell[400];
   font(cr, TABLE_FONT, true);
   for (int c = 0; c < cols; c++) {
     summary_cell(r, NULL, c, cell, sizeof cell);
@@ -115,7 +118,8 @@ static int summary_pages(pdf *p, const report *r) {
     if (i == 0) {
       font(cr, 9, false);
       snprintf(cell, sizeof cell, "Store %s, %d run%s. Median (minimum–maximum) over the stems "
-               "of each axis value, seeds pooled; first conflict: stored first years.", r->db,
+               "(canopy cover: over the runs) of each axis value, seeds pooled; first "
+               "conflict: stored first years.", r->db,
                r->nruns, r->nruns == 1 ? "" : "s");
       text_at(cr, MARGIN, y + 4, cell);
       y += 18;

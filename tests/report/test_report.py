@@ -31,9 +31,15 @@ from store_common import Checks, Env, crash_text  # noqa: E402
 
 ITERATIONS = 12
 YEARS = [5, 10, 12, 20]  # 20 is never reached
-MEASURES = [("height", "height"), ("dbh", "dbh"), ("crown_diameter", "crown_width"),
-            ("crown_height", "crown_height")]
-CSV_MEASURES = MEASURES + [("leaf_area", "leaf_area")]  # the summary has no leaf area
+# the summary's measures: (CSV column, stored key, per run)
+MEASURES = [("height", "height", False), ("dbh", "dbh", False),
+            ("crown_diameter", "crown_width", False), ("crown_height", "crown_height", False),
+            ("co2", "co2", False), ("canopy_cover", "canopy_cover", True)]
+# the CSV's: the summary has no leaf area and no sequestration
+CSV_MEASURES = [(col, key) for col, key, _ in MEASURES] + [
+    ("leaf_area", "leaf_area"), ("co2_sequestered", "co2_sequestered")]
+SUMMARY_HEAD = ["axis", "value", "species", "years", "stems", "height (m)", "dbh (m)",
+                "crown diameter (m)", "crown height (m)", "CO2 (kg)", "canopy cover"]
 
 
 # ---- what the store holds, read here ----------------------------------------------
@@ -68,10 +74,13 @@ def expected_rows(db, sweep, years):
                                           (rid,)).fetchone()[0])
             keys = {p["id"]: p["species"] for p in scen["plants"]}
             for y in years:
-                for (stem, plant, plant_stem, age, height, dbh, cw, ch, la, zones, clearance,
-                     pruned) in con.execute(
+                cover = con.execute("SELECT canopy_cover FROM iterations WHERE run = ? AND"
+                                    " iteration = ?", (rid, y)).fetchone()
+                for (stem, plant, plant_stem, age, height, dbh, cw, ch, la, co2, seq, zones,
+                     clearance, pruned) in con.execute(
                         "SELECT stem, plant, plant_stem, age, height, dbh, crown_width,"
-                        " crown_height, leaf_area, zones, clearance, pruned FROM stats"
+                        " crown_height, leaf_area, co2, co2_sequestered, zones, clearance,"
+                        " pruned FROM stats"
                         " WHERE run = ? AND iteration = ? ORDER BY stem", (rid, y)):
                     total = con.execute("SELECT SUM(pruned) FROM stats WHERE run = ? AND"
                                         " stem = ? AND iteration <= ?",
@@ -82,7 +91,9 @@ def expected_rows(db, sweep, years):
                                  "species": species, "key": key, "age": age,
                                  "year": start + y, "iteration": y, "height": height,
                                  "dbh": dbh, "crown_width": cw, "crown_height": ch,
-                                 "leaf_area": la,
+                                 "leaf_area": la, "co2": co2, "co2_sequestered": seq,
+                                 "canopy_cover": cover[0] if cover else None,
+                                 "rid": rid,
                                  "zones": json.loads(zones) if zones else None,
                                  "clearance": json.loads(clearance) if clearance else None,
                                  "pruned": total if pruned is not None else None})
@@ -142,8 +153,11 @@ def check_csv(c, path, expect, axes, multi_stem):
         if "pruned" in f and number(f["pruned"]) != e["pruned"]:
             bad.append((i, "pruned", f["pruned"], e["pruned"]))
     c.check(not bad, "every CSV value equals the stored stats", bad[:10])
-    c.check(all(e["leaf_area"] is not None for e in expect) and any(e["leaf_area"] for e in expect),
-            "the leaf_area column holds stored leaf areas (some above 0)")
+    for key in ("leaf_area", "canopy_cover"):
+        c.check(all(e[key] is not None for e in expect) and any(e[key] for e in expect),
+                "the %s column holds stored values (some above 0)" % key)
+    c.check(any(e["co2"] for e in expect) and any(e["co2_sequestered"] for e in expect),
+            "the co2 columns hold stored values (some above 0)")
     return header, rows, zones
 
 
@@ -174,9 +188,14 @@ def expected_groups(rows, axes, zones, years):
                     if not g:
                         continue
                     meas = {}
-                    for _, key in MEASURES:
-                        vals = [r[key] for r in g if r[key] is not None]
-                        meas[key] = stat(vals)
+                    runs = []
+                    for r in g:
+                        if r["rid"] not in [x["rid"] for x in runs]:
+                            runs.append(r)
+                    for _, key, per_run in MEASURES:
+                        # a run's value counts once, not once per stem
+                        vals = [r[key] for r in (runs if per_run else g) if r[key] is not None]
+                        meas[key] = stat(vals) + (len(runs) if per_run else len(g),)
                     firsts = {}
                     for z in zones:
                         vals = [r["zones"][z]["first"] for r in g
@@ -244,9 +263,9 @@ def check_summary(c, page, groups, zones):
     if not c.check(len(summary) == 1, "the HTML has one summary table"):
         return p
     head, body = summary[0][0], summary[0][1:]
-    c.check(head[:9] == ["axis", "value", "species", "years", "stems", "height (m)", "dbh (m)",
-                         "crown diameter (m)", "crown height (m)"]
-            and head[9:] == ["first conflict: " + z for z in zones],
+    fixed = len(SUMMARY_HEAD)
+    c.check(head[:fixed] == SUMMARY_HEAD
+            and head[fixed:] == ["first conflict: " + z for z in zones],
             "summary header", head)
     c.check(len(body) == len(groups), "one summary line per axis value, species and year",
             "%d lines, %d expected" % (len(body), len(groups)))
@@ -257,8 +276,8 @@ def check_summary(c, page, groups, zones):
                 or int(cells[4]) != n:
             bad.append((i, "keys", cells[:5], g[:5]))
             continue
-        for k, (_, key) in enumerate(MEASURES):
-            cnt, med, lo, hi = meas[key]
+        for k, (_, key, _) in enumerate(MEASURES):
+            cnt, med, lo, hi, n = meas[key]
             cell = cells[5 + k]
             if cnt == 0:
                 if cell != "–":
@@ -270,9 +289,10 @@ def check_summary(c, page, groups, zones):
                     or (cnt < n) != (m.group(4) is not None) \
                     or (m.group(4) and (int(m.group(4)), int(m.group(5))) != (cnt, n)):
                 bad.append((i, key, cell, (med, lo, hi, cnt, n)))
+        n = g[4]
         for k, z in enumerate(zones):
             cnt, med, lo, hi = firsts[z]
-            cell = cells[9 + k]
+            cell = cells[fixed + k]
             if cnt == 0:
                 m = NEVER.match(cell)
                 if not m or int(m.group(1)) != n:
@@ -320,7 +340,7 @@ def check_pdf(c, env, path, groups, min_pages):
     flat = re.sub(r"\s+", " ", text)
     missing = []
     for g in groups:
-        med, lo, hi = g[5]["height"][1:]
+        med, lo, hi = g[5]["height"][1:4]
         cell = "%.3f (%.3f–%.3f)" % (med, lo, hi)
         if cell not in flat:
             missing.append(cell)
