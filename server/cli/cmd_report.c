@@ -42,7 +42,10 @@ static void report_usage(FILE *f) {
         "  .csv   one row per run, plant and year: the run, its axes, the plant, its\n"
         "         species and age, the year, height, dbh, crown diameter and height, the\n"
         "         first conflict year with each clearance zone, the least clearance to\n"
-        "         each solid obstacle and the nodes pruned so far\n"
+        "         each solid obstacle and the nodes pruned so far; the stem's CO2 stored\n"
+        "         and sequestered, the run's canopy cover, and, when the sweep's plan\n"
+        "         names a \"shade\" day, the run's tree shade hours on the ground and on\n"
+        "         each solid obstacle\n"
         "  .html  one self-contained page: the summary (per axis value, seeds pooled:\n"
         "  .pdf   median and range), each species drawn at each year, plots of height\n"
         "         and crown diameter over the years (the Urban Tree Database's open-grown\n"
@@ -132,7 +135,8 @@ static int run_report(report_args *a) {
   store *st;
   int rc = cli_store_open(a->db, false, &st);
   if (rc) return rc;
-  report_request q = {.db = a->db, .sweep = a->sweep, .years = a->years, .nyears = a->nyears};
+  report_request q = {.db = a->db, .sweep = a->sweep, .years = a->years, .nyears = a->nyears,
+                      .warn = a->draw.warn};
   report *r = NULL;
   char err[1024];
   int failed = report_load(st, &q, &r, err, sizeof err);

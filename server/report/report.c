@@ -14,7 +14,10 @@
 
 #include <cjson/cJSON.h>
 
+#include "plan.h"
+#include "shade.h"
 #include "sweep_store.h"
+#include "sylva/scenario.h"
 #include "utdb.h"
 
 /* ---- small helpers --------------------------------------------------------------- */
@@ -188,8 +191,12 @@ void report_free(report *r) {
     if (r->runs[i].values)
       for (int a = 0; a < r->naxes; a++) free(r->runs[i].values[a]);
     free(r->runs[i].values);
+    if (r->runs[i].shade)
+      for (int y = 0; y < r->nyears; y++) free(r->runs[i].shade[y].obstacles);
+    free(r->runs[i].shade);
   }
   free(r->runs);
+  free_names(r->shade_obstacles, r->nshade_obstacles);
   free_names(r->axes, r->naxes);
   for (int i = 0; i < r->nspecies; i++) {
     free(r->species[i].label);
@@ -284,6 +291,9 @@ typedef struct gather {
   cJSON *plan;      /* the sweep's plan, or NULL */
   sylva_utdb *utdb; /* the database, parsed on first need */
   size_t rows_cap, finals_cap, samples_cap;
+  void (*warn)(const char *msg); /* the request's */
+  int no_site;       /* runs with a shade day but no latitude */
+  char *no_site_run; /* the first of them */
   char *err;
   size_t errlen;
 } gather;
@@ -481,7 +491,7 @@ static int add_row(run_pass *p, const store_stats_row *row, const stem_slot *slo
       .height = row->height, .dbh = row->dbh, .crown_diameter = row->crown_width,
       .crown_height = row->crown_height, .leaf_area = row->leaf_area, .co2 = row->co2,
       .co2_sequestered = row->co2_sequestered, .canopy_cover = row->canopy_cover,
-      .pruned = slot->pruned};
+      .shade_ground = NAN, .pruned = slot->pruned};
   (*n)++;
   int rc = parse_pairs(p, row->zones, true, &o->first, &o->nfirst);
   if (!rc) rc = parse_pairs(p, row->clearance, false, &o->clearance, &o->nclearance);
@@ -519,6 +529,108 @@ static int on_stats(const store_stats_row *row, void *ctx) {
 failed:
   p->status = rc;
   return 1;
+}
+
+/* ---- one run's tree shade ------------------------------------------------------- */
+
+/* The tree shade of world w (run idx at reported year y) on the ground and on each
+ * solid obstacle of cols[0..ncols) (indices into r->shade_obstacles). */
+static int shade_at(gather *g, const sylva_world *w, const shade_site *site, int idx, int y,
+                    const int *cols, int ncols) {
+  report *r = g->r;
+  report_run *run = &r->runs[idx];
+  shade_day day = r->shade_day;
+  day.year = run->start_year > 0 ? run->start_year + r->years[y] : shade_default_day().year;
+  shade_result res;
+  char why[512];
+  int rc = shade_compute(w, site, &day, NULL, &res, why, sizeof why);
+  if (rc) {
+    shade_result_free(&res);
+    return server_fail(g->err, g->errlen, rc, "%s: run \"%s\": the shade of iteration %d: %s",
+                       r->db, run->name, r->years[y], why);
+  }
+  report_shade *out = &run->shade[y];
+  for (int s = 0; s < res.surface_count; s++)
+    if (res.surfaces[s].obstacle < 0 && res.surfaces[s].count)
+      out->ground = res.surfaces[s].mean_added;
+  if (ncols && !(out->obstacles = malloc((size_t)ncols * sizeof *out->obstacles))) {
+    shade_result_free(&res);
+    return nomem(g->err, g->errlen);
+  }
+  for (int c = 0; c < ncols; c++) {
+    int id = sylva_world_find_obstacle(w, r->shade_obstacles[cols[c]]);
+    shade_surface sum;
+    if (id < 0) continue;
+    shade_obstacle_summary(&res, id, &sum);
+    /* a box wholly outside the world has no cells: no value, not 0 */
+    if (sum.count) out->obstacles[out->nobstacles++] = (report_kv){cols[c], sum.mean_added};
+  }
+  shade_result_free(&res);
+  return SERVER_OK;
+}
+
+/* The site of a scenario's light (as `sylva shade` takes it); false without a
+ * latitude. */
+static bool site_of(const sylva_scenario *s, shade_site *site) {
+  if (!s->light.site) return false;
+  *site = (shade_site){.latitude = s->light.sky.latitude,
+                       .north = {s->light.sky.north[0], s->light.sky.north[1]},
+                       .clock = s->light.clock, .longitude = s->light.longitude,
+                       .utc_offset = s->light.utc_offset};
+  return true;
+}
+
+/* Run idx's tree shade at every reported year it reached, once each; its rows from
+ * first_row on get their ground value. */
+static int run_shade(gather *g, store *st, const store_run *sr, const cJSON *scen, int idx,
+                     size_t first_row) {
+  report *r = g->r;
+  report_run *run = &r->runs[idx];
+  if (!(run->shade = calloc((size_t)r->nyears, sizeof *run->shade))) return nomem(g->err, g->errlen);
+  for (int y = 0; y < r->nyears; y++) run->shade[y].ground = NAN;
+  /* the scenario's solid obstacles are columns even where the sun cannot be had */
+  int ncols = 0, *cols = malloc(((size_t)cJSON_GetArraySize(
+                                      cJSON_GetObjectItemCaseSensitive(scen, "obstacles")) + 1) *
+                                  sizeof *cols);
+  if (!cols) return nomem(g->err, g->errlen);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(scen, "obstacles")) {
+    const cJSON *id = cJSON_GetObjectItemCaseSensitive(e, "id");
+    const cJSON *kind = cJSON_GetObjectItemCaseSensitive(e, "kind");
+    if (!cJSON_IsString(id) || (cJSON_IsString(kind) && strcmp(kind->valuestring, "zone") == 0))
+      continue;
+    int k = intern(&r->shade_obstacles, &r->nshade_obstacles, id->valuestring);
+    if (k < 0) {
+      free(cols);
+      return nomem(g->err, g->errlen);
+    }
+    cols[ncols++] = k;
+  }
+  sylva_scenario *s = NULL;
+  char why[512];
+  int rc = SERVER_OK;
+  shade_site site;
+  if (sylva_scenario_parse(sr->scenario, strlen(sr->scenario), &s, why, sizeof why))
+    rc = server_fail(g->err, g->errlen, SERVER_EFAIL, "%s: run \"%s\": its stored scenario: %s",
+                     r->db, sr->name, why);
+  else if (!site_of(s, &site)) {
+    if (!g->no_site++ && !(g->no_site_run = strdup(sr->name))) rc = nomem(g->err, g->errlen);
+  } else {
+    for (int y = 0; y < r->nyears && !rc && r->years[y] <= sr->last_iteration; y++) {
+      sylva_world *w = NULL;
+      if (store_world_at(st, sr->id, r->years[y], g->warn, &w))
+        rc = server_fail(g->err, g->errlen, SERVER_EFAIL, "%s: run \"%s\": %s", r->db, sr->name,
+                         store_error(st));
+      else
+        rc = shade_at(g, w, &site, idx, y, cols, ncols);
+      if (w) sylva_world_destroy(w);
+    }
+  }
+  sylva_scenario_free(s);
+  free(cols);
+  for (size_t i = first_row; !rc && i < r->nrows; i++)
+    r->rows[i].shade_ground = run->shade[r->rows[i].year].ground;
+  return rc;
 }
 
 /* Reads one run: its scenario's plants, species and obstacles, then its stats. */
@@ -604,10 +716,12 @@ static int gather_run(gather *g, store *st, const store_run *sr, const char *axe
       }
     }
   }
+  size_t first_row = r->nrows;
   if (!rc && store_each_stats(st, sr->id, sr->last_iteration, on_stats, &p)) {
     rc = p.status ? p.status
                   : server_fail(g->err, g->errlen, SERVER_EFAIL, "%s", store_error(st));
   }
+  if (!rc && r->shade) rc = run_shade(g, st, sr, scen, idx, first_row);
   free(p.slots);
   free(p.plant_info);
   cJSON_Delete(scen);
@@ -627,7 +741,13 @@ static report_stat stat_of(double *v, int n) {
   return s;
 }
 
-bool report_measure_per_run(report_measure m) { return m == REPORT_CANOPY_COVER; }
+bool report_measure_per_run(report_measure m) {
+  return m == REPORT_CANOPY_COVER || m == REPORT_SHADE_GROUND;
+}
+
+int report_measures_shown(const report *r) {
+  return r->shade ? REPORT_MEASURES : REPORT_SHADE_GROUND;
+}
 
 static double measure_of(const report_row *row, report_measure m) {
   switch (m) {
@@ -636,7 +756,8 @@ static double measure_of(const report_row *row, report_measure m) {
   case REPORT_CROWN_DIAMETER: return row->crown_diameter;
   case REPORT_CROWN_HEIGHT: return row->crown_height;
   case REPORT_CO2: return row->co2;
-  default: return row->canopy_cover;
+  case REPORT_CANOPY_COVER: return row->canopy_cover;
+  default: return row->shade_ground;
   }
 }
 
@@ -833,6 +954,10 @@ static int load(store *st, const report_request *q, report *r, gather *g, char *
       rc = server_fail(err, errlen, SERVER_EFAIL, "%s: the plan of sweep \"%s\" is not JSON", q->db,
                 sweep);
     free(plan_text);
+    char why[512];
+    if (!rc && g->plan && sweep_plan_shade(g->plan, &r->shade, &r->shade_day, why, sizeof why))
+      rc = server_fail(err, errlen, SERVER_EFAIL, "%s: the plan of sweep \"%s\": %s", q->db, sweep,
+                       why);
   }
   if (!rc && sweep) rc = sweep_axes(r, &l, err, errlen);
 
@@ -868,8 +993,16 @@ int report_load(store *st, const report_request *q, report **out, char *err, siz
   }
   r->nyears = q->nyears < REPORT_MAX_YEARS ? q->nyears : REPORT_MAX_YEARS;
   memcpy(r->years, q->years, (size_t)r->nyears * sizeof *r->years);
-  gather g = {.r = r, .err = err, .errlen = errlen};
+  gather g = {.r = r, .warn = q->warn, .err = err, .errlen = errlen};
   int rc = load(st, q, r, &g, err, errlen);
+  if (!rc && g.no_site && q->warn) {
+    char msg[600];
+    snprintf(msg, sizeof msg, "%s: %d of %d runs (\"%.300s\"%s) have no light.latitude: their "
+             "shade columns are empty", r->db, g.no_site, r->nruns, g.no_site_run,
+             g.no_site > 1 ? ", ..." : "");
+    q->warn(msg);
+  }
+  free(g.no_site_run);
   cJSON_Delete(g.plan);
   sylva_utdb_free(g.utdb);
   if (!rc) {

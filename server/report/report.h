@@ -25,6 +25,7 @@
 #include "fit.h"
 #include "render.h"
 #include "server_error.h"
+#include "shade.h"
 #include "store.h"
 
 /** Most reported years. */
@@ -51,6 +52,23 @@ bool report_format_from_path(const char *path, report_format *out);
 bool report_parse_years(const char *text, int years[REPORT_MAX_YEARS], int *count, char *err,
                         size_t errlen);
 
+/** An (index, value) pair of a row: a zone's first conflict year, an obstacle's
+ *  clearance or tree shade hours. */
+typedef struct report_kv {
+  int index;
+  double value;
+} report_kv;
+
+/** A run's tree shade at one reported year, on the plan's shade day (shade.h): the
+ *  mean hours of direct sun its plants take (mean_added, open - with). */
+typedef struct report_shade {
+  double ground;         /**< on the ground's cells; NAN when not computed (the run has
+                              not reached the year, or its light has no latitude) */
+  report_kv *obstacles;  /**< index into report.shade_obstacles and the mean over all
+                              that obstacle's face cells; only obstacles with cells */
+  int nobstacles;
+} report_shade;
+
 /** A run of the report. */
 typedef struct report_run {
   int64_t id;
@@ -61,6 +79,7 @@ typedef struct report_run {
   bool years;         /**< a species counts in years */
   bool conflicts;     /**< the run reports conflicts (zones, clearance, pruned) */
   int last_iteration; /**< its last stored iteration */
+  report_shade *shade; /**< per reported year when report.shade, else NULL */
 } report_run;
 
 /** A species, as labelled in the report. */
@@ -74,13 +93,6 @@ typedef struct report_species {
                                  years): the plots' curves are at age = year + age0 */
   int picture_run;          /**< the run drawn for it: the first with such a plant */
 } report_species;
-
-/** An (index, value) pair of a row: a zone's first conflict year, an obstacle's
- *  clearance. */
-typedef struct report_kv {
-  int index;
-  double value;
-} report_kv;
 
 /** A stem at one iteration. */
 typedef struct report_row {
@@ -97,6 +109,8 @@ typedef struct report_row {
                                     where not stored (docs/model.md, "Wood and carbon") */
   double canopy_cover; /**< the run's share of open ground under leaves at this
                             iteration; NAN where not stored */
+  double shade_ground; /**< its run's report_shade.ground at this year; NAN in final
+                            rows and without a shade day */
   int64_t pruned;     /**< nodes pruned up to this iteration; -1 without conflicts */
   report_kv *first;   /**< zone index and its stored `first` (a calendar year with a
                            start year, else an iteration) */
@@ -126,6 +140,8 @@ typedef enum report_measure {
   REPORT_CROWN_HEIGHT,
   REPORT_CO2,          /**< kg CO2 stored in the stem */
   REPORT_CANOPY_COVER, /**< the run's canopy cover at that iteration */
+  REPORT_SHADE_GROUND, /**< the run's tree shade hours on the ground (shown only with a
+                            shade day: report_measures_shown) */
   REPORT_MEASURES
 } report_measure;
 
@@ -175,7 +191,16 @@ typedef struct report {
   int max_iteration;     /**< the longest run's last iteration */
   report_group *groups;
   size_t ngroups;
+  bool shade;            /**< the sweep's plan names a shade day (sweep_plan_shade) */
+  shade_day shade_day;   /**< that day (year 0: each run's own) */
+  char **shade_obstacles; /**< the solid obstacles of the runs' scenarios, in order of
+                               appearance: the shade_ columns */
+  int nshade_obstacles;
 } report;
+
+/** How many of the measures the summary shows: all of them with a shade day, else
+ *  all but REPORT_SHADE_GROUND (the last). */
+int report_measures_shown(const report *r);
 
 /** What to report. */
 typedef struct report_request {
@@ -184,10 +209,14 @@ typedef struct report_request {
                              run of a store without sweeps */
   const int *years;     /**< sorted, distinct, 1 to REPORT_MAX_YEAR */
   int nyears;
+  void (*warn)(const char *msg); /**< told of a damaged snapshot passed over and of runs
+                                      whose tree shade cannot be computed (may be NULL) */
 } report_request;
 
 /** Gathers the report q asks for from st (one pass over each run's stats) and its
- *  summary. SERVER_EINPUT when the store has no such sweep, several sweeps and no
+ *  summary. With a shade day in the sweep's plan, each run's world is regrown at each
+ *  reported year it reached and its tree shade computed once (shade_compute); runs
+ *  whose light has no latitude get none, and q->warn is told so in one message. SERVER_EINPUT when the store has no such sweep, several sweeps and no
  *  --sweep, or no runs; SERVER_EFAIL when the store fails; SERVER_ENOMEM. On
  *  failure *out is NULL and err says why. */
 int report_load(store *st, const report_request *q, report **out, char *err, size_t errlen);

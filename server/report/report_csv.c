@@ -57,6 +57,10 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
   put_field(f, "co2", false);
   put_field(f, "co2_sequestered", false);
   put_field(f, "canopy_cover", false);
+  if (r->shade) {
+    put_field(f, "shade_ground", false);
+    for (int o = 0; o < r->nshade_obstacles; o++) put_named(f, "shade_", r->shade_obstacles[o]);
+  }
   for (int z = 0; z < r->nzones; z++) put_named(f, "first_", r->zones[z]);
   for (int o = 0; o < r->nobstacles; o++) put_named(f, "clearance_", r->obstacles[o]);
   if (r->conflicts) put_field(f, "pruned", false);
@@ -80,6 +84,12 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
     put_number(f, row->co2);
     put_number(f, row->co2_sequestered);
     put_number(f, row->canopy_cover);
+    if (r->shade) {
+      const report_shade *sh = &run->shade[row->year];
+      put_number(f, sh->ground);
+      for (int o = 0; o < r->nshade_obstacles; o++)
+        put_number(f, pair_value(sh->obstacles, sh->nobstacles, o));
+    }
     for (int z = 0; z < r->nzones; z++) put_number(f, pair_value(row->first, row->nfirst, z));
     for (int o = 0; o < r->nobstacles; o++)
       put_number(f, pair_value(row->clearance, row->nclearance, o));

@@ -58,13 +58,14 @@ static int put_png(FILE *f, const report_png *p, const char *alt, char *err, siz
 
 static const char *const measure_heads[REPORT_MEASURES] = {
     "height (m)", "dbh (m)", "crown diameter (m)", "crown height (m)", "CO2 (kg)",
-    "canopy cover"};
+    "canopy cover", "tree shade, ground (h)"};
 
 static void put_summary(FILE *f, const report *r) {
   fputs("<table class=\"summary\">\n<thead><tr><th>axis</th><th>value</th><th>species</th>"
         "<th>years</th><th>stems</th>",
         f);
-  for (int m = 0; m < REPORT_MEASURES; m++) fprintf(f, "<th>%s</th>", measure_heads[m]);
+  for (int m = 0; m < report_measures_shown(r); m++)
+    fprintf(f, "<th>%s</th>", measure_heads[m]);
   for (int z = 0; z < r->nzones; z++) {
     fputs("<th>first conflict: ", f);
     put_text(f, r->zones[z]);
@@ -82,7 +83,7 @@ static void put_summary(FILE *f, const report *r) {
     put_text(f, r->species[g->species].label);
     report_format_year(cell, sizeof cell, r, g->year);
     fprintf(f, "</td><td>%s</td><td>%d</td>", cell, g->n);
-    for (int m = 0; m < REPORT_MEASURES; m++) {
+    for (int m = 0; m < report_measures_shown(r); m++) {
       report_format_stat(cell, sizeof cell, &g->measure[m],
                          report_measure_per_run((report_measure)m) ? g->runs : g->n);
       fprintf(f, "<td>%s</td>", cell);
@@ -200,6 +201,13 @@ int report_write_html(FILE *f, store *st, const report *r, const report_draw_opt
         "where only k of the n stems (runs) have a value. First conflict: the stored first year in each zone "
         "(calendar years with a start year) of the stems that met it by that year.</p>\n",
         f);
+  if (r->shade)
+    fprintf(f, "<p class=\"note\">Tree shade, ground: per run, the mean hours of direct sun "
+               "its trees take from the ground's cells on %02d-%02d from %02d:%02d to %02d:%02d "
+               "(samples every %d minutes; <code>sylva shade</code>'s "
+               "<code>tree_shade_hours</code>).</p>\n",
+            r->shade_day.month, r->shade_day.day, r->shade_day.from / 60, r->shade_day.from % 60,
+            r->shade_day.to / 60, r->shade_day.to % 60, r->shade_day.step);
   put_summary(f, r);
   if (!r->ngroups)
     fputs("<p>No run has reached any of the reported years.</p>\n", f);

@@ -67,10 +67,11 @@ static void summary_cell(const report *r, const report_group *g, int c, char *bu
   static const char *const heads[FIXED_COLUMNS + REPORT_MEASURES] = {
       "axis", "value", "species", "years", "stems",
       "height (m)", "dbh (m)", "crown diameter (m)", "crown height (m)", "CO2 (kg)",
-      "canopy cover"};
+      "canopy cover", "tree shade, ground (h)"};
+  int measures = report_measures_shown(r);
   if (!g) {
-    if (c < FIXED_COLUMNS + REPORT_MEASURES) snprintf(buf, n, "%s", heads[c]);
-    else snprintf(buf, n, "first: %s", r->zones[c - FIXED_COLUMNS - REPORT_MEASURES]);
+    if (c < FIXED_COLUMNS + measures) snprintf(buf, n, "%s", heads[c]);
+    else snprintf(buf, n, "first: %s", r->zones[c - FIXED_COLUMNS - measures]);
     return;
   }
   switch (c) {
@@ -81,17 +82,17 @@ static void summary_cell(const report *r, const report_group *g, int c, char *bu
   case 4: snprintf(buf, n, "%d", g->n); return;
   default: break;
   }
-  if (c < FIXED_COLUMNS + REPORT_MEASURES) {
+  if (c < FIXED_COLUMNS + measures) {
     report_measure m = (report_measure)(c - FIXED_COLUMNS);
     report_format_stat(buf, n, &g->measure[m], report_measure_per_run(m) ? g->runs : g->n);
+  } else {
+    report_format_first(buf, n, &g->first[c - FIXED_COLUMNS - measures], g->n);
   }
-  else
-    report_format_first(buf, n, &g->first[c - FIXED_COLUMNS - REPORT_MEASURES], g->n);
 }
 
 static int summary_pages(pdf *p, const report *r) {
   cairo_t *cr = p->cr;
-  int cols = FIXED_COLUMNS + REPORT_MEASURES + r->nzones;
+  int cols = FIXED_COLUMNS + report_measures_shown(r) + r->nzones;
   double *width = calloc((size_t)cols, sizeof *width);
   if (!width) return SERVER_ENOMEM;
   char cell[400];
@@ -123,6 +124,15 @@ static int summary_pages(pdf *p, const report *r) {
                r->nruns, r->nruns == 1 ? "" : "s");
       text_at(cr, MARGIN, y + 4, cell);
       y += 18;
+      if (r->shade) {
+        snprintf(cell, sizeof cell, "Tree shade, ground: per run, the mean hours of sun its trees "
+                 "take from the ground on %02d-%02d, %02d:%02d to %02d:%02d, every %d minutes.",
+                 r->shade_day.month, r->shade_day.day, r->shade_day.from / 60,
+                 r->shade_day.from % 60, r->shade_day.to / 60, r->shade_day.to % 60,
+                 r->shade_day.step);
+        text_at(cr, MARGIN, y + 4, cell);
+        y += 14;
+      }
       if (!r->ngroups) text_at(cr, MARGIN, y + 12, "No run has reached any of the reported years.");
     }
     if (r->ngroups) {

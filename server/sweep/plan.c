@@ -353,6 +353,65 @@ static int load_scenario(sweep_plan *p, const cJSON *v, const char *path, char *
   return 0;
 }
 
+/* One "HH:MM" member of the shade object into *minutes; absent leaves it. */
+static int shade_time(const cJSON *shade, const char *key, int *minutes, char *err, size_t n) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(shade, key);
+  if (!v) return 0;
+  char why[256];
+  if (!cJSON_IsString(v))
+    return failf(err, n, "/shade/%s: a time \"HH:MM\" from 00:00 to 24:00", key);
+  if (shade_parse_time(v->valuestring, minutes, why, sizeof why))
+    return failf(err, n, "/shade/%s: %s", key, why);
+  return 0;
+}
+
+int sweep_plan_shade(const cJSON *plan, bool *present, shade_day *day, char *err, size_t n) {
+  const cJSON *shade = cJSON_GetObjectItemCaseSensitive(plan, "shade");
+  *present = false;
+  if (!shade) return 0;
+  if (!cJSON_IsObject(shade))
+    return failf(err, n, "/shade: an object {\"date\": \"MM-DD\", \"from\": \"HH:MM\", "
+                         "\"to\": \"HH:MM\", \"step\": minutes}");
+  const cJSON *dup = duplicate_key(shade);
+  if (dup) return fail_duplicate("/shade", dup, err, n);
+  const cJSON *v;
+  cJSON_ArrayForEach(v, shade) {
+    if (strcmp(v->string, "date") && strcmp(v->string, "from") && strcmp(v->string, "to") &&
+        strcmp(v->string, "step")) {
+      char tok[512];
+      pointer_token(v->string, tok, sizeof tok);
+      return failf(err, n, "/shade/%s: unknown key (shade has date, from, to and step)", tok);
+    }
+  }
+  shade_day d = shade_default_day();
+  d.year = 0;
+  char why[256];
+  v = cJSON_GetObjectItemCaseSensitive(shade, "date");
+  if (!v) return failf(err, n, "/shade/date: missing (the day, \"MM-DD\")");
+  if (!cJSON_IsString(v)) return failf(err, n, "/shade/date: a date \"MM-DD\"");
+  if (shade_parse_date(v->valuestring, &d.month, &d.day, why, sizeof why))
+    return failf(err, n, "/shade/date: %s", why);
+  if (shade_time(shade, "from", &d.from, err, n) || shade_time(shade, "to", &d.to, err, n))
+    return -1;
+  v = cJSON_GetObjectItemCaseSensitive(shade, "step");
+  if (v) {
+    double m = cJSON_IsNumber(v) ? v->valuedouble : 0.0;
+    if (!(m >= 1.0 && m <= SHADE_DAY_MINUTES && m == floor(m)))
+      return failf(err, n, "/shade/step: minutes between samples, an integer from 1 to %d",
+                   SHADE_DAY_MINUTES);
+    d.step = (int)m;
+  }
+  if (d.from >= d.to)
+    return failf(err, n, "/shade/from: %02d:%02d is not before /shade/to %02d:%02d", d.from / 60,
+                 d.from % 60, d.to / 60, d.to % 60);
+  /* the site is each run's own; any valid one lets shade_check judge the day */
+  shade_site site = {.latitude = 0.0, .north = {0.0, 1.0}};
+  if (shade_check(&site, &d, why, sizeof why)) return failf(err, n, "/shade: %s", why);
+  *day = d;
+  *present = true;
+  return 0;
+}
+
 /* Refuses a plan of too many runs before its values are checked: checking builds a
  * world for each species and variant, seconds for a plan of a hundred variants,
  * and the count needs only the axes' sizes. An axis of the wrong shape counts one
@@ -385,10 +444,12 @@ static int parse_plan(sweep_plan *p, cJSON *root, const char *path, bool force, 
   cJSON *v;
   cJSON_ArrayForEach(v, root) {
     if (strcmp(v->string, "format") && strcmp(v->string, "name") &&
-        strcmp(v->string, "scenario") && strcmp(v->string, "axes")) {
+        strcmp(v->string, "scenario") && strcmp(v->string, "axes") &&
+        strcmp(v->string, "shade")) {
       char tok[512];
       pointer_token(v->string, tok, sizeof tok);
-      return failf(err, n, "/%s: unknown key (a plan has format, name, scenario and axes)", tok);
+      return failf(err, n, "/%s: unknown key (a plan has format, name, scenario, axes and "
+                           "shade)", tok);
     }
   }
   v = cJSON_GetObjectItemCaseSensitive(root, "format");
@@ -398,6 +459,7 @@ static int parse_plan(sweep_plan *p, cJSON *root, const char *path, bool force, 
   if (!cJSON_IsString(v) || !v->valuestring[0] || strlen(v->valuestring) > 200)
     return failf(err, n, "/name: the sweep's name, a string of 1 to 200 bytes");
   if (!(p->name = strdup(v->valuestring))) return OOM(err, n);
+  if (sweep_plan_shade(root, &p->shade, &p->shade_day, err, n)) return -1;
   v = cJSON_GetObjectItemCaseSensitive(root, "scenario");
   if (!v) return failf(err, n, "/scenario: missing (a scenario object or file)");
   if (load_scenario(p, v, path, err, n)) return -1;

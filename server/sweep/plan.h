@@ -17,6 +17,8 @@
 
 #include <cjson/cJSON.h>
 
+#include "shade.h"
+
 /** The format string a plan must carry. */
 #define SWEEP_FORMAT "sylva.sweep/1"
 /** Most runs of a plan without --force. */
@@ -56,6 +58,8 @@ typedef struct sweep_plan {
   int runs;          /**< the product of the axes' counts */
   bool base_runs;    /**< the base scenario runs as it is; not so a site without plants
                           whose variants plant it */
+  bool shade;        /**< the plan names a day for the report's tree shade hours */
+  shade_day shade_day; /**< that day (its year 0: each run's is its own) */
 } sweep_plan;
 
 /** One run of a plan. Strings malloc'd (sweep_run_free). */
@@ -65,6 +69,12 @@ typedef struct sweep_run {
   char *scenario;   /**< the run's scenario JSON */
   int value[SWEEP_MAX_AXES]; /**< per axis, the index of its value */
 } sweep_run;
+
+/** Reads the "shade" member of a plan object (docs/cli.md, "sweep"): {"date": "MM-DD",
+ *  "from": "HH:MM", "to": "HH:MM", "step": MIN}, from and to defaulting to 00:00 and
+ *  24:00, step to 10. *present false (and *day untouched) without one. 0, or -1
+ *  with err naming the JSON pointer ("/shade/date: no such date 02-30"). */
+int sweep_plan_shade(const cJSON *plan, bool *present, shade_day *day, char *err, size_t errlen);
 
 /** Parses and checks a plan (text from path; relative paths in it are against path's
  *  folder). force admits up to SWEEP_HARD_MAX_RUNS runs. 0, or -1 with err naming the

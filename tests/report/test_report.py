@@ -12,6 +12,10 @@ meson runs `python3 test_report.py SYLVA_EXE SCENARIOS_DIR PART`, PART:
   plain   a store without sweeps (a pruned street and a shrub of ten stems): no axis
           columns, a `stem` column, species by scenario key, the same checks, one
           summary group per species;
+  benefits  a sweep with a "shade" day (two species, with and without a latitude, 4
+          iterations): co2, co2_sequestered and canopy_cover equal the stats and
+          iterations tables, the shade columns `sylva shade`'s tree_shade_hours, empty
+          with one warning where the light has no latitude; the HTML's tree shade;
   errors  bad input (no --db, no such store, no such sweep, several sweeps, bad
           --years, bad -o): exit 2, a message naming it, no file written and an
           existing one untouched; years no run reached: a warning, header only.
@@ -115,8 +119,10 @@ def number(field):
     return None if field == "" else float(field)
 
 
-def check_csv(c, path, expect, axes, multi_stem):
+def check_csv(c, path, expect, axes, multi_stem, shade=False):
     header, rows = read_csv(path)
+    c.check(any(h.startswith("shade_") for h in header) == shade,
+            "shade_ columns only when the plan names a shade day", header)
     zones = [h[len("first_"):] for h in header if h.startswith("first_")]
     obstacles = [h[len("clearance_"):] for h in header if h.startswith("clearance_")]
     want_head = (["run"] + axes + ["plant"] + (["stem"] if multi_stem else [])
@@ -163,7 +169,7 @@ def check_csv(c, path, expect, axes, multi_stem):
 
 # ---- the summary, recomputed ------------------------------------------------------------
 
-def expected_groups(rows, axes, zones, years):
+def expected_groups(rows, axes, zones, years, measures=MEASURES):
     """[(axis, value, species, year, n, {measure: stat}, {zone: stat})], in the report's
     order: axes but seed, values as they first appear, species as they first appear."""
     group_axes = [a for a in axes if a != "seed"] or [None]
@@ -192,7 +198,7 @@ def expected_groups(rows, axes, zones, years):
                     for r in g:
                         if r["rid"] not in [x["rid"] for x in runs]:
                             runs.append(r)
-                    for _, key, per_run in MEASURES:
+                    for _, key, per_run in measures:
                         # a run's value counts once, not once per stem
                         vals = [r[key] for r in (runs if per_run else g) if r[key] is not None]
                         meas[key] = stat(vals) + (len(runs) if per_run else len(g),)
@@ -256,15 +262,15 @@ def close3(shown, value):
     return abs(float(shown) - value) <= 0.0005 + 1e-9
 
 
-def check_summary(c, page, groups, zones):
+def check_summary(c, page, groups, zones, measures=MEASURES, head_fixed=SUMMARY_HEAD):
     p = Tables()
     p.feed(page)
     summary = [rows for cls, rows in p.tables if cls == "summary"]
     if not c.check(len(summary) == 1, "the HTML has one summary table"):
         return p
     head, body = summary[0][0], summary[0][1:]
-    fixed = len(SUMMARY_HEAD)
-    c.check(head[:fixed] == SUMMARY_HEAD
+    fixed = len(head_fixed)
+    c.check(head[:fixed] == head_fixed
             and head[fixed:] == ["first conflict: " + z for z in zones],
             "summary header", head)
     c.check(len(body) == len(groups), "one summary line per axis value, species and year",
@@ -276,7 +282,7 @@ def check_summary(c, page, groups, zones):
                 or int(cells[4]) != n:
             bad.append((i, "keys", cells[:5], g[:5]))
             continue
-        for k, (_, key, _) in enumerate(MEASURES):
+        for k, (_, key, _) in enumerate(measures):
             cnt, med, lo, hi, n = meas[key]
             cell = cells[5 + k]
             if cnt == 0:
@@ -532,13 +538,121 @@ def part_errors(env, c):
         c.check(header[0] == "run" and rows == [], "unreached years: the header only", rows)
 
 
+SHADE = {"date": "07-21", "from": "10:00", "to": "12:00", "step": 30}
+SHADE_MEASURES = MEASURES + [("shade_ground", "shade_ground", True)]
+NO_LATITUDE = [{"op": "replace", "path": "/light", "value": {"sky": "zenith"}}]
+
+
+def shade_day_summary(env, db, run, iteration):
+    """`sylva shade`'s summary of a stored iteration on the plan's day: {surface: (cells,
+    tree_shade_hours)}."""
+    out = env.path("day.json")
+    rc, _, err = env.sylva("shade", "--db", db, "--name", run, "--iteration", iteration,
+                           "--date", SHADE["date"], "--from", SHADE["from"], "--to", SHADE["to"],
+                           "--step", SHADE["step"], "-o", out)
+    if rc != 0:
+        raise RuntimeError("shade failed (%s): %s" % (rc, err))
+    with open(out) as f:
+        return {x["surface"]: (x["cells"], x["tree_shade_hours"]) for x in json.load(f)["surfaces"]}
+
+
+def part_benefits(env, c):
+    """A sweep with a shade day: co2, co2_sequestered and canopy_cover as stored, the
+    tree shade columns as `sylva shade` gives them, empty with a warning where the
+    light has no latitude; the HTML summary's tree shade."""
+    db = env.path("benefits.db")
+    plan = {"format": "sylva.sweep/1", "name": "benefits",
+            "scenario": env.scenario("street.json"), "shade": SHADE,
+            "axes": {"species": {"street-tree": ["utdb:NoEast:PLAC", "utdb:NoEast:GIBI"]},
+                     "variants": {"as built": [], "no latitude": NO_LATITUDE}}}
+    path = env.path("benefits.json")
+    with open(path, "w") as f:
+        json.dump(plan, f)
+    rc, _, err = env.sylva("sweep", path, "--db", db, "--iterations", 4, "--jobs", 2,
+                           "--quiet-progress")
+    if rc != 0:
+        raise RuntimeError("sweep failed (%s): %s" % (rc, err))
+    con = sqlite3.connect(db)
+    stored = json.loads(con.execute("SELECT plan FROM sweeps").fetchone()[0])
+    con.close()
+    c.check(stored.get("shade") == SHADE, "the store keeps the plan's shade day", stored.get("shade"))
+
+    years = [2, 4]
+    expect = expected_rows(db, "benefits", years)
+    axes = ["species/street-tree", "variant"]
+    out = env.path("b.csv")
+    rc, err = report(env, c, "--db", db, "--years", "2,4", "-o", out)
+    c.check(rc == 0, "report of a sweep with a shade day exits 0", err)
+    lines = err.strip().splitlines()
+    c.check(len(lines) == 1 and "warning" in lines[0] and "2 of 4 runs" in lines[0]
+            and "no light.latitude" in lines[0] and "no latitude" in lines[0],
+            "one warning line names the runs without a latitude", err)
+    header, rows, zones = check_csv(c, out, expect, axes, False, shade=True)
+    cols = ["shade_ground", "shade_facade-south", "shade_facade-north", "shade_awning"]
+    at = header.index("canopy_cover") + 1
+    c.check(header[at:at + len(cols)] == cols and not any(
+        h.startswith("shade_") for h in header[at + len(cols):]),
+        "shade_ground and a shade_ column per solid obstacle after canopy_cover", header)
+    shade = {}  # (run, year) -> the shade fields
+    bad = []
+    for r in rows:
+        f = dict(zip(header, r))
+        key = (f["run"], int(f["year"]))
+        got = [f[h] for h in cols]
+        if shade.setdefault(key, got) != got:
+            bad.append(("not the same on every stem", key))
+        if (f["variant"] == "no latitude") != (got == [""] * len(cols)):
+            bad.append(("empty exactly without a latitude", key, got))
+    c.check(not bad, "run-level shade values, empty exactly where the light has no latitude",
+            bad[:5])
+    c.check(len(shade) == 4 * 2, "every run reached years 2 and 4", sorted(shade))
+    # the binary's own `sylva shade` of the same iterations
+    start = expect[0]["year"] - expect[0]["iteration"]
+    bad = []
+    for (run, year), got in sorted(shade.items()):
+        if "no latitude" in run:
+            continue
+        day = shade_day_summary(env, db, run, year - start)
+        want = [day["ground"][1]]
+        for o in cols[1:]:
+            faces = [v for k, v in day.items() if k.rsplit(":", 1)[0] == o[len("shade_"):]]
+            cells = sum(n for n, _ in faces)
+            want.append(sum(n * h for n, h in faces) / cells)
+        # the summary prints 4 decimals: the ground within its rounding, an
+        # obstacle's mean of rounded faces within it too
+        if any(abs(float(g) - w) > 0.00005 + 1e-9 for g, w in zip(got, want)):
+            bad.append((run, year, got, want))
+    c.check(not bad, "shade columns equal `sylva shade`'s tree_shade_hours (4 runs x years)",
+            bad[:4])
+    c.check(any(float(v[0]) > 0 for v in shade.values() if v[0]),
+            "the trees shade the ground by year 4")
+
+    rc, err = report(env, c, "--db", db, "--years", "2,4", "-o", env.path("b2.csv"))
+    with open(out, "rb") as f1, open(env.path("b2.csv"), "rb") as f2:
+        c.check(rc == 0 and f1.read() == f2.read(), "the same store gives the same bytes")
+
+    for e in expect:
+        v = shade[(e["run"], e["year"])][0]
+        e["shade_ground"] = float(v) if v else None
+    groups = expected_groups(expect, axes, zones, years, SHADE_MEASURES)
+    page = env.path("b.html")
+    rc, err = report(env, c, "--db", db, "--years", "2,4", "-o", page)
+    c.check(rc == 0, "HTML with a shade day exits 0", err)
+    with open(page, encoding="utf-8") as f:
+        text = f.read()
+    check_summary(c, text, groups, zones, SHADE_MEASURES,
+                  SUMMARY_HEAD + ["tree shade, ground (h)"])
+    c.check("on 07-21 from 10:00 to 12:00 (samples every 30 minutes" in text,
+            "the page names the shade day")
+
+
 def main():
     env = Env(sys.argv[:3])
     part = sys.argv[3] if len(sys.argv) > 3 else "sweep"
     c = Checks()
     try:
         {"sweep": part_sweep, "ready": part_ready, "plain": part_plain,
-         "errors": part_errors}[part](env, c)
+         "errors": part_errors, "benefits": part_benefits}[part](env, c)
     finally:
         env.cleanup()
     c.finish()

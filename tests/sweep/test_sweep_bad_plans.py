@@ -1,6 +1,6 @@
 """`sylva sweep` refuses bad plans before it runs anything (issue 22): each case exits 2,
 names the JSON pointer of what is wrong on stderr, and neither creates the --db file
-nor changes one that is there. The plans are over scenarios/street.json (species key
+nor changes one that is there (bad "shade" days included). The plans are over scenarios/street.json (species key
 street-tree, 6 obstacles, the awning at index 2).
 Usage: test_sweep_bad_plans.py SYLVA"""
 import hashlib
@@ -90,6 +90,23 @@ CASES = {
                          ['/scenario:']),
     'site without plants, no variants': (plan({'seed': [1]}, scenario=SITE), [],
                                          ['/scenario:', '/plants: required']),
+    'shade date not a date': (plan({'seed': [1]}, shade={'date': '02-30', 'from': '10:00',
+                                                          'to': '16:00'}), [],
+                              ['/shade/date:', '02-30']),
+    'shade time not HH:MM': (plan({'seed': [1]}, shade={'date': '07-21', 'from': '10:61'}), [],
+                             ['/shade/from:', '10:61']),
+    'shade from after to': (plan({'seed': [1]}, shade={'date': '07-21', 'from': '16:00',
+                                                        'to': '10:00'}), [],
+                            ['/shade/from:', '16:00 is not before /shade/to 10:00']),
+    'shade step 0': (plan({'seed': [1]}, shade={'date': '07-21', 'step': 0}), [],
+                     ['/shade/step:', 'an integer from 1 to 1440']),
+    'shade step a fraction': (plan({'seed': [1]}, shade={'date': '07-21', 'step': 7.5}), [],
+                              ['/shade/step:']),
+    'shade without a date': (plan({'seed': [1]}, shade={'from': '10:00'}), [],
+                             ['/shade/date:', 'missing']),
+    'shade unknown key': (plan({'seed': [1]}, shade={'date': '07-21', 'hour': 3}), [],
+                          ['/shade/hour:', 'unknown key']),
+    'shade not an object': (plan({'seed': [1]}, shade='07-21'), [], ['/shade:', 'an object']),
     'site without plants, a variant without': (
         plan({'variants': {'bare': [], 'planted': PLANT}}, scenario=SITE), [],
         ['/axes/variants/bare:', '/plants: required']),
