@@ -3,7 +3,8 @@
  * then written as CSV (report_csv.c), HTML (report_html.c) or PDF (report_pdf.c):
  *
  *   rows      one per run, stem and reported year: the stats row of that stem at
- *             iteration = year, with the pruned nodes summed up to it;
+ *             iteration = year, with the pruned nodes summed up to it (and its
+ *             run's tree shade that year, with a shade day);
  *   summary   per axis value (seeds pooled) and species, at each reported year: the
  *             median and range of height, dbh, crown diameter and crown height, and
  *             of the first conflict year with each clearance zone;
@@ -11,7 +12,8 @@
  *   finals    each stem's last stored stats row, for the first-conflict chart.
  *
  * Every number a report shows is a stored stats value, or a median, minimum or
- * maximum of such values; nothing is re-measured. Functions that can fail return
+ * maximum of such values; nothing is re-measured but the tree shade of a plan's
+ * shade day (shade.h, on the stored iterations regrown). Functions that can fail return
  * SERVER_OK or a negative server_error (server_error.h) with err naming what and
  * where. */
 #ifndef SYLVA_SERVER_REPORT_H
