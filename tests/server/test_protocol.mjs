@@ -398,11 +398,11 @@ test('zones and pruning: stats carry pruned, zones and clearance as stored; prun
     const csv = (await (await fetch(`${d.http}/api/runs/${encodeURIComponent('street "a"')}/stats.csv`)).text())
       .trim().split('\n');
     // the leaf area follows the conflicts, and street.json's planes grow in years:
-    // their four columns come last
-    const years = /,age,year,crown_diameter,crown_height$/.test(csv[0]);
-    assert.match(csv[0], years ? /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height$/
-      : /,pruned,zones,clearance,leaf_area$/);
-    const tail = new RegExp(`,([^,]*)(,[^,]*){${years ? 4 : 0}}$`);
+    // their four columns come next, then the eight of what the trees give
+    const years = /,age,year,crown_diameter,crown_height,crown_area,/.test(csv[0]);
+    assert.match(csv[0], years ? /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/
+      : /,pruned,zones,clearance,leaf_area,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/);
+    const tail = new RegExp(`,([^,]*)(,[^,]*){${years ? 12 : 8}}$`);
     const lastRows = csv.slice(1).filter((r) => r.startsWith('9,'));
     assert.equal(lastRows.length, last.length);
     assert.ok(last.every((st) => st.leaf_area > 0), 'every stem has leaves');
@@ -532,7 +532,7 @@ test('years: start year, ages and crown measures in snapshots, deltas, status, s
   assert.ok(lane && lane.first > 2027 && lane.first <= 2035, `the old tree entered the lane: ${JSON.stringify(last[1].zones)}`);
   // stats.csv: the CLI's stored run exports the same bytes
   const csv = await (await fetch(`${d.http}/api/runs/years/stats.csv`)).text();
-  assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height$/);
+  assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/);
   assert.equal(csv, exportBytes(join(d.dir, 'cli.db'), 'Trees in years', 'csv').toString());
   // /metrics: the run's year and each aged plant's age
   let metrics = await (await fetch(`${d.http}/metrics`)).text();
@@ -619,7 +619,7 @@ test('years: a run without a start year or years carries none of their fields', 
     for (const key of ['age', 'crown_diameter', 'crown_height']) assert.equal(key in delta.stats[0], false, key);
     await c.type('delta', 60000);
     const csv = await (await fetch(`${d.http}/api/runs/plain/stats.csv`)).text();
-    assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area$/);
+    assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/);
     const metrics = await (await fetch(`${d.http}/metrics`)).text();
     assert.doesNotMatch(metrics, /^sylva_run_year\{/m);
     assert.doesNotMatch(metrics, /^sylva_plant_age\{/m);

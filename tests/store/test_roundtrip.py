@@ -210,6 +210,8 @@ def street_exports(env, c):
 
 
 YEARS_COLUMNS = ["age", "year", "crown_diameter", "crown_height"]
+GIVE_COLUMNS = ["crown_area", "wood_volume", "biomass", "biomass_model", "carbon", "co2",
+                "co2_sequestered", "canopy_cover"]
 
 
 def years(env, c):
@@ -233,12 +235,13 @@ def years(env, c):
     if not c.check(rc == 0 and data is not None, "years: export --format csv", err):
         return
     records = list(csv.reader(io.StringIO(data.decode())))
-    c.check(records[0] == HEADER.split(",") + YEARS_COLUMNS, "years: the CSV header", records[0])
+    c.check(records[0] == HEADER.split(",") + YEARS_COLUMNS + GIVE_COLUMNS, "years: the CSV header",
+            records[0])
     text = lambda v: "" if v is None else str(v)  # noqa: E731
     want = [[text(s["age"]), str(o["year"]), text(s["crown_diameter"]), text(s["crown_height"])]
             for o in objs for s in o["stems"]]
     # the lines print lengths with at most 4 decimals, as the CSV does
-    got = [r[16:] for r in records[1:]]
+    got = [r[16:20] for r in records[1:]]
     c.check(got == want, "years: the CSV's years columns equal the lines'",
             "\n".join("%r != %r" % (g, w) for g, w in zip(got, want) if g != w)[:2000])
     c.check(query(db, "SELECT start_year FROM runs") == [(2027,)], "years: runs.start_year")
@@ -329,9 +332,9 @@ def check_csv(env, c, db, name, lines, stems):
     c.check(text.endswith("\n") and "\r" not in text, "CSV lines end with \\n")
     rows = text.splitlines()
     # a run in years (street.json's planes) carries the years columns after the rest
-    in_years = rows[0] == ",".join([HEADER] + YEARS_COLUMNS)
-    width = 16 + (len(YEARS_COLUMNS) if in_years else 0)
-    c.check(rows[0] == HEADER or in_years, "CSV header", rows[0])
+    in_years = rows[0] == ",".join([HEADER] + YEARS_COLUMNS + GIVE_COLUMNS)
+    width = 16 + (len(YEARS_COLUMNS) if in_years else 0) + len(GIVE_COLUMNS)
+    c.check(rows[0] == ",".join([HEADER] + GIVE_COLUMNS) or in_years, "CSV header", rows[0])
     c.check(sum(1 for r in rows if r.startswith("iteration,")) == 1, "exactly one header line")
     records = list(csv.reader(io.StringIO("\n".join(rows[1:]))))
     c.check(len(records) == stems * ITERATIONS,
@@ -340,7 +343,7 @@ def check_csv(env, c, db, name, lines, stems):
     for line in lines[:-1]:
         obj = json.loads(line)
         for s in obj["stems"]:
-            expected.append((obj["iteration"], s))
+            expected.append((obj["iteration"], dict(s, canopy_cover=obj["canopy_cover"])))
     mismatches = []
     for i, ((it, s), rec) in enumerate(zip(expected, records)):
         if len(rec) != width:
@@ -355,12 +358,15 @@ def check_csv(env, c, db, name, lines, stems):
                 s["crown_base"], s["nodes"], s["shed"], s["light"], s["cap"],
                 "true" if s["finished"] else "false", s.get("pruned"), s.get("zones"),
                 s.get("clearance"), s["leaf_area"])
+        # what the trees give, last: as the line gives it, empty where it leaves it out
+        got += tuple(num(v) for v in rec[-len(GIVE_COLUMNS):])
+        want += tuple(s.get(k) for k in GIVE_COLUMNS)
         if got != want:
             mismatches.append("row %d: %r != %r" % (i + 1, got, want))
     c.check(len(expected) == len(records) and not mismatches,
             "every CSV row equals the stats line of its iteration and stem "
             "(height, dbh, crown, nodes, shed, light, cap, finished, pruned, zones, clearance, "
-            "leaf_area)",
+            "leaf_area, crown_area, wood_volume, the carbon, canopy_cover)",
             "\n".join(mismatches[:10]))
     # the store keeps the measured double; the lines and the CSV print it to 4 decimals
     stored = [round(v, 4) if v is not None else None for (v,) in query(
