@@ -13,6 +13,7 @@ import { ControlsPanel } from './controls.mjs';
 import { EditTools } from './edit.mjs';
 import { Timeline } from './timeline.mjs';
 import { LightPanel } from './light.mjs';
+import { ShadePanel } from './shade.mjs';
 import { ConflictsPanel } from './conflicts.mjs';
 import { CompareView } from './compare.mjs';
 import { countInZones, zonesOf } from './zones.mjs';
@@ -60,6 +61,7 @@ const controls = new ControlsPanel({ session, watch, onStatus: handlers.status, 
 const edit = new EditTools({ session, watch, view });
 const timeline = new Timeline({ session, watch });
 const light = new LightPanel({ session, watch, view });
+const shade = new ShadePanel({ session, watch, view });
 const conflicts = new ConflictsPanel({ watch, timeline });
 
 for (const b of document.querySelectorAll('[data-view]')) b.onclick = () => view.setView(b.dataset.view);
@@ -84,19 +86,24 @@ function changed(what) {
     controls.switched();
     light.hide();
     light.render();
+    shade.clear();
+    shade.render();
     edit.render();
     conflicts.render();
   } else if (what === 'snapshot') {
     timeline.reset();
     edit.speciesOptions();
     light.render();
+    shade.refresh();
   } else if (what === 'live') {
     timeline.liveChanged();
     controls.render();
     controls.renderExports();
     edit.render();
     conflicts.render();
+    shade.refresh();
   } else if (what === 'shown') {
+    shade.refresh();
     timeline.render();
     controls.renderExports();
     edit.render();
@@ -109,6 +116,7 @@ function changed(what) {
 controls.render();
 edit.render();
 light.render();
+shade.render();
 conflicts.render();
 
 // ---- state for tests and debugging -------------------------------------------------
@@ -131,6 +139,7 @@ window.sylva = {
     plants: watch.shown().plants.map((p) => p.id),
     species: watch.live.species.slice(),
     slice: light.slice,
+    shade: shade.state(),
     drawnInstances: (view.branches.mesh?.geometry.instanceCount ?? 0) - (view.branches.sk?.deadCount ?? 0),
     leaves: view.leaves.visible,
     drawnLeaves: view.leaves.visible ? view.leaves.live : 0,
@@ -163,6 +172,8 @@ window.sylva = {
   setView: (name) => { view.setView(name); view.render(); },
   orbit: (angle) => view.orbit(angle),
   lookAt: (from, to) => { view.lookAt(from, to); view.render(); },
+  shadeAt: (x, y) => shade.groundAt(x, y),
+  shadeTexel: (x, y) => view.shadeTexel(x, y),
   setObstacleVisible: (id, on) => { view.setObstacleVisible(id, on); view.render(); },
   render: () => view.render(),
   compare: () => compare.state(),

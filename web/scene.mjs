@@ -44,6 +44,20 @@ function skyTexture() {
 const GROUND_ORDER = -2;
 const SEE_THROUGH_ORDER = -1;
 
+// A see-through mesh of a geometry (MeshBasicMaterial options, with an opacity):
+// blended over what is behind it, but
+// drawn among the opaque things, after the ground and before the branches and
+// leaves, without writing depth, so that a tree behind a facade keeps its own
+// colours. (Drawn after them as a transparent thing, a box's tint took the leaves'
+// green: the street's south crowns seen from the south looked leafless.) The
+// canvas stays opaque: its alpha is not blended down.
+function seeThrough(geometry, options) {
+  const mesh = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ ...options, depthWrite: false,
+    transparent: false, blending: THREE.CustomBlending, blendSrcAlpha: THREE.ZeroFactor, blendDstAlpha: THREE.OneFactor }));
+  mesh.renderOrder = SEE_THROUGH_ORDER;
+  return mesh;
+}
+
 // One colour per plant (by its index in the snapshot), shared with the plots.
 export const PALETTE = ['#2e8b3a', '#c46a1b', '#2f6fb3', '#b8326e', '#7d5bb5', '#1a9a8f', '#a08a12',
   '#d04a3a', '#4f7d1f', '#8a4b2a', '#3d8fd1', '#c27bb0'];
@@ -205,9 +219,8 @@ function label(text, size = 0.35) {
   return s;
 }
 
-// Colour map for light 0..1: deep blue shade through green to yellow sun.
-export function lightColor(v) {
-  const stops = [[0, [20, 30, 90]], [0.35, [40, 110, 160]], [0.65, [90, 180, 90]], [1, [250, 230, 80]]];
+// The colour of v (0..1) on a ramp of [position, [r, g, b]] stops.
+function rampColor(stops, v) {
   for (let i = 1; i < stops.length; i++) {
     if (v <= stops[i][0]) {
       const [a, ca] = stops[i - 1], [b, cb] = stops[i];
@@ -217,6 +230,39 @@ export function lightColor(v) {
   }
   return stops[stops.length - 1][1];
 }
+
+// Colour map for light 0..1: deep blue shade through green to yellow sun.
+const LIGHT_STOPS = [[0, [20, 30, 90]], [0.35, [40, 110, 160]], [0.65, [90, 180, 90]], [1, [250, 230, 80]]];
+export const lightColor = (v) => rampColor(LIGHT_STOPS, v);
+
+// Colour map for tree shade 0..1 (of the shade layer's scale): pale sand where the
+// trees take no sun, through sky blue to deep violet where they take the most.
+const SHADE_STOPS = [[0, [242, 236, 214]], [0.25, [170, 196, 232]], [0.6, [86, 104, 200]], [1, [52, 26, 120]]];
+export const shadeColor = (v) => rampColor(SHADE_STOPS, v);
+
+// A DataTexture of nu x nv values (u fastest, rows from the bottom), each coloured
+// by shadeColor(value / scale).
+function shadeTexture(values, nu, nv, scale) {
+  const rgba = new Uint8Array(nu * nv * 4);
+  for (let i = 0; i < nu * nv; i++) {
+    const [r, g, b] = shadeColor(Math.min(1, values[i] / scale));
+    rgba.set([r, g, b, 255], i * 4);
+  }
+  const tex = new THREE.DataTexture(rgba, nu, nv, THREE.RGBAFormat);
+  tex.colorSpace = THREE.SRGBColorSpace;
+  tex.magFilter = THREE.NearestFilter;
+  tex.needsUpdate = true;
+  return tex;
+}
+
+// How a face of the shade layer lies: the axes of its texture (u along the face,
+// v up) and its outward normal, by the face's name.
+const FACE_AXES = {
+  '+x': [[0, 1, 0], [0, 0, 1], [1, 0, 0]], '-x': [[0, 1, 0], [0, 0, 1], [-1, 0, 0]],
+  '+y': [[1, 0, 0], [0, 0, 1], [0, 1, 0]], '-y': [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
+};
+// How far the layer's quads stand off the ground and the faces, m.
+const SHADE_LIFT = 0.01;
 
 export class View {
   constructor(container) {
@@ -273,6 +319,8 @@ export class View {
     this.ground = null;
     this.obstacleKey = '';
     this.slice = null;
+    this.shadeGroup = new THREE.Group();   // the shade layer: 'shade:ground', 'shade:OBSTACLE:FACE'
+    this.scene.add(this.shadeGroup);
     this.dirty = true;
     this.frames = 0;
     this.renderMs = [];
@@ -463,17 +511,7 @@ export class View {
       const zone = isZone(o);
       const size = [0, 1, 2].map((i) => Math.max(o.max[i] - o.min[i], 1e-3));
       const geo = new THREE.BoxGeometry(...size);
-      // Blended over what is behind it, but drawn among the opaque things, before
-      // the branches and leaves (SEE_THROUGH_ORDER) and without writing depth: a tree
-      // behind a facade keeps its own colours. Drawn after them as a transparent
-      // thing, the box's tint took the leaves' green (the street's south crowns seen
-      // from the south looked leafless).
-      const box = new THREE.Mesh(geo, new THREE.MeshBasicMaterial({
-        color: zone ? ZONE_COLOR : 0x8c7b6b, opacity: zone ? 0.25 : 0.35, depthWrite: false,
-        transparent: false, blending: THREE.CustomBlending,
-        // (the canvas stays opaque: its alpha is not blended down)
-        blendSrcAlpha: THREE.ZeroFactor, blendDstAlpha: THREE.OneFactor }));
-      box.renderOrder = SEE_THROUGH_ORDER;
+      const box = seeThrough(geo, { color: zone ? ZONE_COLOR : 0x8c7b6b, opacity: zone ? 0.25 : 0.35 });
       box.position.set(...[0, 1, 2].map((i) => (o.min[i] + o.max[i]) / 2));
       box.name = `${zone ? 'zone' : 'obstacle'}:${o.id}`;
       const edges = new THREE.LineSegments(new THREE.EdgesGeometry(geo),
@@ -561,6 +599,54 @@ export class View {
     const v = new THREE.Vector3(x, y, z).project(this.camera);
     const el = this.renderer.domElement;
     return [(v.x + 1) / 2 * el.clientWidth, (1 - v.y) / 2 * el.clientHeight];
+  }
+
+  // The shade layer (the daemon's /shade JSON): the ground's cells as a texture on
+  // a plane just above the ground, drawn with the ground (before the see-through
+  // boxes and the trees), and each face's cells as a texture on a quad just off
+  // the face, blended like the boxes; colours by shadeColor(value / scale). null
+  // takes it away.
+  setShade(data, scale = 1) {
+    for (const m of this.shadeGroup.children) {
+      m.geometry.dispose();
+      m.material.map.dispose();
+      m.material.dispose();
+    }
+    this.shadeGroup.clear();
+    if (data) {
+      const v = data.voxel;
+      const ground = new THREE.Mesh(new THREE.PlaneGeometry(data.nx * v, data.ny * v),
+        new THREE.MeshBasicMaterial({ map: shadeTexture(data.ground, data.nx, data.ny, scale), side: THREE.DoubleSide }));
+      ground.position.set(data.origin[0] + data.nx * v / 2, data.origin[1] + data.ny * v / 2, data.origin[2] + SHADE_LIFT);
+      ground.name = 'shade:ground';
+      ground.renderOrder = GROUND_ORDER;
+      this.shadeGroup.add(ground);
+      for (const f of data.faces) {
+        const [u, up, n] = FACE_AXES[f.face].map((a) => new THREE.Vector3(...a));
+        const quad = seeThrough(new THREE.PlaneGeometry(f.nu * v, f.nz * v),
+          { map: shadeTexture(f.added, f.nu, f.nz, scale), side: THREE.DoubleSide, opacity: 0.8 });
+        // (the plane's own normal is u x up, which is -n on two of the faces: it is
+        // drawn from both sides)
+        quad.quaternion.setFromRotationMatrix(new THREE.Matrix4().makeBasis(u, up, new THREE.Vector3().crossVectors(u, up)));
+        const c = new THREE.Vector3(...f.first).addScaledVector(u, (f.nu - 1) * v / 2)
+          .addScaledVector(up, (f.nz - 1) * v / 2).addScaledVector(n, SHADE_LIFT);
+        quad.position.copy(c);
+        quad.name = `shade:${f.obstacle}:${f.face}`;
+        this.shadeGroup.add(quad);
+      }
+    }
+    this.invalidate();
+  }
+
+  // The colour [r, g, b] of the shade layer's ground texture at (x, y), or null.
+  shadeTexel(x, y) {
+    const g = this.shadeGroup.getObjectByName('shade:ground');
+    if (!g) return null;
+    const { data, width, height } = g.material.map.image, p = g.geometry.parameters;
+    const i = Math.floor((x - g.position.x + p.width / 2) / p.width * width);
+    const j = Math.floor((y - g.position.y + p.height / 2) / p.height * height);
+    if (i < 0 || j < 0 || i >= width || j >= height) return null;
+    return Array.from(data.slice((i + width * j) * 4, (i + width * j) * 4 + 3));
   }
 
   // A light slice as a heat map plane at its height; null hides it.

@@ -2,6 +2,7 @@
 // the viewer's tests. Every console error and page error is collected.
 import http from 'node:http';
 import { chromium } from 'playwright-core';
+import { SLOW, connect } from '../server/harness.mjs';
 
 const CHROMIUM = process.env.SYLVA_CHROMIUM || '/usr/bin/chromium';
 
@@ -25,6 +26,19 @@ export async function openViewer(browser, http, { width = 1280, height = 860, ha
   await page.goto(`${http}/${hash}`);
   await page.waitForFunction(() => window.sylva?.state().connection === 'open');
   return { page, errors };
+}
+
+// Creates a run of a scenario over the protocol, growing (start) or not, and
+// selects it in the page; resolves with its id once the page holds its snapshot.
+export async function createAndWatch(d, page, doc, name, { start = false } = {}) {
+  const c = await connect(d.url);
+  c.send({ type: 'create', scenario: doc, name, start, id: 'c' });
+  const { run } = await c.type('created');
+  c.close();
+  await page.waitForSelector(`#runs tr[data-run="${run}"]`, { timeout: 10000 * SLOW });
+  await page.click(`#runs tr[data-run="${run}"]`);
+  await until(page, (s) => s.run === run && s.seq >= 0, 'the selected run');
+  return run;
 }
 
 export const state = (page) => page.evaluate(() => window.sylva.state());

@@ -6,7 +6,7 @@ import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
 import { ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, cleanup, serverSnapshot } from '../server/harness.mjs';
-import { launch, openViewer, until, treePixels, pixels, countWhere } from './browser.mjs';
+import { launch, openViewer, until, treePixels, pixels, countWhere, createAndWatch } from './browser.mjs';
 
 const WEB = ['--web', join(ROOT, 'web')];
 const LEAF = '#d0208c';   // a leaf colour that no branch, ground or sky has
@@ -142,12 +142,7 @@ test('leaves behind a see-through facade keep their colour: the street from the 
   const d = await startDaemon({ args: WEB });
   try {
     const { page, errors } = await openViewer(browser, d.http);
-    const c = await connect(d.url);
-    c.send({ type: 'create', scenario: scenario('street.json', { iterations: 8 }), name: 'street', start: true, id: 'c' });
-    const { run } = await c.type('created');
-    c.close();
-    await page.waitForSelector(`#runs tr[data-run="${run}"]`, { timeout: 10000 * SLOW });
-    await page.click(`#runs tr[data-run="${run}"]`);
+    const run = await createAndWatch(d, page, scenario('street.json', { iterations: 8 }), 'street', { start: true });
     await until(page, (x) => x.run === run && x.status === 'finished' && x.drawnLeaves > 1000 && !x.leafPending,
       'the street grown, its leaves drawn', 120000 * SLOW);
     // south of the south facade (y -8 to -7, 12 m high), looking north: it stands in

@@ -8,7 +8,7 @@ import {
   SYLVA, ROOT, SLOW, startDaemon, stopDaemon, connect, scenario, exportSkeleton, plantsJSON, cleanup, tempDir,
   serverSnapshot,
 } from '../server/harness.mjs';
-import { launch, openViewer, state, until, treePixels, httpGet } from './browser.mjs';
+import { launch, openViewer, state, until, treePixels, httpGet, createAndWatch } from './browser.mjs';
 
 const WEB = ['--web', join(ROOT, 'web')];
 let browser;
@@ -118,17 +118,9 @@ test('the wall scenario grows in the page: internodes, pixels, plots, memory', a
   }
 });
 
-// Creates a run over the protocol and selects it in the page.
-async function runInPage(d, page, file, { name, start, overrides = {} }) {
-  const c = await connect(d.url);
-  c.send({ type: 'create', scenario: scenario(file, overrides), name, start, id: 'c' });
-  const { run } = await c.type('created');
-  c.close();
-  await page.waitForSelector(`#runs tr[data-run="${run}"]`, { timeout: 10000 * SLOW });
-  await page.click(`#runs tr[data-run="${run}"]`);
-  await until(page, (s) => s.run === run && s.seq >= 0, 'the selected run');
-  return run;
-}
+// Creates a run of a scenario file over the protocol and selects it in the page.
+const runInPage = (d, page, file, { name, start, overrides = {} }) =>
+  createAndWatch(d, page, scenario(file, overrides), name, { start });
 
 test('controls, a wall and a tree between iterations, the timeline, light and exports', async () => {
   const d = await startDaemon({ args: WEB });
