@@ -148,18 +148,13 @@ static int parse_args(int argc, char **argv, shade_args *a) {
 
 /* The site of a scenario's light; exit 2 without a latitude. */
 static int site_of(const char *where, const sylva_scenario *s, shade_site *site) {
-  if (!s->light.site) {
+  if (!shade_site_of(s, site)) {
     fprintf(stderr,
             "sylva: %s: the sun needs the site's latitude: the scenario's light has no "
             "\"latitude\" (light.latitude, with \"sky\": \"site\"; docs/scenario.md)\n",
             where);
     return CLI_EXIT_USAGE;
   }
-  *site = (shade_site){.latitude = s->light.sky.latitude,
-                       .north = {s->light.sky.north[0], s->light.sky.north[1]},
-                       .clock = s->light.clock,
-                       .longitude = s->light.longitude,
-                       .utc_offset = s->light.utc_offset};
   return CLI_EXIT_OK;
 }
 

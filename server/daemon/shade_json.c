@@ -41,16 +41,10 @@ static int site_of_run(store *st, int64_t run, shade_site *site, char *err, size
   free(json);
   if (rc) return server_fail(err, errlen, SERVER_EFAIL, "the run's stored scenario: %s", why);
   rc = SERVER_OK;
-  if (!s->light.site)
+  if (!shade_site_of(s, site))
     rc = server_fail(err, errlen, SERVER_EINPUT,
                      "run: its light has no site (light.latitude, with \"sky\": \"site\"): "
                      "the sun's hours need a latitude");
-  else
-    *site = (shade_site){.latitude = s->light.sky.latitude,
-                         .north = {s->light.sky.north[0], s->light.sky.north[1]},
-                         .clock = s->light.clock,
-                         .longitude = s->light.longitude,
-                         .utc_offset = s->light.utc_offset};
   sylva_scenario_free(s);
   return rc;
 }

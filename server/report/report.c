@@ -569,17 +569,6 @@ static int shade_at(gather *g, const sylva_world *w, const shade_site *site, int
   return SERVER_OK;
 }
 
-/* The site of a scenario's light (as `sylva shade` takes it); false without a
- * latitude. */
-static bool site_of(const sylva_scenario *s, shade_site *site) {
-  if (!s->light.site) return false;
-  *site = (shade_site){.latitude = s->light.sky.latitude,
-                       .north = {s->light.sky.north[0], s->light.sky.north[1]},
-                       .clock = s->light.clock, .longitude = s->light.longitude,
-                       .utc_offset = s->light.utc_offset};
-  return true;
-}
-
 /* Run idx's tree shade at every reported year it reached, once each; its rows from
  * first_row on get their ground value. */
 static int run_shade(gather *g, store *st, const store_run *sr, const cJSON *scen, int idx,
@@ -613,7 +602,7 @@ static int run_shade(gather *g, store *st, const store_run *sr, const cJSON *sce
   if (sylva_scenario_parse(sr->scenario, strlen(sr->scenario), &s, why, sizeof why))
     rc = server_fail(g->err, g->errlen, SERVER_EFAIL, "%s: run \"%s\": its stored scenario: %s",
                      r->db, sr->name, why);
-  else if (!site_of(s, &site)) {
+  else if (!shade_site_of(s, &site)) {
     if (!g->no_site++ && !(g->no_site_run = strdup(sr->name))) rc = nomem(g->err, g->errlen);
   } else {
     for (int y = 0; y < r->nyears && !rc && r->years[y] <= sr->last_iteration; y++) {

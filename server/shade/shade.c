@@ -667,3 +667,13 @@ int shade_ground_added(const shade_result *r, double *out) {
   for (size_t i = 0; i < n; i++) out[i] = r->cells[i].open - r->cells[i].with;
   return SERVER_OK;
 }
+
+bool shade_site_of(const sylva_scenario *s, shade_site *site) {
+  if (!s->light.site) return false;
+  *site = (shade_site){.latitude = s->light.sky.latitude,
+                       .north = {s->light.sky.north[0], s->light.sky.north[1]},
+                       .clock = s->light.clock,
+                       .longitude = s->light.longitude,
+                       .utc_offset = s->light.utc_offset};
+  return true;
+}

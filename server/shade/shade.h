@@ -30,6 +30,7 @@
 #include <stdio.h>
 
 #include "server_error.h"
+#include "sylva/scenario.h"
 #include "sylva/world.h"
 
 /** Extinction coefficient of a spherical leaf angle distribution (Campbell and
@@ -64,6 +65,10 @@ typedef struct shade_site {
   bool clock;
   double longitude, utc_offset;
 } shade_site;
+
+/** The site of a scenario's light (its latitude, north and clock); false when the
+ *  light is not a site's (the paper's zenith sky has no latitude): *site untouched. */
+bool shade_site_of(const sylva_scenario *s, shade_site *site);
 
 /** The day and the times sampled: from, from + step, ... < to (minutes after
  *  midnight), each sample standing for `step` minutes. */
