@@ -366,8 +366,13 @@ static double block_depth(const leaf_grid *g, double voxel, const int lo[3], con
   return depth;
 }
 
+/* An optical depth past which the leaves pass none of the sun: exp(-30) is 9e-14,
+ * below the last printed digit of a day's hours however many samples it takes. */
+#define SHADE_OPAQUE 30.0
+
 /* The share of the sun the leaves pass along o + t d: exp(-sum of kd * length)
- * over the voxels the ray crosses, inside the leaves' box only. The walk goes
+ * over the voxels the ray crosses, inside the leaves' box only (0 past an optical
+ * depth of SHADE_OPAQUE). The walk goes
  * through blocks of SHADE_BLOCK^3 voxels and into the voxels of those that hold
  * leaves: the same voxels and lengths, without stepping through empty air. */
 static double transmission(const leaf_grid *g, double voxel, const double o[3],
@@ -390,6 +395,7 @@ static double transmission(const leaf_grid *g, double voxel, const double o[3],
         hi[b] = lo[b] + SHADE_BLOCK - 1 < g->n[b] - 1 ? lo[b] + SHADE_BLOCK - 1 : g->n[b] - 1;
       }
       depth += block_depth(g, voxel, lo, hi, o, d, t, next);
+      if (depth > SHADE_OPAQUE) return 0.0; /* nothing passes: the rest is not walked */
     }
     if (k.tmax[a] >= t1) break;
     t = next;
