@@ -172,7 +172,7 @@ static int shade_world(const shade_args *a, const sylva_world *w, const shade_si
   int rc = cli_outfile_open(&o, "-o", a->out, false);
   if (rc) return rc;
   shade_result r;
-  int failed = shade_compute(w, site, day, fp, &r, err, sizeof err);
+  int failed = shade_compute_threads(w, site, day, fp, 0, &r, err, sizeof err);
   if (!failed) {
     if (a->format == SHADE_CSV) failed = shade_write_csv(o.f, &r, err, sizeof err);
     else if (a->format == SHADE_JSON) failed = shade_write_summary(o.f, &r, err, sizeof err);

@@ -543,7 +543,7 @@ static int shade_at(gather *g, const sylva_world *w, const shade_site *site, int
   day.year = run->start_year > 0 ? run->start_year + r->years[y] : shade_default_day().year;
   shade_result res;
   char why[512];
-  int rc = shade_compute(w, site, &day, NULL, &res, why, sizeof why);
+  int rc = shade_compute_threads(w, site, &day, NULL, 0, &res, why, sizeof why);
   if (rc) {
     shade_result_free(&res);
     return server_fail(g->err, g->errlen, rc, "%s: run \"%s\": the shade of iteration %d: %s",

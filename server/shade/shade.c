@@ -6,8 +6,10 @@
 #include <libnova/sidereal_time.h>
 #include <libnova/solar.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "foliage.h"
 #include "server_error.h"
@@ -594,8 +596,86 @@ void shade_obstacle_summary(const shade_result *r, int obstacle, shade_surface *
   out->share_dim = n ? dim / (double)n : 0.0;
 }
 
+/* The cells [from, to) of a day: each cell's hours summed over the samples in their
+ * order, whatever the cells the other threads take, so the sums are the same bits
+ * for any number of threads. */
+typedef struct shade_job {
+  const shade_result *r;
+  shade_cell *cells;
+  const leaf_grid *g;
+  double voxel, dt;
+  const shade_box *boxes;
+  int box_count;
+  const double (*dirs)[3]; /* the sun's directions of the samples with the sun up */
+  int dir_count;
+  size_t from, to;
+} shade_job;
+
+static void shade_cells(const shade_job *j) {
+  for (int i = 0; i < j->dir_count; i++) {
+    const double *d = j->dirs[i];
+    for (int s = 0; s < j->r->surface_count; s++) {
+      const shade_surface *sf = &j->r->surfaces[s];
+      cell_work cw = {.axis = 2, .sign = 1.0, .own = sf->obstacle};
+      if (sf->face >= 0) {
+        cw.axis = sf->face < 2 ? 0 : 1;
+        cw.sign = sf->face % 2 == 0 ? 1.0 : -1.0;
+      }
+      if (!(cw.sign * d[cw.axis] > 0.0)) continue;
+      size_t lo = sf->first > j->from ? sf->first : j->from;
+      size_t hi = sf->first + sf->count < j->to ? sf->first + sf->count : j->to;
+      for (size_t c = lo; c < hi; c++) {
+        shade_cell *cell = &j->cells[c];
+        if (blocked(j->boxes, j->box_count, cw.own, cell->p, d)) continue;
+        cell->open += j->dt;
+        cell->with += j->dt * transmission(j->g, j->voxel, cell->p, d);
+      }
+    }
+  }
+}
+
+static void *shade_thread(void *arg) {
+  shade_cells(arg);
+  return NULL;
+}
+
+/* Runs the job on `threads` threads, each a run of cells; a thread that cannot be
+ * started leaves its cells to the caller's. */
+static void shade_run(shade_job job, int threads) {
+  enum { MAX_THREADS = 64 };
+  if (threads <= 0) {
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    threads = n > 0 ? (int)n : 1;
+  }
+  if (threads > MAX_THREADS) threads = MAX_THREADS;
+  size_t n = job.to - job.from;
+  if ((size_t)threads > n / 1024 + 1) threads = (int)(n / 1024 + 1); /* not for a few cells */
+  pthread_t tid[MAX_THREADS];
+  shade_job part[MAX_THREADS];
+  bool started[MAX_THREADS] = {false};
+  for (int t = 0; t < threads; t++) {
+    part[t] = job;
+    part[t].from = job.from + n * (size_t)t / (size_t)threads;
+    part[t].to = job.from + n * (size_t)(t + 1) / (size_t)threads;
+    if (t > 0) started[t] = pthread_create(&tid[t], NULL, shade_thread, &part[t]) == 0;
+  }
+  shade_cells(&part[0]);
+  for (int t = 1; t < threads; t++) {
+    if (started[t])
+      pthread_join(tid[t], NULL);
+    else
+      shade_cells(&part[t]);
+  }
+}
+
 int shade_compute(const sylva_world *w, const shade_site *site, const shade_day *day,
                   const shade_filter *filter, shade_result *out, char *err, size_t errlen) {
+  return shade_compute_threads(w, site, day, filter, 1, out, err, errlen);
+}
+
+int shade_compute_threads(const sylva_world *w, const shade_site *site, const shade_day *day,
+                          const shade_filter *filter, int threads, shade_result *out, char *err,
+                          size_t errlen) {
   const sylva_world_def *def = sylva_world_get_def(w);
   *out = (shade_result){.voxel = def->voxel, .site = *site, .day = *day};
   memcpy(out->min, def->min, sizeof out->min);
@@ -615,6 +695,7 @@ int shade_compute(const sylva_world *w, const shade_site *site, const shade_day 
   sylva_sun *sun = malloc((size_t)count * sizeof *sun);
   shade_box *boxes = NULL;
   int box_count = 0;
+  double(*dirs)[3] = NULL;
   leaf_grid g = {.kd = NULL, .full = NULL};
   if (!hours || !sun || collect_boxes(w, &boxes, &box_count)) {
     rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the sun's samples");
@@ -629,31 +710,24 @@ int shade_compute(const sylva_world *w, const shade_site *site, const shade_day 
 
   double len = hypot(site->north[0], site->north[1]);
   double north[2] = {site->north[0] / len, site->north[1] / len};
-  double dt = day->step / 60.0;
-  for (int i = 0; i < count; i++) {
-    if (!(sun[i].elevation > 0.0)) continue;
-    double d[3];
-    sun_direction(north, sun[i].elevation, sun[i].azimuth, d);
-    for (int s = 0; s < out->surface_count; s++) {
-      const shade_surface *sf = &out->surfaces[s];
-      cell_work cw = {.axis = 2, .sign = 1.0, .own = sf->obstacle};
-      if (sf->face >= 0) {
-        cw.axis = sf->face < 2 ? 0 : 1;
-        cw.sign = sf->face % 2 == 0 ? 1.0 : -1.0;
-      }
-      if (!(cw.sign * d[cw.axis] > 0.0)) continue;
-      for (size_t c = sf->first; c < sf->first + sf->count; c++) {
-        shade_cell *cell = &out->cells[c];
-        if (blocked(boxes, box_count, cw.own, cell->p, d)) continue;
-        cell->open += dt;
-        cell->with += dt * transmission(&g, def->voxel, cell->p, d);
-      }
-    }
+  dirs = malloc((size_t)count * sizeof *dirs);
+  if (!dirs) {
+    rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the sun's samples");
+    goto done;
   }
+  int lit = 0;
+  for (int i = 0; i < count; i++)
+    if (sun[i].elevation > 0.0) sun_direction(north, sun[i].elevation, sun[i].azimuth, dirs[lit++]);
+  shade_run((shade_job){.r = out, .cells = out->cells, .g = &g, .voxel = def->voxel,
+                        .dt = day->step / 60.0, .boxes = boxes, .box_count = box_count,
+                        .dirs = (const double(*)[3])dirs, .dir_count = lit, .from = 0,
+                        .to = out->cell_count},
+            threads);
   for (int s = 0; s < out->surface_count; s++)
     summarise(out->cells, out->surfaces[s].first, out->surfaces[s].count, &out->surfaces[s]);
 done:
   free(hours);
+  free(dirs);
   free(sun);
   free(boxes);
   free(g.kd);

@@ -155,6 +155,12 @@ const char *shade_face_name(shade_face f);
  *  Returns 0, SERVER_EINPUT (bad site or day) or SERVER_ENOMEM. */
 int shade_compute(const sylva_world *w, const shade_site *site, const shade_day *day,
                   const shade_filter *filter, shade_result *out, char *err, size_t errlen);
+/** shade_compute on `threads` threads (0: the machine's cores), each taking a run of
+ *  the cells: the same result, bit for bit, for any number of threads. w must not
+ *  change meanwhile. */
+int shade_compute_threads(const sylva_world *w, const shade_site *site, const shade_day *day,
+                          const shade_filter *filter, int threads, shade_result *out, char *err,
+                          size_t errlen);
 
 /** Frees what shade_compute allocated and zeroes *r. */
 void shade_result_free(shade_result *r);

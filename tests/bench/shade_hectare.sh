@@ -1,7 +1,8 @@
 #!/bin/sh
 # Benchmark of `sylva shade` on a hectare (docs/performance.md, "Shade"), run by
 # hand, not a test:
-#   tests/bench/shade_hectare.sh [SYLVA_EXE]     (default build/server/sylva)
+#   tests/bench/shade_hectare.sh [SYLVA_EXE [DIR]]  (default build/server/sylva; DIR keeps
+#                                                 the store, and a store there is reused)
 # Grows the hectare of `bench years` (400 littleleaf lindens, utdb:NoEast:TICO, 5 m
 # apart, 106 x 106 m, 30 m high, the voxel of the species' rho / 2) 40 years into a
 # temporary store, under a site sky at 48° N of 16 directions (shade needs the
@@ -10,8 +11,13 @@
 set -eu
 root=$(cd "$(dirname "$0")/../.." && pwd)
 exe=${1:-"$root/build/server/sylva"}
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+if [ $# -ge 2 ]; then
+  tmp=$2
+  mkdir -p "$tmp"
+else
+  tmp=$(mktemp -d)
+  trap 'rm -rf "$tmp"' EXIT
+fi
 python3 - "$tmp/hectare.json" <<'PY'
 import json, sys
 rows, spacing = 20, 5.0
@@ -25,8 +31,9 @@ json.dump({"format": "sylva.scenario/1", "name": "a hectare of 400 lindens", "se
            "species": {"linden": {"preset": "utdb:NoEast:TICO"}}, "plants": plants,
            "light": {"sky": "site", "latitude": 48, "samples": 16}}, open(sys.argv[1], "w"))
 PY
-/usr/bin/time -f "grow the hectare 40 years: %e s wall, %U s user, %M KB peak" \
-  "$exe" run "$tmp/hectare.json" --db "$tmp/hectare.db" --name h --quiet-progress > /dev/null
-/usr/bin/time -f "shade hectare 2070 07-21 whole day: %e s wall, %U s user, %M KB peak" \
+[ -f "$tmp/hectare.db" ] ||
+  /usr/bin/time -f "grow the hectare 40 years: %e s wall, %U s user, %M KB peak" \
+    "$exe" run "$tmp/hectare.json" --db "$tmp/hectare.db" --name h --quiet-progress > /dev/null
+/usr/bin/time -f "shade hectare 2070 07-21 whole day (all cores): %e s wall, %U s user, %M KB peak" \
   "$exe" shade --db "$tmp/hectare.db" --name h --year 2070 --date 07-21 --surface ground \
   -o "$tmp/hectare.json.out.json"

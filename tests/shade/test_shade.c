@@ -201,6 +201,20 @@ static void test_transmission(void) {
   CHECK_INT(shade_ground_added(&r, added), 0);
   CHECK_NEAR(added[at], r.cells[at].open - r.cells[at].with, 0.0);
   free(added);
+  /* on 1, 2 and 3 threads, the whole day: the same bits in every cell */
+  shade_day whole = {.month = 6, .day = 21, .year = 2025, .from = 0, .to = 1440, .step = 10};
+  shade_result one, more;
+  CHECK_INT(shade_compute_threads(w, &site, &whole, NULL, 1, &one, err, sizeof err), 0);
+  for (int threads = 2; threads <= 3; threads++) {
+    CHECK_INT(shade_compute_threads(w, &site, &whole, NULL, threads, &more, err, sizeof err), 0);
+    bool same = more.cell_count == one.cell_count && one.cell_count > 0;
+    for (size_t c = 0; same && c < one.cell_count; c++)
+      same = memcmp(&more.cells[c].open, &one.cells[c].open, sizeof one.cells[c].open) == 0 &&
+             memcmp(&more.cells[c].with, &one.cells[c].with, sizeof one.cells[c].with) == 0;
+    CHECK(same);
+    shade_result_free(&more);
+  }
+  shade_result_free(&one);
   shade_result_free(&r);
   sylva_world_destroy(w);
 }
