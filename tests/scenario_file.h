@@ -28,4 +28,15 @@ static sylva_scenario *scenario_file(const char *dir, const char *name) {
   }
   return s;
 }
+
+/* The world of a parsed scenario, or exits with the error. */
+static inline sylva_world *scenario_world(const sylva_scenario *s) {
+  sylva_world *w = NULL;
+  char err[512];
+  if (sylva_scenario_build(s, &w, err, sizeof err) < 0) {
+    fprintf(stderr, "build: %s\n", err);
+    exit(1);
+  }
+  return w;
+}
 #endif

@@ -1159,6 +1159,12 @@ int sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out) {
   return SYLVA_OK;
 }
 
+int64_t sylva_world_node_index(const sylva_world *w, int32_t id) {
+  SYLVA_ASSERT(w->nodes.count == w->nodes.live);
+  int32_t slot = sylva__skeleton_find(&w->nodes, id); /* slot i is node i */
+  return slot >= 0 ? slot : SYLVA_ENOTFOUND;
+}
+
 double sylva_world_light_at(const sylva_world *w, const double p[3]) {
   int v[3];
   if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) return 0.0;

@@ -1,8 +1,7 @@
 /* Mesh export (OBJ, PLY) of a world's branches as generalized cylinders; see mesh.h.
  *
  * Two passes over the live nodes. The plan pass maps parent ids to node indices
- * (ids increase and parents come first, so a binary search over the ids seen so
- * far), marks each node's first child and sorts the nodes by stem (counting sort,
+ * (sylva_world_node_index), marks each node's first child and sorts the nodes by stem (counting sort,
  * stable, so id order holds within a stem). The geometry pass (sylva_mesh_branches,
  * which the glTF export shares) gives ring after ring, stem by stem; it keeps one
  * frame (u, t) per node so children can carry their parent's frame. */
@@ -22,7 +21,6 @@
 typedef struct mesh_plan {
   size_t n;              /* live nodes */
   int stems;             /* stems of all plants */
-  int32_t *ids;          /* ids[i]: id of node i */
   int32_t *parent;       /* node index of the parent, or -1 */
   int32_t *first_child;  /* node index of the first (lowest id) child, or -1 */
   int32_t *order;        /* node indices sorted by (global stem, id) */
@@ -32,7 +30,6 @@ typedef struct mesh_plan {
 } mesh_plan;
 
 static void plan_free(mesh_plan *p) {
-  free(p->ids);
   free(p->parent);
   free(p->first_child);
   free(p->order);
@@ -45,16 +42,6 @@ static bool has_geometry(const mesh_plan *p, size_t i) {
   return p->parent[i] >= 0 || p->first_child[i] >= 0;
 }
 
-static int32_t find_index(const int32_t *ids, size_t count, int32_t id) {
-  size_t lo = 0, hi = count;
-  while (lo < hi) {
-    size_t mid = lo + (hi - lo) / 2;
-    if (ids[mid] < id) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < count && ids[lo] == id ? (int32_t)lo : -1;
-}
-
 static int plan_build(const sylva_world *w, mesh_plan *p) {
   memset(p, 0, sizeof *p);
   size_t n = sylva_world_node_count(w);
@@ -63,25 +50,22 @@ static int plan_build(const sylva_world *w, mesh_plan *p) {
   p->n = n;
   p->stems = sylva_world_stem_count(w);
   size_t m = n ? n : 1;
-  p->ids = malloc(m * sizeof *p->ids);
   p->parent = malloc(m * sizeof *p->parent);
   p->first_child = malloc(m * sizeof *p->first_child);
   p->order = malloc(m * sizeof *p->order);
   p->ring = malloc(m * sizeof *p->ring);
   p->stem_start = calloc((size_t)p->stems + 1, sizeof *p->stem_start);
-  if (!p->ids || !p->parent || !p->first_child || !p->order || !p->ring || !p->stem_start) {
+  if (!p->parent || !p->first_child || !p->order || !p->ring || !p->stem_start) {
     plan_free(p);
     return SYLVA_ENOMEM;
   }
   sylva_node_info info;
   for (size_t i = 0; i < n; i++) {
     sylva_world_node_at(w, i, &info);
-    assert(i == 0 || info.id > p->ids[i - 1]);
-    p->ids[i] = info.id;
     p->first_child[i] = -1;
     p->parent[i] = -1;
     if (info.parent >= 0) {
-      int32_t q = find_index(p->ids, i, info.parent);
+      int32_t q = (int32_t)sylva_world_node_index(w, info.parent);
       assert(q >= 0); /* a live node's parent is live and comes first */
       p->parent[i] = q;
       if (p->first_child[q] < 0) p->first_child[q] = (int32_t)i;

@@ -162,17 +162,6 @@ typedef struct leaf_grid {
 /* Voxels per edge of the blocks the rays skip when empty. */
 #define SHADE_BLOCK 4
 
-/* The index of node id among ids[0 .. count) (sorted), or -1. */
-static long find_id(const int32_t *ids, size_t count, int32_t id) {
-  size_t lo = 0, hi = count;
-  while (lo < hi) {
-    size_t mid = lo + (hi - lo) / 2;
-    if (ids[mid] < id) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < count && ids[lo] == id ? (long)lo : -1;
-}
-
 /* One leaf card's centre as a world voxel, clamped into the world so that every
  * leaf the world reports is counted. */
 static void leaf_voxel(const sylva_world_def *def, const int dims[3], const double c[3],
@@ -185,8 +174,8 @@ static void leaf_voxel(const sylva_world_def *def, const int dims[3], const doub
 
 /* Visits every leaf of w: pass 0 finds the box of their voxels, pass 1 adds their
  * areas into g->kd. */
-static void leaf_pass(const sylva_world *w, const sylva_node_info *nodes, const int32_t *ids,
-                      size_t count, int pass, leaf_grid *g) {
+static void leaf_pass(const sylva_world *w, const sylva_node_info *nodes, size_t count, int pass,
+                      leaf_grid *g) {
   const sylva_world_def *def = sylva_world_get_def(w);
   int dims[3];
   sylva_world_dims(w, dims);
@@ -198,7 +187,7 @@ static void leaf_pass(const sylva_world *w, const sylva_node_info *nodes, const 
         sylva_world_species(w, sylva_world_plant_species(w, nd->plant));
     if (!sp) continue;
     double q[3] = {nd->x, nd->y, nd->z}, p[3] = {0, 0, 0};
-    long parent = nd->parent >= 0 ? find_id(ids, count, nd->parent) : -1;
+    int64_t parent = nd->parent >= 0 ? sylva_world_node_index(w, nd->parent) : -1;
     if (parent >= 0) {
       p[0] = nodes[parent].x;
       p[1] = nodes[parent].y;
@@ -252,17 +241,9 @@ static int leaf_grid_build(const sylva_world *w, leaf_grid *g, char *err, size_t
   size_t count = sylva_world_node_count(w);
   if (count == 0) return SERVER_OK;
   sylva_node_info *nodes = malloc(count * sizeof *nodes);
-  int32_t *ids = malloc(count * sizeof *ids);
-  if (!nodes || !ids) {
-    free(nodes);
-    free(ids);
-    return server_fail(err, errlen, SERVER_ENOMEM, "out of memory for %zu nodes", count);
-  }
-  for (size_t i = 0; i < count; i++) {
-    sylva_world_node_at(w, i, &nodes[i]);
-    ids[i] = nodes[i].id;
-  }
-  leaf_pass(w, nodes, ids, count, 0, g);
+  if (!nodes) return server_fail(err, errlen, SERVER_ENOMEM, "out of memory for %zu nodes", count);
+  for (size_t i = 0; i < count; i++) sylva_world_node_at(w, i, &nodes[i]);
+  leaf_pass(w, nodes, count, 0, g);
   int rc = SERVER_OK;
   if (g->n[0] > 0) {
     size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
@@ -270,7 +251,7 @@ static int leaf_grid_build(const sylva_world *w, leaf_grid *g, char *err, size_t
     if (!g->kd) {
       rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for %zu leaf voxels", cells);
     } else {
-      leaf_pass(w, nodes, ids, count, 1, g);
+      leaf_pass(w, nodes, count, 1, g);
       rc = mark_blocks(g, err, errlen);
       const sylva_world_def *def = sylva_world_get_def(w);
       for (int a = 0; a < 3; a++) {
@@ -280,7 +261,6 @@ static int leaf_grid_build(const sylva_world *w, leaf_grid *g, char *err, size_t
     }
   }
   free(nodes);
-  free(ids);
   return rc;
 }
 

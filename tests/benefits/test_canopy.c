@@ -1,4 +1,5 @@
-/* Canopy cover and crown areas (docs/model.md, "Canopy cover"): a hand-worked crown
+/* Canopy cover and crown areas (docs/model.md, "Canopy cover"), and the year's
+ * sequestered CO2 through planting and an image: a hand-worked crown
  * beside a wall; and the street's crowns, every few iterations, against a count made
  * here over the world's nodes as the API gives them (leaves, positions, parents):
  * each stem's cells, their union counted once where crowns overlap, less the cells
@@ -12,15 +13,6 @@
 #include "../scenario_file.h"
 #include "sylva/sylva.h"
 
-static sylva_world *build(const sylva_scenario *s) {
-  sylva_world *w = NULL;
-  char err[512];
-  if (sylva_scenario_build(s, &w, err, sizeof err) < 0) {
-    fprintf(stderr, "build: %s\n", err);
-    exit(1);
-  }
-  return w;
-}
 
 static sylva_world *world_of(const char *json) {
   sylva_scenario *s = NULL;
@@ -29,7 +21,7 @@ static sylva_world *world_of(const char *json) {
     fprintf(stderr, "scenario: %s\n", err);
     exit(1);
   }
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   sylva_scenario_free(s);
   return w;
 }
@@ -141,7 +133,7 @@ static void check_counted(const sylva_world *w, const char *where) {
  * iterations 0, 4, 8 and 12. */
 static void test_street(void) {
   sylva_scenario *s = scenario_file(SOURCE_ROOT "/scenarios", "street.json");
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   for (int t = 0; t <= 12; t++) {
     if (t % 4 == 0) {
       char where[32];
@@ -175,9 +167,44 @@ static void test_overlap(void) {
   sylva_world_destroy(w);
 }
 
+/* co2_sequestered: 0 at planting, then the year's change of co2; an image keeps it,
+ * and the world read back goes on as the one that was not saved. */
+static void test_sequestered(void) {
+  sylva_world *w = world_of(
+      "{\"format\": \"sylva.scenario/1\", \"seed\": 4, \"iterations\": 3,"
+      " \"world\": {\"min\": [-4, -4, 0], \"max\": [4, 4, 12]},"
+      " \"species\": {\"plane\": {\"preset\": \"utdb:NoEast:PLAC\"}},"
+      " \"plants\": [{\"id\": \"a\", \"species\": \"plane\", \"roots\": [[0, 0, 0]]}]}");
+  sylva_stem_stats s0, s1, s2, r1, r2;
+  CHECK_INT(sylva_world_stem_stats(w, 0, &s0), 0);
+  CHECK(s0.co2 > 0 && s0.co2_sequestered == 0.0);
+  CHECK_INT(sylva_world_step(w, NULL), 0);
+  CHECK_INT(sylva_world_stem_stats(w, 0, &s1), 0);
+  CHECK(s1.co2_sequestered == s1.co2 - s0.co2 && s1.co2 > s0.co2);
+  uint8_t *img = NULL;
+  size_t n = 0;
+  CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
+  sylva_world *r = NULL;
+  CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
+  sylva_free(img);
+  if (r) {
+    CHECK_INT(sylva_world_stem_stats(r, 0, &r1), 0);
+    CHECK(r1.co2_sequestered == s1.co2_sequestered && r1.co2 == s1.co2);
+    CHECK(r1.crown_area == s1.crown_area && r1.wood_volume == s1.wood_volume);
+    CHECK(sylva_world_canopy_cover(r) == sylva_world_canopy_cover(w));
+    CHECK_INT(sylva_world_step(w, NULL), 0);
+    CHECK_INT(sylva_world_step(r, NULL), 0);
+    sylva_world_stem_stats(w, 0, &s2);
+    sylva_world_stem_stats(r, 0, &r2);
+    CHECK(r2.co2_sequestered == s2.co2_sequestered && s2.co2_sequestered == s2.co2 - s1.co2);
+    sylva_world_destroy(r);
+  }
+  sylva_world_destroy(w);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {CHECK_TEST(hand_worked), CHECK_TEST(street),
-                                     CHECK_TEST(overlap)};
+                                     CHECK_TEST(overlap), CHECK_TEST(sequestered)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("canopy");
 }

@@ -24,15 +24,6 @@ static sylva_scenario *load(const char *name) {
   return scenario_file(SOURCE_ROOT "/scenarios", name);
 }
 
-static sylva_world *build(const sylva_scenario *s) {
-  sylva_world *w = NULL;
-  char err[512];
-  if (sylva_scenario_build(s, &w, err, sizeof err) < 0) {
-    fprintf(stderr, "build: %s\n", err);
-    exit(1);
-  }
-  return w;
-}
 
 /* Grows until finished or the limit; returns the iterations done. */
 static int grow(sylva_world *w, int limit) {
@@ -71,7 +62,7 @@ static int nodes_placed_legally(const sylva_world *w) {
 
 static void test_simplified(void) {
   sylva_scenario *s = load("simplified.json");
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   const sylva_species_def *sp = sylva_world_species(w, 0);
   double rho = sp->rho, path = sp->initial_nodes;
   int ok5 = 1, monotone = 1;
@@ -112,7 +103,7 @@ static void test_simplified(void) {
  * nothing grows into the wall. */
 static void test_wall(void) {
   sylva_scenario *s = load("wall.json");
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   int legal = 1;
   double hmax = 0, xm = sylva_world_species(w, 0)->growth.p[1] * sylva_world_species(w, 0)->rho;
   const sylva_journal *j;
@@ -147,7 +138,7 @@ static void test_wall(void) {
 /* Board over x in [0.3, 3]: fewer nodes below it than in the mirrored open region. */
 static void test_board(void) {
   sylva_scenario *s = load("board.json");
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   int legal = 1;
   while (!sylva_world_finished(w) && sylva_world_iteration(w) < 16) {
     CHECK_INT(sylva_world_step(w, NULL), 0);
@@ -178,7 +169,7 @@ static int cmp_u64(const void *a, const void *b) {
 
 static void test_stand(void) {
   sylva_scenario *s = load("stand.json");
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   const sylva_world_def *d = sylva_world_get_def(w);
   int dims[3];
   sylva_world_dims(w, dims);
@@ -213,7 +204,7 @@ static void test_stand(void) {
 /* A tree grown beside a taller competitor ends lower than the same tree alone. */
 static void test_competition(void) {
   sylva_scenario *s = load("competition.json");
-  sylva_world *both = build(s);
+  sylva_world *both = scenario_world(s);
   grow(both, s->iterations);
   sylva_stem_stats with;
   sylva_world_stem_stats(both, 0, &with);
@@ -221,7 +212,7 @@ static void test_competition(void) {
   sylva_world_stem_stats(both, 1, &rival);
   s->plant_count = 1; /* the same scenario without the right-hand tree */
   s->stem_count = 1;
-  sylva_world *alone = build(s);
+  sylva_world *alone = scenario_world(s);
   grow(alone, s->iterations);
   sylva_stem_stats without;
   sylva_world_stem_stats(alone, 0, &without);
@@ -239,7 +230,7 @@ static void test_competition(void) {
 /* Stats lines and final skeleton of a run, as one string. */
 static char *run_output(sylva_scenario *s, uint64_t seed, int limit, int32_t orders[][8]) {
   s->seed = seed;
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   size_t cap = 1 << 16, len = 0;
   char *out = malloc(cap);
   out[0] = 0;
@@ -293,7 +284,7 @@ static void test_determinism_and_order(void) {
 /* Snapshots taken at every iteration continue bit-identically (hash every step). */
 static void test_snapshot_continuation(void) {
   sylva_scenario *s = load("urban.json");
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   enum { N = 10 };
   uint64_t ref[N + 1];
   uint8_t *img[N + 1];
@@ -379,7 +370,7 @@ static sylva_world *wall_site(double y, bool site) {
     fprintf(stderr, "wall_site: %s\n", err);
     exit(1);
   }
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   sylva_scenario_free(s);
   grow(w, 20);
   return w;
@@ -439,7 +430,7 @@ static void test_street_zones(void) {
       bare->obstacles[kept++] = bare->obstacles[i];
   CHECK_INT(bare->obstacle_count - kept, 3);
   bare->obstacle_count = kept;
-  sylva_world *a = build(s), *b = build(bare);
+  sylva_world *a = scenario_world(s), *b = scenario_world(bare);
   CHECK(sylva_world_reports_conflicts(a));
   CHECK(!sylva_world_reports_conflicts(b));
   static int first[STREET_STEMS][STREET_OBSTACLES];
@@ -524,7 +515,7 @@ static bool street_state_equal(const street_state *a, const sylva_world *w) {
 static void test_street_pruned(void) {
   sylva_scenario *s = load("street-pruned.json");
   CHECK_INT(s->management_count, 3);
-  sylva_world *w = build(s);
+  sylva_world *w = scenario_world(s);
   CHECK_INT(sylva_world_prune_count(w), 3);
   enum { LIMIT = 40 };
   static const int at[] = {5, 6, 7, 8, 12};

@@ -77,6 +77,14 @@ static void test_bad_ids(void) {
   CHECK(root[0] == 1);
   CHECK_INT(sylva_world_node_at(w, 0, &ni), 0);
   CHECK_INT(ni.parent, -1);
+  /* a node's index by its id, for every node; no index for an id no node has */
+  for (size_t i = 0; i < sylva_world_node_count(w); i++) {
+    sylva_node_info at;
+    sylva_world_node_at(w, i, &at);
+    CHECK_INT(sylva_world_node_index(w, at.id), (int64_t)i);
+  }
+  CHECK_INT(sylva_world_node_index(w, -1), SYLVA_ENOTFOUND);
+  CHECK_INT(sylva_world_node_index(w, 1 << 30), SYLVA_ENOTFOUND);
   CHECK(sylva_world_hash(w) == h); /* nothing changed */
   sylva_world_destroy(w);
 }

@@ -315,6 +315,9 @@ size_t sylva_world_node_count(const sylva_world *w);
 /** The i-th live node (0 <= i < count), in id order: parents before children. 0 or
  *  SYLVA_ENOTFOUND (out untouched). */
 int sylva_world_node_at(const sylva_world *w, size_t i, sylva_node_info *out);
+/** The index (for sylva_world_node_at) of the live node with this id, or
+ *  SYLVA_ENOTFOUND. */
+int64_t sylva_world_node_index(const sylva_world *w, int32_t id);
 /** Light (0..1) of the voxel holding point p; 0 outside the world. */
 double sylva_world_light_at(const sylva_world *w, const double p[3]);
 /** Voxels per axis. */
