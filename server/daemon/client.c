@@ -14,12 +14,30 @@
  * 8) would otherwise hold the loop for one long turn. */
 #define CLIENT_CLOSES_PER_TURN 32
 
+/* close_code of a refused client asked to close: lws sends its close frame in a
+ * turn of the loop to come, and the connection is dropped DROP_MS after (RFC 6455
+ * 7.1.7: a failed connection's data, a close frame in reply included, is not
+ * processed) */
+#define CLOSE_DROP (-2)
+#define DROP_MS 250
+
 /* Applies the closes asked for; from the set's timer, outside lws callbacks. */
 static void on_closer(uv_timer_t *t) {
   client_set *s = t->data;
+  uint64_t now = uv_now(t->loop), wait = 0;
   int closed = 0;
   for (client *c = s->head, *next; c; c = next) {
     next = c->next;
+    if (c->close_code == CLOSE_DROP) {
+      if (now - c->asked_at < DROP_MS) {
+        uint64_t left = DROP_MS - (now - c->asked_at);
+        if (!wait || left < wait) wait = left;
+        continue;
+      }
+      c->close_code = -1;
+      lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_SYNC);
+      continue;
+    }
     if (c->close_code <= 0) continue;
     if (c->close_after) { /* its messages leave first (client_writable, on_watch) */
       lws_callback_on_writable(c->wsi);
@@ -31,13 +49,27 @@ static void on_closer(uv_timer_t *t) {
     }
     lws_close_reason(c->wsi, (enum lws_close_status)c->close_code,
                      (unsigned char *)c->close_reason, strlen(c->close_reason));
+    c->close_code = c->refused ? CLOSE_DROP : -1; /* asked; lws reports CLOSED later */
+    c->asked_at = now;
+    if (c->refused && (!wait || DROP_MS < wait)) wait = DROP_MS;
     lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_SYNC);
-    c->close_code = -1; /* asked; lws reports CLOSED later */
   }
+  if (wait) uv_timer_start(&s->closer, on_closer, wait, 0);
 }
 
 static void closer_soon(client_set *s) {
   if (!uv_is_closing((uv_handle_t *)&s->closer)) uv_timer_start(&s->closer, on_closer, 0, 0);
+}
+
+/* A client closed for what it sends is read no more: the rest of its message
+ * stays in the kernel's buffers instead of being read, unmasked and dropped on
+ * the loop while lws waits for a close frame in reply; the connection is dropped
+ * DROP_MS after its own close frame was asked for. */
+static void refuse(client *c, int code, const char *reason) {
+  if (c->close_code) return;
+  lws_rx_flow_control(c->wsi, 0);
+  c->refused = true;
+  client_close(c, code, reason);
 }
 
 /* Once a second: a client whose message has been arriving for longer than the
@@ -47,7 +79,7 @@ static void on_watch(uv_timer_t *t) {
   uint64_t now = uv_now(t->loop);
   for (client *c = s->head; c; c = c->next) {
     if (c->rx_start && now - c->rx_start > (uint64_t)s->limits.message_ms)
-      client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "message not finished in time");
+      refuse(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "message not finished in time");
     if (c->close_after && now >= c->close_after) { /* its messages did not leave in time */
       c->close_after = 0;
       closer_soon(s);
@@ -77,7 +109,11 @@ int client_set_init(client_set *s, uv_loop_t *loop, const client_limits *limits)
 bool client_set_has_room(const client_set *s) { return s->count < s->limits.max_clients; }
 
 void client_set_close_all(client_set *s, int code, const char *reason) {
-  for (client *c = s->head; c; c = c->next) client_close(c, code, reason);
+  for (client *c = s->head; c; c = c->next) {
+    if (c->refused && c->close_code < 0) /* its close is asked; it is read no more */
+      lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+    client_close(c, code, reason);
+  }
 }
 
 void client_set_close(client_set *s) {
@@ -183,7 +219,7 @@ bool client_receive(client *c, const void *in, size_t len) {
   if (!lws_is_final_fragment(c->wsi) || lws_remaining_packet_payload(c->wsi)) {
     if (c->rx_too_large) {
       rx_end(c);
-      client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+      refuse(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
     }
     return false;
   }
@@ -195,9 +231,9 @@ bool client_receive(client *c, const void *in, size_t len) {
   }
   bool ok = false;
   if (++c->window_count > s->limits.rate_limit)
-    client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "rate limit exceeded");
+    refuse(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "rate limit exceeded");
   else if (c->rx_too_large)
-    client_close(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+    refuse(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
   else if (c->rx_binary)
     client_send_text(c, sylva_msg_error("bad_request", "binary frames are not accepted", NULL));
   else

@@ -81,6 +81,9 @@ struct client {
   uint64_t close_after; /**< non-zero: the close waits for the queue to empty, at
                              most until this loop time (ms) */
   char close_reason[96];
+  bool refused;         /**< closed for what it sent: read no more, and dropped
+                             soon after its close frame (client.c) */
+  uint64_t asked_at;    /**< when the close was asked of lws (loop ms) */
   client *next, *prev;
 };
 

@@ -777,7 +777,10 @@ static bool client_left(struct lws *wsi) {
   return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
 }
 
-/* One step of the reply: the headers, or the next chunk of the body. */
+/* One step of the reply: the headers with the first chunk of the body, or the
+ * next chunk. The headers and a small body leave in the same turn of the loop as
+ * the request came: under a flood of busy connections each turn is long, and a
+ * /healthz that took a turn for each would wait for all of them (abuse row 8). */
 static int write_reply(struct lws *wsi, http_pss *pss) {
   /* a client that stops reading is closed after HTTP_TIMEOUT_SECS */
   lws_set_timeout(wsi, PENDING_TIMEOUT_HTTP_CONTENT, HTTP_TIMEOUT_SECS);
@@ -785,8 +788,6 @@ static int write_reply(struct lws *wsi, http_pss *pss) {
     if (send_headers(wsi, pss)) return -1;
     pss->headers_sent = true;
     if (pss->len == 0) return finish(wsi, pss);
-    lws_callback_on_writable(wsi);
-    return 0;
   }
   unsigned char buf[LWS_PRE + HTTP_CHUNK], *start = &buf[LWS_PRE];
   size_t n = pss->len - pss->off;
@@ -845,10 +846,9 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
        * stops the daemon from accepting connections in 4.1.6 on libuv.) */
       lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
       lws_set_timer_usecs(wsi, HTTP_WATCH_USECS);
-    } else {
-      lws_callback_on_writable(wsi);
+      return 0;
     }
-    return 0;
+    return pss->status ? write_reply(wsi, pss) : 0;
   }
   case LWS_CALLBACK_TIMER:
     if (!pss || !pss->job) break;
