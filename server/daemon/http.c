@@ -780,14 +780,23 @@ static bool client_left(struct lws *wsi) {
 /* One step of the reply: the headers with the first chunk of the body, or the
  * next chunk. The headers and a small body leave in the same turn of the loop as
  * the request came: under a flood of busy connections each turn is long, and a
- * /healthz that took a turn for each would wait for all of them (abuse row 8). */
-static int write_reply(struct lws *wsi, http_pss *pss) {
+ * /healthz that took a turn for each would wait for all of them (abuse row 8).
+ * The transaction is completed from a writable callback only (in_request: called
+ * from LWS_CALLBACK_HTTP, where lws still holds the request). */
+static int write_reply(struct lws *wsi, http_pss *pss, bool in_request) {
   /* a client that stops reading is closed after HTTP_TIMEOUT_SECS */
   lws_set_timeout(wsi, PENDING_TIMEOUT_HTTP_CONTENT, HTTP_TIMEOUT_SECS);
+  if (pss->headers_sent && pss->off == pss->len) return finish(wsi, pss); /* all out */
   if (!pss->headers_sent) {
     if (send_headers(wsi, pss)) return -1;
     pss->headers_sent = true;
-    if (pss->len == 0) return finish(wsi, pss);
+    if (pss->len == 0) {
+      if (in_request) {
+        lws_callback_on_writable(wsi);
+        return 0;
+      }
+      return finish(wsi, pss);
+    }
   }
   unsigned char buf[LWS_PRE + HTTP_CHUNK], *start = &buf[LWS_PRE];
   size_t n = pss->len - pss->off;
@@ -804,7 +813,7 @@ static int write_reply(struct lws *wsi, http_pss *pss) {
   bool last = pss->off + n == pss->len;
   if (lws_write(wsi, start, n, last ? LWS_WRITE_HTTP_FINAL : LWS_WRITE_HTTP) != (int)n) return -1;
   pss->off += n;
-  if (last) return finish(wsi, pss);
+  if (last && !in_request) return finish(wsi, pss);
   lws_callback_on_writable(wsi);
   return 0;
 }
@@ -848,7 +857,7 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
       lws_set_timer_usecs(wsi, HTTP_WATCH_USECS);
       return 0;
     }
-    return pss->status ? write_reply(wsi, pss) : 0;
+    return pss->status ? write_reply(wsi, pss, true) : 0;
   }
   case LWS_CALLBACK_TIMER:
     if (!pss || !pss->job) break;
@@ -859,7 +868,7 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
     return 0;
   case LWS_CALLBACK_HTTP_WRITEABLE:
     if (!pss || !pss->status || pss->job) break; /* no reply yet */
-    return write_reply(wsi, pss);
+    return write_reply(wsi, pss, false);
   case LWS_CALLBACK_HTTP_DROP_PROTOCOL:
   case LWS_CALLBACK_CLOSED_HTTP:
     if (!pss) break;
