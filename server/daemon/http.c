@@ -10,6 +10,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 
@@ -778,11 +779,12 @@ static bool client_left(struct lws *wsi) {
 }
 
 /* One step of the reply: the headers with the first chunk of the body, or the
- * next chunk. The headers and a small body leave in the same turn of the loop as
- * the request came: under a flood of busy connections each turn is long, and a
- * /healthz that took a turn for each would wait for all of them (abuse row 8).
- * The transaction is completed from a writable callback only (in_request: called
- * from LWS_CALLBACK_HTTP, where lws still holds the request). */
+ * next chunk. Under a flood of busy connections each turn of the loop is long,
+ * and a /healthz that took a turn for each step would wait for all of them (abuse
+ * row 8): the headers and a small body leave together, and for a client that
+ * closes after the reply, in the turn its request came in (in_request: called
+ * from LWS_CALLBACK_HTTP, where lws still holds the request, so the transaction
+ * is completed from the next writable callback). */
 static int write_reply(struct lws *wsi, http_pss *pss, bool in_request) {
   /* a client that stops reading is closed after HTTP_TIMEOUT_SECS */
   lws_set_timeout(wsi, PENDING_TIMEOUT_HTTP_CONTENT, HTTP_TIMEOUT_SECS);
@@ -857,7 +859,16 @@ int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user,
       lws_set_timer_usecs(wsi, HTTP_WATCH_USECS);
       return 0;
     }
-    return pss->status ? write_reply(wsi, pss, true) : 0;
+    if (!pss->status) return 0;
+    /* a client that asked to close after this reply (as a health check does) gets
+     * it at once; a kept-alive connection waits for the writable turn, so that
+     * its transaction completes in the turn its last byte leaves */
+    char conn[32];
+    if (lws_hdr_copy(wsi, conn, sizeof conn, WSI_TOKEN_CONNECTION) > 0 &&
+        strcasecmp(conn, "close") == 0)
+      return write_reply(wsi, pss, true);
+    lws_callback_on_writable(wsi);
+    return 0;
   }
   case LWS_CALLBACK_TIMER:
     if (!pss || !pss->job) break;
