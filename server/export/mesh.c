@@ -1,8 +1,8 @@
 /* Mesh export (OBJ, PLY) of a world's branches as generalized cylinders; see mesh.h.
  *
  * Two passes over the live nodes. The plan pass maps parent ids to node indices
- * (sylva_world_node_index), marks each node's first child and sorts the nodes by stem (counting sort,
- * stable, so id order holds within a stem). The geometry pass (sylva_mesh_branches,
+ * (sylva_world_node_index), marks each node's first child and sorts the nodes by
+ * stem (counting sort, stable, so id order holds within a stem). The geometry pass (sylva_mesh_branches,
  * which the glTF export shares) gives ring after ring, stem by stem; it keeps one
  * frame (u, t) per node so children can carry their parent's frame. */
 #include "mesh.h"

@@ -274,11 +274,18 @@ export function rawGet(port, path) {
 // A raw WebSocket on sylva.v1: once upgraded, send(socket) writes what the test
 // wants; resolves with the code of the first close frame the daemon sends, or null
 // when the connection ends (or `ms` pass) without one.
-export function rawCloseCode(port, send, ms = 15000) {
+// With untilDropped, the client neither answers the close frame nor closes: it
+// resolves {code, droppedMs}, the time from the close frame to the daemon ending
+// the connection.
+export function rawCloseCode(port, send, ms = 15000, { untilDropped = false } = {}) {
   return new Promise((resolve) => {
     const s = tcpConnect(port, '127.0.0.1');
-    let buf = Buffer.alloc(0), upgraded = false;
-    const done = (code) => { s.destroy(); resolve(code); };
+    let buf = Buffer.alloc(0), upgraded = false, closeAt = null, closeCode = null;
+    const done = (code) => {
+      s.destroy();
+      if (!untilDropped) resolve(code);
+      else resolve({ code: closeCode, droppedMs: closeAt === null ? null : Date.now() - closeAt });
+    };
     s.on('data', (b) => {
       buf = Buffer.concat([buf, b]);
       if (!upgraded) {
@@ -289,7 +296,11 @@ export function rawCloseCode(port, send, ms = 15000) {
         send(s);
       }
       const at = buf.indexOf(0x88);
-      if (at >= 0 && buf.length >= at + 4) done(buf.readUInt16BE(at + 2));
+      if (at >= 0 && buf.length >= at + 4 && closeAt === null) {
+        if (!untilDropped) return done(buf.readUInt16BE(at + 2));
+        closeAt = Date.now();
+        closeCode = buf.readUInt16BE(at + 2);
+      }
     });
     s.on('close', () => done(null));
     s.on('error', () => done(null));

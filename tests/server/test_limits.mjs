@@ -181,6 +181,26 @@ test('--max-input: unfinished messages past the budget are closed with 1009; the
   assert.equal(h.clients, 0, 'the refused clients are gone within a second');
 }));
 
+test('a client refused for what it sends is read no more and dropped soon after its close frame, without its answer', () => withDaemon({ args: ['--max-message', '4096'] }, async (d) => {
+  // a frame announcing 1 MiB, of which 64 KiB come: past --max-message at once;
+  // the client then neither answers the close frame nor closes (docs/protocol.md,
+  // "Limits": dropped 250 ms after its close frame; lws alone waits 5 s for the
+  // answer)
+  const r = await rawCloseCode(d.port, (s) => {
+    const head = Buffer.alloc(14);
+    head[0] = 0x01;
+    head[1] = 0x80 | 127;
+    head.writeBigUInt64BE(BigInt(1 << 20), 2);
+    head.writeUInt32BE(0x01020304, 10);
+    s.write(head);
+    s.write(Buffer.alloc(65536, 0x21));
+  }, 15000, { untilDropped: true });
+  assert.equal(r.code, 1009);
+  assert.ok(r.droppedMs !== null && r.droppedMs < 2000, `dropped ${r.droppedMs} ms after its close frame`);
+  const h = await fetch(`${d.http}/healthz`).then((x) => x.json());
+  assert.equal(h.clients, 0);
+}));
+
 // Six stored stands (81 MiB each by estimate) against a budget of 200 MiB.
 function storedStands(db, n) {
   for (let i = 0; i < n; i++) {
