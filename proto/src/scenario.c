@@ -646,6 +646,38 @@ static int parse_from(sylva__parser *p, const cJSON *obj, sylva_scenario_plant *
   return rc;
 }
 
+/* Adds to s->species each library species ("utdb:REGION:CODE") that a plant of the
+ * array `plants` names and the species map lacks, its def the library's (docs/scenario.md,
+ * "Plants"). An unknown library name is left for the plant's own check to name. */
+static int add_library_species(sylva__parser *p, const cJSON *plants, sylva_scenario *s) {
+  const size_t prefix = strlen(SYLVA_LIBRARY_PREFIX);
+  int i = 0;
+  for (const cJSON *pl = plants->child; pl; pl = pl->next, i++) {
+    const cJSON *sp = cJSON_IsObject(pl) ? member(pl, "species") : NULL;
+    const char *name = cJSON_IsString(sp) ? sp->valuestring : NULL;
+    if (!name || strncmp(name, SYLVA_LIBRARY_PREFIX, prefix) != 0 || strlen(name) >= SYLVA_LABEL_MAX)
+      continue;
+    bool known = false;
+    for (int k = 0; k < s->species_count && !known; k++) known = strcmp(s->species[k].name, name) == 0;
+    sylva_species_def def = sylva_default_species_def();
+    if (known || sylva_preset_find(name, &def) != 0) continue;
+    if (s->species_count == SYLVA_SCENARIO_MAX_SPECIES) {
+      size_t old = sylva__ptr_push_index(p, (size_t)i);
+      int rc = sylva__fail_at_key(p, "species", "%d species; at most %d are allowed",
+                                  s->species_count + 1, SYLVA_SCENARIO_MAX_SPECIES);
+      sylva__ptr_pop(p, old);
+      return rc;
+    }
+    sylva_scenario_species *grown = realloc(s->species, ((size_t)s->species_count + 1) * sizeof *grown);
+    if (!grown) return sylva__fail_nomem(p);
+    s->species = grown;
+    memset(&grown[s->species_count], 0, sizeof *grown);
+    memcpy(grown[s->species_count].name, name, strlen(name) + 1);
+    grown[s->species_count++].def = def;
+  }
+  return 0;
+}
+
 /* by_name: the species sorted by name, for lookups in O(log n). */
 int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *by_name,
                        int species_count, int *stem_count, sylva_scenario_plant *pl,
@@ -686,8 +718,12 @@ int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *
       pl->species = found->index;
     } else {
       char q[80];
-      rc = sylva__fail(p, "unknown species %s (not a key of %.*s/species)", sylva__quote(q, name),
-                       (int)p->base, p->ptr);
+      if (strncmp(name, SYLVA_LIBRARY_PREFIX, strlen(SYLVA_LIBRARY_PREFIX)) == 0)
+        rc = sylva__fail(p, "unknown species %s (not a key of %.*s/species, nor a library species: "
+                         "`sylva species` lists them)", sylva__quote(q, name), (int)p->base, p->ptr);
+      else
+        rc = sylva__fail(p, "unknown species %s (not a key of %.*s/species)", sylva__quote(q, name),
+                         (int)p->base, p->ptr);
     }
   }
   sylva__ptr_pop(p, old);
@@ -935,6 +971,12 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
     sylva__ptr_pop(p, old);
     if (rc) return rc;
   }
+
+  /* library species named by plants directly ("species": "utdb:NoEast:PLAC"), with
+   * no entry in the species map: each becomes one, in the order first named */
+  if (!rc && (item = member(root, "plants")) && cJSON_IsArray(item))
+    rc = add_library_species(p, item, s);
+  if (rc) return rc;
 
   /* world: the box now, the voxel once the plants are known */
   if (!(item = member(root, "world")))

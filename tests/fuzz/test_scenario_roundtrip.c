@@ -450,6 +450,69 @@ static void test_library_foliage(void) {
   cJSON_Delete(doc);
 }
 
+/* A plant names a library species directly (docs/scenario.md, "Plants"): it is held
+ * as a species of that name with the library's def, once however many plants name
+ * it, after the species given; an entry of the map of the same name wins; an
+ * unknown library name is refused with its pointer. */
+static void test_library_plants(void) {
+  static const char head[] = "{\"format\": \"sylva.scenario/1\", \"iterations\": 2, "
+                             "\"world\": {\"min\": [-10, -10, 0], \"max\": [10, 10, 20]}, ";
+  char text[1024];
+  snprintf(text, sizeof text, "%s\"species\": {\"bush\": {\"preset\": \"igm-fig11\"}}, \"plants\": ["
+           "{\"id\": \"a\", \"species\": \"utdb:NoEast:ACPL\", \"roots\": [[0, 0, 0]], \"age\": 5}, "
+           "{\"id\": \"b\", \"species\": \"bush\", \"roots\": [[5, 0, 0]]}, "
+           "{\"id\": \"c\", \"species\": \"utdb:NoEast:ACPL\", \"roots\": [[-5, 0, 0]]}]}", head);
+  sylva_scenario *s = parse_ok("library plants", text, strlen(text));
+  sylva_species_def lib;
+  EXPECT(sylva_library_find("utdb:NoEast:ACPL", &lib) == 0, "in the library");
+  if (s) {
+    EXPECT(s->species_count == 2 && strcmp(s->species[1].name, "utdb:NoEast:ACPL") == 0,
+           "%d species", s->species_count);
+    EXPECT(s->plants[0].species == 1 && s->plants[1].species == 0 && s->plants[2].species == 1,
+           "plants' species %d %d %d", s->plants[0].species, s->plants[1].species,
+           s->plants[2].species);
+    EXPECT(s->species_count == 2 && s->species[1].def.lambda == lib.lambda &&
+               s->species[1].def.growth.p[1] == lib.growth.p[1] && s->species[1].def.rho == lib.rho,
+           "the library's def");
+    /* its stored form writes the species out, as for the entry {"preset": name} */
+    char *canon = sylva_scenario_json(s);
+    char spelt[1024];
+    snprintf(spelt, sizeof spelt, "%s\"species\": {\"bush\": {\"preset\": \"igm-fig11\"}, "
+             "\"utdb:NoEast:ACPL\": {\"preset\": \"utdb:NoEast:ACPL\"}}, \"plants\": ["
+             "{\"id\": \"a\", \"species\": \"utdb:NoEast:ACPL\", \"roots\": [[0, 0, 0]], \"age\": 5}, "
+             "{\"id\": \"b\", \"species\": \"bush\", \"roots\": [[5, 0, 0]]}, "
+             "{\"id\": \"c\", \"species\": \"utdb:NoEast:ACPL\", \"roots\": [[-5, 0, 0]]}]}", head);
+    sylva_scenario *entry = parse_ok("spelt out", spelt, strlen(spelt));
+    char *entry_json = entry ? sylva_scenario_json(entry) : NULL;
+    EXPECT(canon && entry_json && strcmp(canon, entry_json) == 0, "as if the map held it");
+    free(entry_json);
+    sylva_scenario_free(entry);
+    sylva_scenario *back = canon ? parse_ok("stored form", canon, strlen(canon)) : NULL;
+    char *again = back ? sylva_scenario_json(back) : NULL;
+    EXPECT(again && strcmp(canon, again) == 0, "the stored form round-trips");
+    free(again);
+    free(canon);
+    sylva_scenario_free(back);
+    sylva_scenario_free(s);
+  }
+  /* the map's own entry of that name wins */
+  snprintf(text, sizeof text, "%s\"species\": {\"utdb:NoEast:ACPL\": {\"preset\": "
+           "\"utdb:NoEast:ACPL\", \"lambda\": 0.6}}, \"plants\": [{\"id\": \"a\", \"species\": "
+           "\"utdb:NoEast:ACPL\", \"roots\": [[0, 0, 0]]}]}", head);
+  s = parse_ok("the map's entry", text, strlen(text));
+  EXPECT(s && s->species_count == 1 && s->species[0].def.lambda == 0.6, "overrides kept");
+  sylva_scenario_free(s);
+  /* an unknown library name */
+  snprintf(text, sizeof text, "%s\"plants\": [{\"id\": \"a\", \"species\": \"utdb:NoEast:NOPE\", "
+           "\"roots\": [[0, 0, 0]]}]}", head);
+  char err[512] = "";
+  s = NULL;
+  EXPECT(sylva_scenario_parse(text, strlen(text), &s, err, sizeof err) < 0 && !s &&
+             strstr(err, "/plants/0/species: unknown species \"utdb:NoEast:NOPE\"") &&
+             strstr(err, "library"),
+         "%s", err);
+}
+
 int main(int argc, char **argv) {
   if (argc != 2 && argc != 3) {
     fprintf(stderr, "usage: %s SCENARIO_DIR [TEST]\n", argv[0]);
@@ -461,7 +524,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(parse_errors), CHECK_TEST(no_plants), CHECK_TEST(fmt_fixed),
       CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label), CHECK_TEST(light),
       CHECK_TEST(shipped_scenarios), CHECK_TEST(years), CHECK_TEST(foliage),
-      CHECK_TEST(library_foliage)};
+      CHECK_TEST(library_foliage), CHECK_TEST(library_plants)};
   CHECK_RUN(argc, argv, 2, tests);
   return check_summary("scenario-roundtrip");
 }
