@@ -10,19 +10,24 @@
 
 /* ---- geometry ------------------------------------------------------------------ */
 
+/* Whether a point lies in an obstacle (a box, or a prism: its z range and footprint,
+ * boundaries included). */
 static bool inside(const sylva__obstacle *o, double x, double y, double z) {
-  return x >= o->min[0] && x <= o->max[0] && y >= o->min[1] && y <= o->max[1] &&
-         z >= o->min[2] && z <= o->max[2];
+  if (!(x >= o->min[0] && x <= o->max[0] && y >= o->min[1] && y <= o->max[1] &&
+        z >= o->min[2] && z <= o->max[2]))
+    return false;
+  return !o->fp || sylva__footprint_inside(o->fp, x, y);
 }
 
-/* Squared distance from a point to a box [mn, mx]. */
-static double dist2_point(const double mn[3], const double mx[3], const double p[3]) {
+/* Squared distance from a point to an obstacle: a box [min, max], or a prism, whose
+ * distance is the footprint's across and its z range's along. */
+static double dist2_point(const sylva__obstacle *o, const double p[3]) {
   double d2 = 0.0;
-  for (int a = 0; a < 3; a++) {
-    double d = p[a] < mn[a] ? mn[a] - p[a] : p[a] > mx[a] ? p[a] - mx[a] : 0.0;
+  for (int a = o->fp ? 2 : 0; a < 3; a++) {
+    double d = p[a] < o->min[a] ? o->min[a] - p[a] : p[a] > o->max[a] ? p[a] - o->max[a] : 0.0;
     d2 += d * d;
   }
-  return d2;
+  return o->fp ? d2 + sylva__footprint_dist2(o->fp, p[0], p[1]) : d2;
 }
 
 /* Squared distance between two boxes. */
@@ -173,7 +178,7 @@ void sylva__conflicts(sylva_world *w, int T) {
           count += inside(ob, s->x[i], s->y[i], s->z[i]);
         } else {
           double p[3] = {s->x[i], s->y[i], s->z[i]};
-          double d2 = dist2_point(ob->min, ob->max, p);
+          double d2 = dist2_point(ob, p);
           if (d2 < best) best = d2;
         }
       }
@@ -212,12 +217,9 @@ int sylva__conflicts_update(sylva_world *w, int first_stem) {
 
 /* ---- pruning ------------------------------------------------------------------- */
 
-size_t sylva__prune(sylva_world *w, const double mn[3], const double mx[3], int T,
-                    bool announced_only, int32_t *roots, size_t *root_count) {
+size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool announced_only,
+                    int32_t *roots, size_t *root_count) {
   sylva__skeleton *s = &w->nodes;
-  sylva__obstacle box;
-  memcpy(box.min, mn, sizeof box.min);
-  memcpy(box.max, mx, sizeof box.max);
   size_t doomed = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
@@ -228,7 +230,7 @@ size_t sylva__prune(sylva_world *w, const double mn[3], const double mx[3], int 
       doomed++;
       continue;
     }
-    if (!inside(&box, s->x[i], s->y[i], s->z[i])) continue;
+    if (!inside(box, s->x[i], s->y[i], s->z[i])) continue;
     s->flags[i] |= SYLVA__NODE_DOOMED;
     doomed++;
     /* a cut: a lateral leaves a scar on its parent, whose bud does not sprout again;

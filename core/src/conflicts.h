@@ -19,12 +19,12 @@ int sylva__conflicts_update(sylva_world *w, int first_stem);
 /** Appends a (stem, zone, first) pair read from a snapshot, in order; SYLVA_EINVAL
  *  out of order, SYLVA_ENOMEM. */
 int sylva__entered_add(sylva_world *w, int32_t stem, int32_t zone, int32_t first);
-/** Removes every node inside [mn, mx] and its subtree (roots stay), counting them in
- *  the stems' stats.pruned. The subtrees' root ids go to roots (room for every node);
- *  with announced_only, those born at T are left out. Returns the nodes removed;
- *  their slots stay dead until compaction. Never fails. */
-size_t sylva__prune(sylva_world *w, const double mn[3], const double mx[3], int T,
-                    bool announced_only, int32_t *roots, size_t *root_count);
+/** Removes every node inside box (a box [min, max], or a zone's prism) and its subtree
+ *  (roots stay), counting them in the stems' stats.pruned. The subtrees' root ids go
+ *  to roots (room for every node); with announced_only, those born at T are left out.
+ *  Returns the nodes removed; their slots stay dead until compaction. Never fails. */
+size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool announced_only,
+                    int32_t *roots, size_t *root_count);
 /** Does a schedule prune at iteration T? */
 bool sylva__prune_due(const sylva_prune_def *d, int T);
 #endif

@@ -1,4 +1,5 @@
 #include "grid.h"
+#include "prism.h"
 
 #include <limits.h>
 #include <math.h>
@@ -52,6 +53,7 @@ void sylva__grid_free(sylva__grid *g) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
     for (size_t i = 0; i < ncols; i++) sylva__free(g->obstacle_cols[i]);
   }
+  for (int s = 0; s < g->obstacle_slots; s++) sylva__footprint_free(g->obstacles[s].fp);
   if (g->site) {
     size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
     for (size_t i = 0; i < nchunks; i++) sylva__free(g->site->chunk[i]);
@@ -82,7 +84,7 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
          (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
-         (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes +
+         (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes + g->footprint_bytes +
          (size_t)g->sky_count * sizeof(sylva_sky_dir) + sylva__grid_site_bytes(g);
 }
 
@@ -517,8 +519,30 @@ static void drop_empty_lists(sylva__grid *g, const int c0[2], const int c1[2]) {
     }
 }
 
-/* Makes room for one more slot, label and entry in every column of o; the grid
- * holds the same obstacles whether it succeeds or not. */
+/* The i-th voxel box of o (0 <= i < box_count(o)) over its z range. */
+static int box_count(const sylva__obstacle *o) { return o->fp ? o->fp->rect_count : 1; }
+static sylva__obstacle_box box_of(const sylva__obstacle *o, int i) {
+  if (!o->fp) return (sylva__obstacle_box){{o->lo[0], o->lo[1], o->lo[2]}, {o->hi[0], o->hi[1], o->hi[2]}, o->id};
+  const int32_t *r = o->fp->rect[i];
+  return (sylva__obstacle_box){{r[0], r[1], o->lo[2]}, {r[2], r[3], o->hi[2]}, o->id};
+}
+
+/* Runs the statements given for every chunk column that a box of o overlaps, with
+ * list (its list's place) and box (the box) in scope. */
+#define FOR_EACH_LISTING(g, o, list, box, ...)                                               \
+  for (int i_ = 0; i_ < box_count(o); i_++) {                                                 \
+    const sylva__obstacle_box box = box_of(o, i_);                                            \
+    if (box.hi[0] <= box.lo[0] || box.hi[1] <= box.lo[1]) continue;                           \
+    for (int cy_ = box.lo[1] >> 4; cy_ <= (box.hi[1] - 1) >> 4; cy_++)                        \
+      for (int cx_ = box.lo[0] >> 4; cx_ <= (box.hi[0] - 1) >> 4; cx_++) {                    \
+        sylva__obstacle_list **list = &(g)->obstacle_cols[(size_t)cy_ * (size_t)(g)->c[0] + (size_t)cx_]; \
+        __VA_ARGS__                                                                           \
+      }                                                                                       \
+  }
+
+/* Makes room for one more slot, label and entry in every column of o (as many as
+ * its boxes over the column); the grid holds the same obstacles whether it succeeds
+ * or not. */
 static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o, bool zone) {
   if (g->obstacle_slots == g->obstacle_cap) {
     if (g->obstacle_cap > INT32_MAX / 4) return SYLVA_ENOMEM;
@@ -548,17 +572,20 @@ static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o, bool zone)
     g->obstacle_cols = sylva__calloc(ncols, sizeof *g->obstacle_cols);
     if (!g->obstacle_cols) return SYLVA_ENOMEM;
   }
-  for (int cy = c0[1]; cy < c1[1]; cy++)
-    for (int cx = c0[0]; cx < c1[0]; cx++) {
-      sylva__obstacle_list **l = &g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
-      int32_t count = *l ? (*l)->count : 0, cap = *l ? (*l)->cap : 0;
-      if (count < cap) continue;
+  /* each listing counted in its list's count (room made as needed), then given back */
+  size_t counted = 0;
+  bool failed = false;
+  FOR_EACH_LISTING(g, o, l, box, {
+    (void)box;
+    if (failed) continue;
+    int32_t count = *l ? (*l)->count : 0, cap = *l ? (*l)->cap : 0;
+    if (count == cap) {
       int32_t grown = cap ? cap * 2 : 4;
       sylva__obstacle_list *m = cap > INT32_MAX / 4 ? NULL :
           sylva__realloc(*l, sizeof **l + (size_t)grown * sizeof(sylva__obstacle_box));
       if (!m) {
-        drop_empty_lists(g, c0, c1); /* the lists made for o, so that empty means absent */
-        return SYLVA_ENOMEM;
+        failed = true;
+        continue;
       }
       m->count = count;
       m->cap = grown;
@@ -566,14 +593,31 @@ static int obstacle_reserve(sylva__grid *g, const sylva__obstacle *o, bool zone)
       g->obstacle_list_bytes += (size_t)(grown - cap) * sizeof(sylva__obstacle_box) +
                                 (cap ? 0 : sizeof **l);
     }
+    (*l)->count++;
+    counted++;
+  })
+  FOR_EACH_LISTING(g, o, l, box, {
+    (void)box;
+    if (counted == 0) continue;
+    (*l)->count--;
+    counted--;
+  })
+  if (failed) {
+    drop_empty_lists(g, c0, c1); /* the lists made for o, so that empty means absent */
+    return SYLVA_ENOMEM;
+  }
   return SYLVA_OK;
 }
 
-int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, const double min[3],
-                                  const double max[3], bool zone) {
+int sylva__grid_add_obstacle_def(sylva__grid *g, int id, const sylva_obstacle_def *def) {
+  const char *label = def->label;
+  bool zone = def->kind == SYLVA_OBSTACLE_ZONE;
   if (!label || !label[0] || strlen(label) >= SYLVA_LABEL_MAX) return SYLVA_EINVAL;
-  for (int a = 0; a < 3; a++)
-    if (!isfinite(min[a]) || !isfinite(max[a]) || !(max[a] > min[a])) return SYLVA_EINVAL;
+  if (def->kind != SYLVA_OBSTACLE_SOLID && !zone) return SYLVA_EINVAL;
+  bool prism = def->footprint.ring_count != 0;
+  for (int a = prism ? 2 : 0; a < 3; a++)
+    if (!isfinite(def->min[a]) || !isfinite(def->max[a]) || !(def->max[a] > def->min[a]))
+      return SYLVA_EINVAL;
   if (id < g->next_obstacle_id || id == INT_MAX) return SYLVA_EINVAL;
   if (sylva__grid_find_obstacle(g, label) >= 0) return SYLVA_EINVAL;
   sylva__obstacle ob;
@@ -582,11 +626,32 @@ int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, con
   ob.live = true;
   ob.zone = zone;
   strcpy(ob.label, label);
-  memcpy(ob.min, min, sizeof ob.min);
-  memcpy(ob.max, max, sizeof ob.max);
+  memcpy(ob.min, def->min, sizeof ob.min);
+  memcpy(ob.max, def->max, sizeof ob.max);
+  if (prism) {
+    int rc = sylva__footprint_copy(&def->footprint, &ob.fp);
+    if (rc) return rc;
+    for (int a = 0; a < 2; a++) {
+      ob.min[a] = ob.fp->min[a];
+      ob.max[a] = ob.fp->max[a];
+    }
+    if (!(ob.max[0] > ob.min[0]) || !(ob.max[1] > ob.min[1])) {
+      sylva__footprint_free(ob.fp);
+      return SYLVA_EINVAL;
+    }
+    /* a zone's columns are never listed: it needs no rectangles */
+    rc = zone ? SYLVA_OK : sylva__footprint_voxelize(ob.fp, g->min, g->voxel, g->n);
+    if (rc) {
+      sylva__footprint_free(ob.fp);
+      return rc;
+    }
+  }
   obstacle_voxels(g, &ob);
   int rc = obstacle_reserve(g, &ob, zone);
-  if (rc) return rc;
+  if (rc) {
+    sylva__footprint_free(ob.fp);
+    return rc;
+  }
   /* nothing fails from here on */
   int s = g->obstacle_slots++;
   g->obstacles[s] = ob;
@@ -595,16 +660,9 @@ int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, con
   g->label_slot[label_entry(g, label)] = s;
   g->obstacle_count++;
   g->next_obstacle_id = id + 1;
+  if (ob.fp) g->footprint_bytes += sylva__footprint_bytes(ob.fp);
   if (zone) return id; /* listed by id and label only: it blocks and darkens nothing */
-  int c0[2], c1[2];
-  if (obstacle_columns(&ob, c0, c1)) {
-    sylva__obstacle_box box = {{ob.lo[0], ob.lo[1], ob.lo[2]}, {ob.hi[0], ob.hi[1], ob.hi[2]}, id};
-    for (int cy = c0[1]; cy < c1[1]; cy++)
-      for (int cx = c0[0]; cx < c1[0]; cx++) {
-        sylva__obstacle_list *l = g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
-        l->box[l->count++] = box;
-      }
-  }
+  if (g->obstacle_cols) FOR_EACH_LISTING(g, &ob, l, box, { (*l)->box[(*l)->count++] = box; })
   site_forget(g);
   if (ob.hi[2] > g->sky_top) g->sky_top = ob.hi[2];
   return id;
@@ -612,7 +670,10 @@ int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, con
 
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]) {
-  return sylva__grid_add_obstacle_kind(g, g->next_obstacle_id, label, min, max, false);
+  sylva_obstacle_def def = {.label = label};
+  memcpy(def.min, min, sizeof def.min);
+  memcpy(def.max, max, sizeof def.max);
+  return sylva__grid_add_obstacle_def(g, g->next_obstacle_id, &def);
 }
 
 int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
@@ -625,13 +686,18 @@ int sylva__grid_remove_obstacle(sylva__grid *g, int id) {
     for (int cy = c0[1]; cy < c1[1]; cy++)
       for (int cx = c0[0]; cx < c1[0]; cx++) {
         sylva__obstacle_list *l = g->obstacle_cols[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
-        int32_t i = 0;
-        while (l->box[i].id != id) i++;
-        l->box[i] = l->box[--l->count];
+        for (int32_t i = 0; l && i < l->count;) /* a prism may have several boxes here */
+          if (l->box[i].id == id)
+            l->box[i] = l->box[--l->count];
+          else
+            i++;
       }
     drop_empty_lists(g, c0, c1); /* a column left without obstacles costs nothing again */
   }
   label_erase(g, (size_t)label_entry(g, o->label));
+  if (o->fp) g->footprint_bytes -= sylva__footprint_bytes(o->fp);
+  sylva__footprint_free(o->fp);
+  o->fp = NULL;
   o->live = false;
   for (int k = s + 1; k <= g->obstacle_slots; k += k & -k) g->obstacle_rank[k]--;
   g->obstacle_count--;

@@ -37,11 +37,15 @@ typedef struct sylva__obstacle {
   bool live; /* false: removed, a slot waiting for the next compaction */
   bool zone; /* a clearance zone: listed, never in a column; it blocks nothing */
   char label[SYLVA_LABEL_MAX];
-  double min[3], max[3];
+  double min[3], max[3]; /* a prism's: its footprint's bounds and its z range */
   int lo[3], hi[3]; /* voxel box [lo, hi), clipped to the grid */
+  /* A prism's footprint, owned (freed when the obstacle is removed); NULL for a box.
+   * Its voxel rectangles, each over lo[2]..hi[2], are what the columns list. */
+  struct sylva__footprint *fp;
 } sylva__obstacle;
 
-/** An obstacle's voxel box in the list of a chunk column it overlaps. */
+/** An obstacle's voxel box (a box's one, or one of a prism's rectangles) in the list
+ *  of a chunk column it overlaps. */
 typedef struct sylva__obstacle_box {
   int32_t lo[3], hi[3];
   int32_t id;
@@ -79,6 +83,7 @@ typedef struct sylva__grid {
    * grid): NULL or the boxes of the obstacles over that column. */
   sylva__obstacle_list **obstacle_cols;
   size_t obstacle_list_bytes; /* the lists, headers and capacity */
+  size_t footprint_bytes;     /* the prisms' footprints */
   /* A site's sky (site.h): none in the zenith model. A voxel's factor is computed
    * when first read and kept (per chunk), and forgotten when an obstacle comes or
    * goes. */
@@ -141,16 +146,15 @@ typedef struct sylva__pyramid {
  *  leaves the shade as it was. */
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
 
-/** Adds an obstacle with the next id; returns the id, SYLVA_EINVAL for a bad box or
+/** Adds a solid box with the next id; returns the id, SYLVA_EINVAL for a bad box or
  *  label or a label in use, SYLVA_ENOMEM leaving the grid as it was. */
 int sylva__grid_add_obstacle(sylva__grid *g, const char *label, const double min[3],
                              const double max[3]);
-/** The same with a given id, above every id given so far (a snapshot's obstacles;
- *  SYLVA_EINVAL for an id at or below one), solid (zone false) or a clearance zone
- *  (zone true), which is kept with its id and label but neither blocks, nor darkens,
- *  nor hides sky. */
-int sylva__grid_add_obstacle_kind(sylva__grid *g, int id, const char *label, const double min[3],
-                                  const double max[3], bool zone);
+/** Adds the obstacle of def (a box or a prism, solid or a clearance zone, which is
+ *  kept with its id and label but neither blocks, nor darkens, nor hides sky) with a
+ *  given id, above every id given so far (a snapshot's obstacles; SYLVA_EINVAL for an
+ *  id at or below one, or a def sylva_world_add_obstacle() refuses). */
+int sylva__grid_add_obstacle_def(sylva__grid *g, int id, const sylva_obstacle_def *def);
 /** Removes the obstacle of this id (never allocates); SYLVA_ENOTFOUND if none. */
 int sylva__grid_remove_obstacle(sylva__grid *g, int id);
 /** Slot of the live obstacle with this id, or -1. */

@@ -8,7 +8,9 @@
  * schedules follow the nodes; SCALED when a species has ref_rho, acclimation, years
  * or a nursery: every species record then has those four places too; CROWN with a
  * crown limit, FOLIAGE with foliage not the default, WOOD with heartwood, REACH
- * with a lateral reach, CARBON with a wood density or a biomass allometry (sylva/species_fields.h). The voxel grid is not stored: shade
+ * with a lateral reach, CARBON with a wood density or a biomass allometry (sylva/species_fields.h),
+ * PRISMS when an obstacle is a prism: each obstacle then carries its footprint's
+ * ring count (0 for a box), ring sizes and points. The voxel grid is not stored: shade
  * is an exact integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -24,7 +26,7 @@ static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
 enum { HEADER = 32 };
 /* the header's flags */
 enum { SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8, FOLIAGE = 16, WOOD = 32, REACH = 64,
-       CARBON = 128 };
+       CARBON = 128, PRISMS = 256 };
 /* Places of the species record that every image has; those up to 42 only with SCALED,
  * 43 and 44 only with CROWN (which implies SCALED), 45 to 47 only with FOLIAGE (which
  * implies both), 48 only with WOOD (which implies all three), 49 only with REACH
@@ -198,6 +200,10 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
       (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0) |
       (crown ? CROWN : 0) | (foliage ? FOLIAGE : 0) | (wood ? WOOD : 0) | (reach ? REACH : 0) |
       (carbon ? CARBON : 0);
+  bool prisms = false;
+  for (int s = 0; s < w->grid.obstacle_slots; s++)
+    prisms = prisms || (w->grid.obstacles[s].live && w->grid.obstacles[s].fp);
+  if (prisms) flags |= PRISMS;
   int places = species_places(flags);
   uint8_t zero[HEADER] = {0};
   put(&o, zero, HEADER);
@@ -233,6 +239,15 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
     for (int a = 0; a < 3; a++) put_f64(&o, ob->min[a]);
     for (int a = 0; a < 3; a++) put_f64(&o, ob->max[a]);
     if (conflicts) put_u8(&o, ob->zone);
+    if (prisms) {
+      const sylva__footprint *f = ob->fp;
+      put_u32(&o, f ? (uint32_t)f->ring_count : 0);
+      for (int r = 0; f && r < f->ring_count; r++) put_u32(&o, (uint32_t)f->ring_size[r]);
+      for (int i = 0; f && i < f->point_count; i++) {
+        put_f64(&o, f->pt[i][0]);
+        put_f64(&o, f->pt[i][1]);
+      }
+    }
   }
   put_u32(&o, (uint32_t)w->plant_count);
   for (int i = 0; i < w->plant_count; i++) {
@@ -456,10 +471,39 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
     for (int a = 0; a < 3; a++) mn[a] = get_f64(r);
     for (int a = 0; a < 3; a++) mx[a] = get_f64(r);
     uint8_t zone = conflicts ? get_u8(r) : 0;
+    sylva_obstacle_def od = {.label = label, .kind = zone ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID};
+    memcpy(od.min, mn, sizeof od.min);
+    memcpy(od.max, mx, sizeof od.max);
+    int *sizes = NULL;
+    double(*pts)[2] = NULL;
+    uint32_t rings = (flags & PRISMS) ? get_u32(r) : 0, npts = 0;
     if (r->bad) break;
-    if (id < 0 || id >= next_obstacle || zone > 1) SYLVA__FAIL(SYLVA_EBADIMAGE);
-    /* refuses an id at or below the previous one (SYLVA_EINVAL) */
-    int added = sylva__grid_add_obstacle_kind(&w->grid, id, label, mn, mx, zone != 0);
+    if (rings > SYLVA_FOOTPRINT_MAX_POINTS / 3) SYLVA__FAIL(SYLVA_EBADIMAGE);
+    if (rings) {
+      if (!(sizes = sylva__malloc(rings * sizeof *sizes))) SYLVA__FAIL(SYLVA_ENOMEM);
+      for (uint32_t k = 0; k < rings; k++) {
+        uint32_t n = get_u32(r);
+        if (n > SYLVA_FOOTPRINT_MAX_POINTS - npts) r->bad = true;
+        if (r->bad) break;
+        sizes[k] = (int)n;
+        npts += n;
+      }
+      if (!r->bad && !(pts = sylva__malloc((npts ? npts : 1) * sizeof *pts))) {
+        sylva__free(sizes);
+        SYLVA__FAIL(SYLVA_ENOMEM);
+      }
+      for (uint32_t k = 0; k < npts && !r->bad; k++) {
+        pts[k][0] = get_f64(r);
+        pts[k][1] = get_f64(r);
+      }
+      od.footprint = (sylva_footprint){(const double(*)[2])pts, (int)npts, sizes, (int)rings};
+    }
+    int added = r->bad ? SYLVA_EBADIMAGE : id < 0 || id >= next_obstacle || zone > 1 ? SYLVA_EBADIMAGE
+                /* refuses an id at or below the previous one (SYLVA_EINVAL) */
+                : sylva__grid_add_obstacle_def(&w->grid, id, &od);
+    sylva__free(sizes);
+    sylva__free(pts);
+    if (r->bad) break;
     if (added < 0) SYLVA__FAIL(added == SYLVA_ENOMEM ? added : SYLVA_EBADIMAGE);
   }
   w->grid.next_obstacle_id = next_obstacle;
@@ -636,7 +680,7 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH | CARBON))
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH | CARBON | PRISMS))
     return SYLVA_EBADIMAGE;
   if ((reserved & CROWN) && !(reserved & SCALED)) return SYLVA_EBADIMAGE;
   if ((reserved & FOLIAGE) && !(reserved & CROWN)) return SYLVA_EBADIMAGE;

@@ -296,6 +296,9 @@ static void canopy_foot(sylva_world *w) {
     for (int y = lo[1]; y < hi[1]; y++)
       for (int x = lo[0]; x < hi[0]; x++) {
         size_t c = (size_t)y * (size_t)w->col_n[0] + (size_t)x;
+        if (ob->fp && !sylva__footprint_inside(ob->fp, w->def.min[0] + (x + 0.5) * e,
+                                               w->def.min[1] + (y + 0.5) * e))
+          continue; /* a prism covers the cells whose centres its footprint holds */
         if (!(w->foot[c >> 3] & (1u << (c & 7)))) covered++;
         w->foot[c >> 3] |= (uint8_t)(1u << (c & 7));
       }

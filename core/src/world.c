@@ -744,9 +744,7 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
 
 int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def) {
   if (w->status) return w->status;
-  if (def->kind != SYLVA_OBSTACLE_SOLID && def->kind != SYLVA_OBSTACLE_ZONE) return SYLVA_EINVAL;
-  int id = sylva__grid_add_obstacle_kind(&w->grid, w->grid.next_obstacle_id, def->label, def->min,
-                                         def->max, def->kind == SYLVA_OBSTACLE_ZONE);
+  int id = sylva__grid_add_obstacle_def(&w->grid, w->grid.next_obstacle_id, def);
   if (id < 0) return id;
   bool reports = w->reports;
   w->reports |= def->kind == SYLVA_OBSTACLE_ZONE;
@@ -817,7 +815,10 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   }
   /* nothing fails from here on */
   int T = w->iteration;
-  size_t n = sylva__prune(w, min, max, T, false, w->pruned_ids.data, &w->pruned_ids.len);
+  sylva__obstacle box = {.fp = NULL};
+  memcpy(box.min, min, sizeof box.min);
+  memcpy(box.max, max, sizeof box.max);
+  size_t n = sylva__prune(w, &box, T, false, w->pruned_ids.data, &w->pruned_ids.len);
   if (!n) w->reports = reports; /* nothing cut: as it was */
   if (n) {
     sylva__light_collect(w, T + 1, NULL); /* as after a step's shedding */
@@ -972,7 +973,7 @@ static int finish_step(sylva_world *w, int T) {
       done = w->prunes.data[k].zone == d->zone && sylva__prune_due(&w->prunes.data[k], T);
     if (done) continue;
     const sylva__obstacle *z = &w->grid.obstacles[slot];
-    pruned |= sylva__prune(w, z->min, z->max, T, true, w->shed.data, &w->shed.len) > 0;
+    pruned |= sylva__prune(w, z, T, true, w->shed.data, &w->shed.len) > 0;
   }
   if (pruned) sylva__light_collect(w, T + 1, NULL); /* as after shedding */
   SYLVA__CHECK_WORLD(w, SYLVA__AFTER_SHEDDING);
@@ -1133,6 +1134,7 @@ static void obstacle_def(const sylva__obstacle *o, sylva_obstacle_def *out) {
   memcpy(out->min, o->min, sizeof out->min);
   memcpy(out->max, o->max, sizeof out->max);
   out->kind = o->zone ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID;
+  out->footprint = o->fp ? sylva__footprint_view(o->fp) : (sylva_footprint){0};
 }
 
 int sylva_world_obstacle_at(const sylva_world *w, int i, int *id, sylva_obstacle_def *out) {
@@ -1232,6 +1234,7 @@ uint64_t sylva_world_hash(const sylva_world *w) {
     h = fnv(h, o->label, strlen(o->label));
     h = fnv(h, o->min, sizeof(double) * 3);
     h = fnv(h, o->max, sizeof(double) * 3);
+    if (o->fp) h = fnv(h, o->fp->pt, sizeof *o->fp->pt * (size_t)o->fp->point_count);
   }
   return h;
 }

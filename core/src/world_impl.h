@@ -5,6 +5,7 @@
 #include "alloc.h"
 #include "debug.h"
 #include "grid.h"
+#include "prism.h"
 #include "rng.h"
 #include "skeleton.h"
 #include "sylva/world.h"

@@ -280,14 +280,8 @@ void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w) {
     int id;
     sylva_obstacle_def o;
     sylva_world_obstacle_at(w, i, &id, &o);
-    sylva__strbuf_puts(b, i ? ",{\"id\":" : "{\"id\":");
-    sylva__strbuf_json_string(b, o.label ? o.label : "");
-    sylva__strbuf_puts(b, o.kind == SYLVA_OBSTACLE_ZONE ? ",\"kind\":\"zone\",\"min\":"
-                                                      : ",\"kind\":\"box\",\"min\":");
-    sylva__put_vec3(b, o.min);
-    sylva__strbuf_puts(b, ",\"max\":");
-    sylva__put_vec3(b, o.max);
-    sylva__strbuf_putc(b, '}');
+    if (i) sylva__strbuf_putc(b, ',');
+    sylva__put_obstacle(b, &o, true);
   }
   sylva__strbuf_puts(b, "],\"plants\":[");
   int plants = sylva_world_plant_count(w);

@@ -14,6 +14,8 @@
 /** Decimals of radii. */
 #define SYLVA__RADIUS_DECIMALS 5
 
+/** Appends an obstacle's JSON (sylva_obstacle_json(), obstacle.c). */
+void sylva__put_obstacle(sylva__strbuf *b, const sylva_obstacle_def *o, bool compact);
 /** [x,y,z] with the shortest exact numbers. */
 void sylva__put_vec3(sylva__strbuf *b, const double v[3]);
 /** "x,y,z,radius" of a node (positions with 4 decimals, the radius with 5, trimmed). */

@@ -448,6 +448,8 @@ void sylva_msg_free(sylva_msg *m) {
     free(m->add_plant_species[i]);
   free(m->add_plants);
   free(m->add_plant_species);
+  for (int i = 0; m->add_obstacles && i < m->add_obstacle_count; i++)
+    sylva_scenario_obstacle_clear(&m->add_obstacles[i]);
   free(m->add_obstacles);
   for (int i = 0; m->remove_obstacles && i < m->remove_obstacle_count; i++)
     free(m->remove_obstacles[i]);

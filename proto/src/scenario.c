@@ -16,6 +16,7 @@
 #include "sylva/json_check.h"
 #include "sylva/species_fields.h"
 #include "sylva/status.h"
+#include "encode_parts.h"
 #include "scenario_parts.h"
 #include "strbuf.h"
 
@@ -762,43 +763,6 @@ int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *
   return rc;
 }
 
-int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obstacle *o) {
-  static const char *const keys[] = {"id", "kind", "min", "max"};
-  int rc = sylva__want_object(p, obj);
-  if (!rc) rc = sylva__check_keys(p, obj, keys, 4);
-  if (rc) return rc;
-  for (int i = 0; i < 4; i++)
-    if (!member(obj, keys[i])) return sylva__fail_at_key(p, keys[i], "required");
-  size_t old = sylva__ptr_push(p, "id");
-  rc = sylva__want_label(p, member(obj, "id"), o->id);
-  sylva__ptr_pop(p, old);
-  if (rc) return rc;
-  old = sylva__ptr_push(p, "kind");
-  const char *kind = "";
-  rc = sylva__want_string(p, member(obj, "kind"), &kind);
-  o->kind = strcmp(kind, "zone") == 0 ? SYLVA_OBSTACLE_ZONE : SYLVA_OBSTACLE_SOLID;
-  if (!rc && strcmp(kind, "box") != 0 && strcmp(kind, "zone") != 0) {
-    char q[80];
-    rc = sylva__fail(p, "unknown obstacle kind %s (known: box, zone)", sylva__quote(q, kind));
-  }
-  sylva__ptr_pop(p, old);
-  if (rc) return rc;
-  old = sylva__ptr_push(p, "min");
-  rc = sylva__want_vec3(p, member(obj, "min"), o->min);
-  sylva__ptr_pop(p, old);
-  if (rc) return rc;
-  old = sylva__ptr_push(p, "max");
-  rc = sylva__want_vec3(p, member(obj, "max"), o->max);
-  for (int i = 0; !rc && i < 3; i++)
-    if (!(o->max[i] > o->min[i])) {
-      char a[SYLVA_FMT_BUFSIZE], b[SYLVA_FMT_BUFSIZE];
-      rc = sylva__fail(p, "must be greater than min on every axis (%c: %s <= %s)", "xyz"[i],
-                       sylva__num(a, o->max[i]), sylva__num(b, o->min[i]));
-    }
-  sylva__ptr_pop(p, old);
-  return rc;
-}
-
 /* "1.2e12": two significant digits, no '+' or leading zeros in the exponent. */
 static const char *sci(char buf[48], double v) {
   char tmp[32];
@@ -880,6 +844,7 @@ static void scenario_free_parts(sylva_scenario *s) {
     free(s->plants[i].nodes);
   }
   free(s->plants);
+  for (int i = 0; s->obstacles && i < s->obstacle_count; i++) sylva_scenario_obstacle_clear(&s->obstacles[i]);
   free(s->obstacles);
   free(s->management);
   free(s);
@@ -1269,14 +1234,9 @@ char *sylva_scenario_json(const sylva_scenario *s) {
   sylva__strbuf_puts(&b, s->plant_count ? "\n  ],\n  \"obstacles\": [" : "],\n  \"obstacles\": [");
   for (int i = 0; i < s->obstacle_count; i++) {
     const sylva_scenario_obstacle *o = &s->obstacles[i];
-    sylva__strbuf_puts(&b, i ? ",\n    {\"id\": " : "\n    {\"id\": ");
-    sylva__strbuf_json_string(&b, o->id);
-    sylva__strbuf_puts(&b, o->kind == SYLVA_OBSTACLE_ZONE ? ", \"kind\": \"zone\", \"min\": "
-                                                          : ", \"kind\": \"box\", \"min\": ");
-    put_vec3(&b, o->min);
-    sylva__strbuf_puts(&b, ", \"max\": ");
-    put_vec3(&b, o->max);
-    sylva__strbuf_putc(&b, '}');
+    sylva__strbuf_puts(&b, i ? ",\n    " : "\n    ");
+    sylva_obstacle_def od = sylva_scenario_obstacle_def(o);
+    sylva__put_obstacle(&b, &od, false);
   }
   sylva__strbuf_puts(&b, s->obstacle_count ? "\n  ]" : "]");
   if (s->management_count) { /* none is the default: such scenarios stay as they were */
@@ -1334,9 +1294,7 @@ int sylva_scenario_build(const sylva_scenario *s, sylva_world **out, char *err, 
   /* Obstacles first, so that a root inside one is found when its plant is added. */
   for (int i = 0; i < s->obstacle_count; i++) {
     const sylva_scenario_obstacle *o = &s->obstacles[i];
-    sylva_obstacle_def od = {.label = o->id, .kind = o->kind};
-    memcpy(od.min, o->min, sizeof od.min);
-    memcpy(od.max, o->max, sizeof od.max);
+    sylva_obstacle_def od = sylva_scenario_obstacle_def(o);
     rc = sylva_world_add_obstacle(w, &od);
     if (rc < 0) {
       size_t old = sylva__ptr_push(&p, "obstacles");

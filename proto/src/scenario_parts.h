@@ -104,7 +104,9 @@ bool sylva__find_duplicate(sylva__id_ref *refs, int count, int *first, int *seco
 int sylva__parse_plant(sylva__parser *p, const cJSON *obj, const sylva__id_ref *by_name,
                        int species_count, int *stem_count, sylva_scenario_plant *pl,
                        const char **species_name);
-/** An obstacle object {"id", "kind": "box", "min", "max"} with max > min. */
+/** An obstacle object (obstacle.c): {"id", "kind": "box", "min", "max"} with max > min,
+ *  {"id", "kind": "prism", "polygon", "holes", "z"}, or "kind": "zone" with either
+ *  shape. On failure o may own a partial footprint (sylva_scenario_obstacle_clear()). */
 int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obstacle *o);
 /** Parses `management` (after the obstacles, which it names) into s. */
 int sylva__parse_management(sylva__parser *p, const cJSON *item, sylva_scenario *s);

@@ -291,7 +291,8 @@ static int edit_from_msg(const sylva_msg *m, edit *e) {
     memcpy(eo->min, o->min, sizeof eo->min);
     memcpy(eo->max, o->max, sizeof eo->max);
     eo->kind = o->kind;
-    if (!(eo->id = strdup(o->id))) return SYLVA_ENOMEM;
+    sylva_obstacle_def def = sylva_scenario_obstacle_def(o);
+    if (!(eo->id = strdup(o->id)) || edit_obstacle_footprint(eo, &def.footprint)) return SYLVA_ENOMEM;
   }
   if (m->prune) {
     e->prune.set = true;

@@ -9,6 +9,7 @@
 
 #include "server_error.h"
 #include "sylva/status.h"
+#include "sylva/scenario.h"
 #include "sylva/world.h"
 
 /* ---- writing ---------------------------------------------------------------------- */
@@ -16,6 +17,15 @@
 static cJSON *vec3(const double v[3]) { return cJSON_CreateDoubleArray(v, 3); }
 
 static cJSON *encode_obstacle(const edit_obstacle *o) {
+  if (o->ring_count) { /* a prism: as a scenario writes it (format 4) */
+    sylva_obstacle_def def = {o->id, {o->min[0], o->min[1], o->min[2]},
+                              {o->max[0], o->max[1], o->max[2]}, o->kind,
+                              {(const double(*)[2])o->points, o->point_count, o->ring_sizes, o->ring_count}};
+    char *text = sylva_obstacle_json(&def, true);
+    cJSON *obj = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    return obj;
+  }
   cJSON *obj = cJSON_CreateObject();
   if (obj && cJSON_AddStringToObject(obj, "id", o->id) &&
       cJSON_AddStringToObject(obj, "kind", o->kind == SYLVA_OBSTACLE_ZONE ? "zone" : "box") &&
@@ -44,6 +54,8 @@ char *command_log_encode(const edit *e) {
   int format = 2;
   for (int i = 0; i < e->plant_count; i++)
     if (e->plants[i].age) format = 3;
+  for (int i = 0; i < e->obstacle_count; i++)
+    if (e->obstacles[i].ring_count) format = 4;
   cJSON *root = cJSON_CreateObject();
   cJSON *removals = NULL, *obstacles = NULL, *plants = NULL;
   bool ok = root && cJSON_AddNumberToObject(root, "format", format) &&
@@ -143,11 +155,34 @@ static int read_array(reader *r, const cJSON *root, const char *key, const cJSON
   return SERVER_OK;
 }
 
+/* A format-4 obstacle, a box or a prism, read as a scenario's are. */
+static int read_obstacle_4(reader *r, const cJSON *item, edit_obstacle *o) {
+  char *text = cJSON_PrintUnformatted(item);
+  if (!text) return SERVER_ENOMEM;
+  sylva_scenario_obstacle so;
+  int rc = sylva_obstacle_parse(text, strlen(text), r->ptr, &so, r->err, r->errlen);
+  free(text);
+  if (rc) return rc == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
+  if (!(o->id = strdup(so.id))) {
+    sylva_scenario_obstacle_clear(&so);
+    return SERVER_ENOMEM;
+  }
+  memcpy(o->min, so.min, sizeof o->min);
+  memcpy(o->max, so.max, sizeof o->max);
+  o->kind = so.kind;
+  o->points = so.points; /* the footprint, handed over */
+  o->ring_sizes = so.ring_sizes;
+  o->point_count = so.point_count;
+  o->ring_count = so.ring_count;
+  return SERVER_OK;
+}
+
 static int read_obstacle(reader *r, const cJSON *item, edit_obstacle *o) {
   static const char *const keys[] = {"id", "kind", "min", "max"};
   char base[sizeof r->ptr];
   memcpy(base, r->ptr, sizeof base);
   if (!cJSON_IsObject(item)) return bad(r, "expected an object");
+  if (r->format >= 4) return read_obstacle_4(r, item, o);
   int rc = check_keys(r, item, keys, 4);
   const cJSON *kind = cJSON_GetObjectItemCaseSensitive(item, "kind");
   at(r, base, "kind", 0);

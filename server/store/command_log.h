@@ -9,7 +9,9 @@
  *    "add_plants": [{"id": "oak2", "species": "oak", "roots": [[x, y, z]]}],
  *    "prune": {"zone": "road"}}
  *
- * Format 3 added a plant's optional "age" (years at planting); format 2 added zones
+ * Format 4 added prisms ({"id", "kind": "prism" or "zone", "polygon", "holes", "z"},
+ * docs/scenario.md, "Obstacles"), its obstacles read as a scenario's are; format 3
+ * added a plant's optional "age" (years at planting); format 2 added zones
  * (kind "zone") and the optional prune; format 1 has neither.
  * Records without "format" are read as format 0: the protocol-1 `edit` message
  * that stores written before the format existed hold (the same three arrays,
@@ -21,9 +23,10 @@
 
 #include "edit.h"
 
-/** The newest format, which this build writes for an edit that needs it (a plant
- *  with an age); other edits are written as format 2. It reads every format up to it. */
-#define COMMAND_LOG_FORMAT 3
+/** The newest format, which this build writes for an edit that needs it (a prism;
+ *  3 for a plant with an age); other edits are written as format 2. It reads every
+ *  format up to it. */
+#define COMMAND_LOG_FORMAT 4
 
 /** The record of an edit (malloc'd, no newline), or NULL when memory ran out. The
  *  same edit always gives the same bytes; numbers round-trip exactly. */

@@ -18,9 +18,25 @@ int edit_reserve(edit *e, int removals, int obstacles, int plants) {
   return SYLVA_OK;
 }
 
+int edit_obstacle_footprint(edit_obstacle *o, const sylva_footprint *f) {
+  if (!f->ring_count) return SYLVA_OK;
+  if (!(o->points = malloc((size_t)f->point_count * sizeof *o->points)) ||
+      !(o->ring_sizes = malloc((size_t)f->ring_count * sizeof *o->ring_sizes)))
+    return SYLVA_ENOMEM;
+  memcpy(o->points, f->points, (size_t)f->point_count * sizeof *o->points);
+  memcpy(o->ring_sizes, f->ring_sizes, (size_t)f->ring_count * sizeof *o->ring_sizes);
+  o->point_count = f->point_count;
+  o->ring_count = f->ring_count;
+  return SYLVA_OK;
+}
+
 void edit_free(edit *e) {
   for (int i = 0; e->removals && i < e->removal_count; i++) free(e->removals[i]);
-  for (int i = 0; e->obstacles && i < e->obstacle_count; i++) free(e->obstacles[i].id);
+  for (int i = 0; e->obstacles && i < e->obstacle_count; i++) {
+    free(e->obstacles[i].id);
+    free(e->obstacles[i].points);
+    free(e->obstacles[i].ring_sizes);
+  }
   for (int i = 0; e->plants && i < e->plant_count; i++) {
     free(e->plants[i].id);
     free(e->plants[i].species);
@@ -68,7 +84,8 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
   for (int i = 0; i < e->obstacle_count; i++) {
     const edit_obstacle *o = &e->obstacles[i];
     sylva_obstacle_def def = {o->id, {o->min[0], o->min[1], o->min[2]},
-                              {o->max[0], o->max[1], o->max[2]}, o->kind};
+                              {o->max[0], o->max[1], o->max[2]}, o->kind,
+                              {(const double(*)[2])o->points, o->point_count, o->ring_sizes, o->ring_count}};
     rc = sylva_world_add_obstacle(copy, &def);
     if (rc < 0) {
       snprintf(err, errlen, "/add_obstacles/%d/id: %s", i,

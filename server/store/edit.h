@@ -19,12 +19,19 @@ typedef struct edit_plant {
                 species with years */
 } edit_plant;
 
-/** An obstacle to add: a solid box or a clearance zone. */
+/** An obstacle to add: solid or a clearance zone, a box or a prism (its footprint's
+ *  points and ring sizes owned, ring_count 0 for a box; sylva_obstacle_def). */
 typedef struct edit_obstacle {
   char *id;
   double min[3], max[3];
   sylva_obstacle_kind kind;
+  double (*points)[2];
+  int *ring_sizes;
+  int point_count, ring_count;
 } edit_obstacle;
+
+/** Copies a prism's footprint into o (SYLVA_ENOMEM or 0; nothing for a box). */
+int edit_obstacle_footprint(edit_obstacle *o, const sylva_footprint *f);
 
 /** Pruning now: of a zone (zone set) or of a box (zone NULL). */
 typedef struct edit_prune {

@@ -166,7 +166,7 @@ static bool edit(sylva_world *w, faults *f, outcome *o) {
       "board",
       {lo[0] + 0.05 * span[0], lo[1] + 0.05 * span[1], lo[2] + 0.8 * span[2]},
       {lo[0] + 0.15 * span[0], lo[1] + 0.15 * span[1], lo[2] + 0.82 * span[2]},
-      SYLVA_OBSTACLE_SOLID};
+      SYLVA_OBSTACLE_SOLID, {0}};
   double root[1][3] = {{lo[0] + 0.25 * span[0], lo[1] + 0.25 * span[1], lo[2]}};
   sylva_plant_def tree = {0, "late", (const double(*)[3])root, 1, 0, NULL, 0};
   double cut_min[3] = {lo[0] + 0.4 * span[0], lo[1] + 0.4 * span[1], lo[2] + 0.2 * span[2]};

@@ -330,7 +330,7 @@ static void obstacles(int edits) {
   for (int i = 0; i < 1000; i++) {
     char label[16];
     snprintf(label, sizeof label, "box%d", i);
-    sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID};
+    sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID, {0}};
     random_box(&r, 5.0, 2.0, o.min, o.max);
     if (sylva_world_add_obstacle(w, &o) < 0) exit(1);
   }
@@ -358,7 +358,7 @@ static void obstacles(int edits) {
   for (int i = 0; i < edits; i++) {
     char label[16];
     snprintf(label, sizeof label, "o%d", i);
-    sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID};
+    sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID, {0}};
     random_box(&r, 1.0, 0.5, o.min, o.max);
     ids[i] = sylva_world_add_obstacle(w, &o);
     if (ids[i] < 0) exit(1);

@@ -29,8 +29,8 @@
 /* The world: the tree and the shrub, a wall between them and a clearance zone. */
 static sylva_world *make_world(int colour_x, int colour_y, int iterations) {
   static const sylva_obstacle_def obstacles[2] = {
-      {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID},
-      {"lane", {3.0, -3.0, 0.5}, {4.0, 3.0, 4.0}, SYLVA_OBSTACLE_ZONE}};
+      {"wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID, {0}},
+      {"lane", {3.0, -3.0, 0.5}, {4.0, 3.0, 4.0}, SYLVA_OBSTACLE_ZONE, {0}}};
   return export_world(colour_x, colour_y, obstacles, 2, iterations);
 }
 
@@ -504,7 +504,7 @@ static void test_empty(void) {
   cJSON_Delete(g.json);
   free(b.data);
   /* a box alone */
-  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}, SYLVA_OBSTACLE_SOLID, {0}};
   CHECK(sylva_world_add_obstacle(w, &box) >= 0);
   sylva_mesh_options opt = {.sides = 8, .obstacles = true};
   b = write_blob(w, &opt);

@@ -24,7 +24,7 @@
 /* The world: the tree and the shrub beside a wall. */
 static sylva_world *make_world(int iterations) {
   static const sylva_obstacle_def wall = {
-      "wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID};
+      "wall", {-0.2, -3.0, 0.0}, {0.2, 3.0, 2.5}, SYLVA_OBSTACLE_SOLID, {0}};
   return export_world(0x4a7f35, 0x4a7f35, &wall, 1, iterations);
 }
 
@@ -778,7 +778,7 @@ static void test_empty(void) {
   CHECK(p.ok && p.header_v == 0 && p.header_f == 0);
   parsed_free(&p);
   free(ply.data);
-  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def box = {"a box", {1, 1, 1}, {2, 3, 4}, SYLVA_OBSTACLE_SOLID, {0}};
   CHECK(sylva_world_add_obstacle(w, &box) >= 0);
   opt.obstacles = true;
   CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_OBJ, &opt, &v, &f), 0);
@@ -791,7 +791,7 @@ static void test_empty(void) {
   parsed_free(&p);
   free(obj.data);
   /* a clearance zone is a box too, named a zone */
-  sylva_obstacle_def zone = {"road", {0, 0, 0}, {1, 1, 1}, SYLVA_OBSTACLE_ZONE};
+  sylva_obstacle_def zone = {"road", {0, 0, 0}, {1, 1, 1}, SYLVA_OBSTACLE_ZONE, {0}};
   CHECK(sylva_world_add_obstacle(w, &zone) >= 0);
   obj = write_blob(w, SYLVA_MESH_OBJ, &opt);
   p = parse_obj(&obj);

@@ -1452,7 +1452,7 @@ static sylva_world *years_world(void) {
   int oak = 0;
   sp.years = 1;
   int lime = sylva_world_add_species(w, &sp, "lime");
-  sylva_obstacle_def zone = {"crowns", {-5, -5, 1}, {5, 5, 5}, SYLVA_OBSTACLE_ZONE};
+  sylva_obstacle_def zone = {"crowns", {-5, -5, 1}, {5, 5, 5}, SYLVA_OBSTACLE_ZONE, {0}};
   CHECK(sylva_world_add_obstacle(w, &zone) >= 0);
   const double a[][3] = {{-1, 0, 0}}, b[][3] = {{1, 0, 0}};
   sylva_plant_def pa = {lime, "lime", a, 1, 5, NULL, 0}, pb = {oak, "oak", b, 1, 0, NULL, 0};

@@ -246,7 +246,7 @@ static double factor(const sylva_world *w, double x, double y, double z) {
 static void test_site_open_and_board(void) {
   sylva_sky_def def = munich;
   def.latitude = 50, def.samples = 256;
-  sylva_obstacle_def board = {"board", {-6, -6, 1.0}, {6, 6, 1.1}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def board = {"board", {-6, -6, 1.0}, {6, 6, 1.1}, SYLVA_OBSTACLE_SOLID, {0}};
   sylva_world *w = site_world(&def, &board);
   double open = factor(w, 15.05, 15.05, 0.55), under = factor(w, 0.05, 0.05, 0.55);
   CHECK_NEAR(open, 1.0, 1e-9);
@@ -261,7 +261,7 @@ static void test_site_open_and_board(void) {
 /* 50 N: 1 m north of a 6 m east-west wall (north is +y) gets less than 1 m south
  * of it; at the equator over the whole year the two sides are within 10%. */
 static void test_site_wall_sides(void) {
-  sylva_obstacle_def wall = {"wall", {-10, -0.1, 0}, {10, 0.1, 6}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def wall = {"wall", {-10, -0.1, 0}, {10, 0.1, 6}, SYLVA_OBSTACLE_SOLID, {0}};
   sylva_sky_def def = munich;
   def.latitude = 50, def.samples = 256;
   sylva_world *w = site_world(&def, &wall);

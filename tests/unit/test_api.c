@@ -21,7 +21,7 @@ static sylva_world *small_world(void) {
   int s = sylva_world_add_species(w, &sp, "oak");
   double roots[2][3] = {{0, 0, 0}, {1, 0, 0}};
   sylva_plant_def pd = {s, "shrub", (const double(*)[3])roots, 2, 0, NULL, 0};
-  sylva_obstacle_def wall = {"wall", {2, -1, 0}, {2.2, 1, 2}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def wall = {"wall", {2, -1, 0}, {2.2, 1, 2}, SYLVA_OBSTACLE_SOLID, {0}};
   if (s < 0 || sylva_world_add_plant(w, &pd, NULL) < 0 || sylva_world_add_obstacle(w, &wall) < 0) {
     sylva_world_destroy(w);
     return NULL;

@@ -52,7 +52,7 @@ static sylva_world *site(void) {
   double root[1][3] = {{0, 0, 0}};
   sylva_plant_def pd = {s, "oak", (const double(*)[3])root, 1, 0, NULL, 0};
   sylva_world_add_plant(w, &pd, NULL);
-  sylva_obstacle_def wall = {"wall", {-3, -3, 0}, {-2.8, 3, 2}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def wall = {"wall", {-3, -3, 0}, {-2.8, 3, 2}, SYLVA_OBSTACLE_SOLID, {0}};
   sylva_world_add_obstacle(w, &wall);
   return w;
 }
@@ -60,7 +60,7 @@ static sylva_world *site(void) {
 /* The edit of `format1`, made with the core's own calls. */
 static void edit_by_hand_format1(sylva_world *w) {
   CHECK_INT(sylva_world_remove_obstacle(w, sylva_world_find_obstacle(w, "wall")), 0);
-  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID, {0}};
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
   double r1[1][3] = {{-1, 0.1, 0}}, r2[2][3] = {{1, -1, 0}, {1.3, -1.2, 0}};
   sylva_plant_def a = {0, "oak2", (const double(*)[3])r1, 1, 0, NULL, 0};
@@ -72,8 +72,8 @@ static void edit_by_hand_format1(sylva_world *w) {
 /* The edit of `today`: format 1's, a zone over the crowns, and their pruning. */
 static void edit_by_hand(sylva_world *w) {
   CHECK_INT(sylva_world_remove_obstacle(w, sylva_world_find_obstacle(w, "wall")), 0);
-  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID};
-  sylva_obstacle_def crown = {"crown", {-3, -3, 0.45}, {3, 3, 6}, SYLVA_OBSTACLE_ZONE};
+  sylva_obstacle_def board = {"board", {1.25, -2, 3}, {1.5, 2, 3.2}, SYLVA_OBSTACLE_SOLID, {0}};
+  sylva_obstacle_def crown = {"crown", {-3, -3, 0.45}, {3, 3, 6}, SYLVA_OBSTACLE_ZONE, {0}};
   CHECK(sylva_world_add_obstacle(w, &board) >= 0);
   CHECK(sylva_world_add_obstacle(w, &crown) >= 0);
   double r1[1][3] = {{-1, 0.1, 0}}, r2[2][3] = {{1, -1, 0}, {1.3, -1.2, 0}};
@@ -229,13 +229,57 @@ static void test_aged_plant(void) {
   }
 }
 
+/* Format 4: a prism with a hole and a prism zone, read back and re-encoded to the same
+ * bytes, give the world the core's own calls give. */
+static void test_prism_replays(void) {
+  static const char prisms[] =
+      "{\"format\":4,\"command\":\"edit\",\"remove_obstacles\":[],\"add_obstacles\":["
+      "{\"id\":\"house\",\"kind\":\"prism\",\"polygon\":[[1,-2],[2.5,-1],[1.5,0.5],[0.5,-0.5]],"
+      "\"holes\":[[[1.2,-1],[1.6,-1],[1.4,-0.6]]],\"z\":[0,2.5]},"
+      "{\"id\":\"lane\",\"kind\":\"zone\",\"polygon\":[[-3,-1],[3,1],[3,2],[-3,0]],\"z\":[0.5,6]}],"
+      "\"add_plants\":[]}";
+  edit e;
+  char err[256] = "";
+  CHECK_INT(command_log_decode(prisms, &e, err, sizeof err), SERVER_OK);
+  CHECK(e.obstacle_count == 2 && e.obstacles[0].ring_count == 2 && e.obstacles[0].point_count == 7 &&
+        e.obstacles[1].ring_count == 1 && e.obstacles[1].kind == SYLVA_OBSTACLE_ZONE);
+  char *again = command_log_encode(&e);
+  CHECK(again && strcmp(again, prisms) == 0);
+  if (again && strcmp(again, prisms)) fprintf(stderr, "  encoded: %s\n", again);
+  free(again);
+  edit_free(&e);
+
+  sylva_world *w = site();
+  for (int i = 0; i < 4; i++) sylva_world_step(w, NULL);
+  double house_pts[7][2] = {{1, -2}, {2.5, -1}, {1.5, 0.5}, {0.5, -0.5}, {1.2, -1}, {1.6, -1}, {1.4, -0.6}};
+  double lane_pts[4][2] = {{-3, -1}, {3, 1}, {3, 2}, {-3, 0}};
+  int house_rings[2] = {4, 3}, lane_rings[1] = {4};
+  sylva_obstacle_def house = {"house", {0, 0, 0}, {0, 0, 2.5}, SYLVA_OBSTACLE_SOLID,
+                              {(const double(*)[2])house_pts, 7, house_rings, 2}};
+  sylva_obstacle_def lane = {"lane", {0, 0, 0.5}, {0, 0, 6}, SYLVA_OBSTACLE_ZONE,
+                             {(const double(*)[2])lane_pts, 4, lane_rings, 1}};
+  CHECK(sylva_world_add_obstacle(w, &house) >= 0);
+  CHECK(sylva_world_add_obstacle(w, &lane) >= 0);
+  CHECK(replayed_hash(prisms) == sylva_world_hash(w));
+  sylva_world_destroy(w);
+}
+
 /* Bad records name the place and the problem; nothing is half-read. */
 static void test_bad_records(void) {
   static const struct {
     const char *record, *message;
   } cases[] = {
-      {"{\"format\":4,\"command\":\"edit\"}",
-       "/format: format 4 is newer than this sylva reads (up to 3)"},
+      {"{\"format\":5,\"command\":\"edit\"}",
+       "/format: format 5 is newer than this sylva reads (up to 4)"},
+      {"{\"format\":4,\"command\":\"edit\",\"add_obstacles\":[{\"id\":\"b\",\"kind\":\"prism\","
+       "\"polygon\":[[0,0],[1,0],[1,1]],\"z\":[2,1]}]}",
+       "/add_obstacles/0/z: to must be greater than from (1 <= 2)"},
+      {"{\"format\":4,\"command\":\"edit\",\"add_obstacles\":[{\"id\":\"b\",\"kind\":\"prism\","
+       "\"polygon\":[[0,0],[1,0],[2,0]],\"z\":[0,1]}]}",
+       "/add_obstacles/0/polygon: the ring has no area"},
+      {"{\"format\":3,\"command\":\"edit\",\"add_obstacles\":[{\"id\":\"b\",\"kind\":\"prism\","
+       "\"polygon\":[[0,0],[1,0],[1,1]],\"z\":[0,1]}]}",
+       "/add_obstacles/0/polygon: unknown key"},
       {"{\"format\":1.5,\"command\":\"edit\"}", "/format: expected an integer >= 1"},
       {"{\"format\":1,\"command\":\"prune\"}", "/command: expected \"edit\""},
       {"{\"format\":1,\"command\":\"edit\",\"colour\":1}", "/colour: unknown key"},
@@ -317,7 +361,8 @@ static void test_store_replays_log(void) {
 int main(int argc, char **argv) {
   static const check_test tests[] = {CHECK_TEST(today_replays), CHECK_TEST(encoding_is_stable),
                                      CHECK_TEST(format0_replays), CHECK_TEST(bad_records),
-                                     CHECK_TEST(store_replays_log), CHECK_TEST(aged_plant)};
+                                     CHECK_TEST(store_replays_log), CHECK_TEST(aged_plant),
+                                     CHECK_TEST(prism_replays)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("command log");
 }

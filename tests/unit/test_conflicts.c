@@ -46,14 +46,14 @@ static const sylva_sky_dir sky5[] = {
 
 /* Solids and zones interleaved, so that ids of the one kind skip the other. */
 static const sylva_obstacle_def layout[] = {
-    {"wall-south", {-15, -4, 0}, {15, -3.6, 5}, SYLVA_OBSTACLE_SOLID},
-    {"road", {-15, -1.4, 0}, {15, 1.4, 3.5}, SYLVA_OBSTACLE_ZONE},
-    {"awning", {0.5, 1.0, 2.0}, {4, 1.3, 2.1}, SYLVA_OBSTACLE_SOLID},
+    {"wall-south", {-15, -4, 0}, {15, -3.6, 5}, SYLVA_OBSTACLE_SOLID, {0}},
+    {"road", {-15, -1.4, 0}, {15, 1.4, 3.5}, SYLVA_OBSTACLE_ZONE, {0}},
+    {"awning", {0.5, 1.0, 2.0}, {4, 1.3, 2.1}, SYLVA_OBSTACLE_SOLID, {0}},
     /* around tree b's root and first trunk node: entered at iteration 0 */
-    {"trunk-zone", {-0.1, -2.1, 0}, {0.1, -1.9, 0.15}, SYLVA_OBSTACLE_ZONE},
+    {"trunk-zone", {-0.1, -2.1, 0}, {0.1, -1.9, 0.15}, SYLVA_OBSTACLE_ZONE, {0}},
     /* more than SYLVA_CLEARANCE_RANGE from tree a */
-    {"east-post", {13.5, -0.5, 0}, {14, 0.5, 3}, SYLVA_OBSTACLE_SOLID},
-    {"canopy", {-15, -4, 4}, {15, 4, 8}, SYLVA_OBSTACLE_ZONE},
+    {"east-post", {13.5, -0.5, 0}, {14, 0.5, 3}, SYLVA_OBSTACLE_SOLID, {0}},
+    {"canopy", {-15, -4, 4}, {15, 4, 8}, SYLVA_OBSTACLE_ZONE, {0}},
 };
 #define LAYOUT_COUNT ((int)(sizeof layout / sizeof layout[0]))
 
@@ -258,7 +258,7 @@ static void zones_change_nothing_case(unsigned base, uint64_t seed) {
   int out_of_range = 0;
   for (int T = 1; T <= 16; T++) {
     if (T == 4) { /* a zone over tree c's crown, added mid-run */
-      sylva_obstacle_def late = {"late", {1.5, 1.5, 0.5}, {3, 3, 2.5}, SYLVA_OBSTACLE_ZONE};
+      sylva_obstacle_def late = {"late", {1.5, 1.5, 0.5}, {3, 3, 2.5}, SYLVA_OBSTACLE_ZONE, {0}};
       CHECK(sylva_world_add_obstacle(a, &late) >= 0);
     }
     if (T == 9) /* and a zone removed */
@@ -318,8 +318,8 @@ static void test_conflicts_brute_force(void) {
   /* zones whose faces pass through tree b's root at (0, -2, 0): inside on every
    * face, min or max (each holds the root alone) */
   static const sylva_obstacle_def edges[] = {
-      {"edge-max", {-1, -3, -1}, {0, -2, 0}, SYLVA_OBSTACLE_ZONE},
-      {"edge-min", {0, -2, 0}, {1, -1, 0.05}, SYLVA_OBSTACLE_ZONE},
+      {"edge-max", {-1, -3, -1}, {0, -2, 0}, SYLVA_OBSTACLE_ZONE, {0}},
+      {"edge-min", {0, -2, 0}, {1, -1, 0.05}, SYLVA_OBSTACLE_ZONE, {0}},
   };
   for (int i = 0; i < 2; i++) {
     int id = sylva_world_add_obstacle(w, &edges[i]);
@@ -342,7 +342,7 @@ static void test_conflicts_brute_force(void) {
       CHECK_INT(t.first[5][sylva_world_find_obstacle(w, "road")], 2);
     }
     if (T == 6) { /* a zone added over nodes: they enter now */
-      sylva_obstacle_def late = {"late", {1.5, 1.5, 0.5}, {3, 3, 2.5}, SYLVA_OBSTACLE_ZONE};
+      sylva_obstacle_def late = {"late", {1.5, 1.5, 0.5}, {3, 3, 2.5}, SYLVA_OBSTACLE_ZONE, {0}};
       int id = sylva_world_add_obstacle(w, &late);
       CHECK(id >= 0);
       bad += check_conflicts(w, &t, "zone added");
@@ -353,7 +353,7 @@ static void test_conflicts_brute_force(void) {
       bad += check_conflicts(w, &t, "zone removed");
     }
     if (T == 12) { /* a solid added: clearances to it from now on */
-      sylva_obstacle_def post = {"post", {-1, -1.5, 0}, {-0.8, -1.3, 2}, SYLVA_OBSTACLE_SOLID};
+      sylva_obstacle_def post = {"post", {-1, -1.5, 0}, {-0.8, -1.3, 2}, SYLVA_OBSTACLE_SOLID, {0}};
       CHECK(sylva_world_add_obstacle(w, &post) >= 0);
       bad += check_conflicts(w, &t, "solid added");
     }
@@ -959,7 +959,7 @@ static void test_snapshot_format(void) {
   CHECK(plain && zoned && sky && sky_zoned);
   if (!plain || !zoned || !sky || !sky_zoned) return;
   /* a zone through every trunk: each stem enters it */
-  sylva_obstacle_def trunks = {"trunks", {-15, -4, 0.3}, {15, 4, 0.6}, SYLVA_OBSTACLE_ZONE};
+  sylva_obstacle_def trunks = {"trunks", {-15, -4, 0.3}, {15, 4, 0.6}, SYLVA_OBSTACLE_ZONE, {0}};
   CHECK(sylva_world_add_obstacle(zoned, &trunks) >= 0);
   for (int T = 0; T < 12; T++) {
     CHECK_INT(sylva_world_step(plain, NULL), 0);
@@ -1154,8 +1154,8 @@ static void test_prune_dates_every_zone(void) {
   sylva_world *w = make_world(43, WITH_SOLIDS);
   CHECK(w != NULL);
   if (!w) return;
-  sylva_obstacle_def a = {"upper-a", {-15, -4, 1.2}, {15, 4, 8}, SYLVA_OBSTACLE_ZONE};
-  sylva_obstacle_def b = {"upper-b", {-15, -4, 1.2}, {15, 4, 8}, SYLVA_OBSTACLE_ZONE};
+  sylva_obstacle_def a = {"upper-a", {-15, -4, 1.2}, {15, 4, 8}, SYLVA_OBSTACLE_ZONE, {0}};
+  sylva_obstacle_def b = {"upper-b", {-15, -4, 1.2}, {15, 4, 8}, SYLVA_OBSTACLE_ZONE, {0}};
   int ia = sylva_world_add_obstacle(w, &a), ib = sylva_world_add_obstacle(w, &b);
   CHECK(ia >= 0 && ib >= 0);
   sylva_prune_def every1 = {ia, 1, 1};

@@ -128,7 +128,7 @@ static void test_shedding(void) {
   sp.r_s = 0.35;
   sylva_world *w = one_tree(&sp, 5), *ref = one_tree(&sp, 5);
   CHECK(w && ref);
-  sylva_obstacle_def box = {"box", {-1.5, -0.3, 0.9}, {0.0, 0.3, 1.0}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def box = {"box", {-1.5, -0.3, 0.9}, {0.0, 0.3, 1.0}, SYLVA_OBSTACLE_SOLID, {0}};
   CHECK(sylva_world_add_obstacle(w, &box) >= 0);
   CHECK(sylva_world_add_obstacle(ref, &box) >= 0);
   w->iteration = ref->iteration = 1;
@@ -197,7 +197,7 @@ static sylva_world *small_stand(uint64_t seed) {
     sylva_plant_def pd = {s, label, (const double(*)[3])roots[i], 1, 0, NULL, 0};
     if (sylva_world_add_plant(w, &pd, NULL) < 0) return NULL;
   }
-  sylva_obstacle_def wall = {"wall", {-3, -2, 0}, {-2.8, 2, 2}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def wall = {"wall", {-3, -2, 0}, {-2.8, 2, 2}, SYLVA_OBSTACLE_SOLID, {0}};
   sylva_world_add_obstacle(w, &wall);
   return w;
 }

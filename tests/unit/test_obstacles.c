@@ -345,7 +345,7 @@ static void test_out_of_memory(void) {
 }
 
 static int add_box(sylva_world *w, const char *label, double x, double y, double z) {
-  sylva_obstacle_def o = {label, {x, y, z}, {x + 0.7, y + 0.4, z + 0.1}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def o = {label, {x, y, z}, {x + 0.7, y + 0.4, z + 0.1}, SYLVA_OBSTACLE_SOLID, {0}};
   return sylva_world_add_obstacle(w, &o);
 }
 

@@ -161,7 +161,7 @@ static sylva_world *tree_world(const sylva_sky_dir *sky, int sky_count, bool boa
   int s = sylva_world_add_species(w, &sp, "oak");
   double roots[1][3] = {{0, 0, 0}};
   sylva_plant_def pd = {s, "tree", (const double(*)[3])roots, 1, 0, NULL, 0};
-  sylva_obstacle_def roof = {"board", {-1, -1, 3.0}, {1, 1, 3.2}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def roof = {"board", {-1, -1, 3.0}, {1, 1, 3.2}, SYLVA_OBSTACLE_SOLID, {0}};
   if (s < 0 || sylva_world_add_plant(w, &pd, NULL) < 0 ||
       (board && sylva_world_add_obstacle(w, &roof) < 0)) {
     sylva_world_destroy(w);
@@ -197,14 +197,14 @@ static void test_board_light(void) {
   CHECK_NEAR(sylva_world_light_at(z, under), 0.0, 0.0);
   CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
   /* a wall to the east takes the low direction too */
-  sylva_obstacle_def wall = {"wall", {2, -3, 0}, {2.2, 3, 4}, SYLVA_OBSTACLE_SOLID};
+  sylva_obstacle_def wall = {"wall", {2, -3, 0}, {2.2, 3, 4}, SYLVA_OBSTACLE_SOLID, {0}};
   int id = sylva_world_add_obstacle(s, &wall);
   CHECK(id >= 0);
   CHECK_NEAR(sylva_world_light_at(s, under), 0.0, 1e-6);
   CHECK_INT(sylva_world_remove_obstacle(s, id), SYLVA_OK);
   CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
   /* a clearance zone where the wall stood hides no sky */
-  sylva_obstacle_def zone = {"lane", {2, -3, 0}, {2.2, 3, 4}, SYLVA_OBSTACLE_ZONE};
+  sylva_obstacle_def zone = {"lane", {2, -3, 0}, {2.2, 3, 4}, SYLVA_OBSTACLE_ZONE, {0}};
   CHECK(sylva_world_add_obstacle(s, &zone) >= 0);
   CHECK_NEAR(sylva_world_light_at(s, under), 0.4, 1e-6);
   sylva_world_destroy(z);

@@ -98,11 +98,34 @@ typedef enum sylva_obstacle_kind {
                                  nodes that grow into it are counted, and pruned */
 } sylva_obstacle_kind;
 
-/** An obstacle: a box, solid or a clearance zone. */
+/** Most points of one prism's footprint, all rings together. */
+#define SYLVA_FOOTPRINT_MAX_POINTS 100000
+
+/** A prism's footprint in x, y (metres): rings of points, concatenated, each ring
+ *  ring_sizes[r] points (at least 3, not closed: the last joins the first). The
+ *  first is the outline; the others holes, or more parts. A point is inside where
+ *  a ray from it crosses the rings an odd number of times (even-odd), so holes need
+ *  no winding of their own. ring_count 0: no footprint (a box). */
+typedef struct sylva_footprint {
+  const double (*points)[2];
+  int point_count;
+  const int *ring_sizes;
+  int ring_count;
+} sylva_footprint;
+
+/** An obstacle, solid or a clearance zone: a box [min, max], or a prism, a footprint
+ *  extruded from min[2] to max[2] (docs/model.md, "Obstacles"). A voxel is inside a
+ *  prism where its column's centre lies inside the footprint and its z range meets
+ *  the prism's, as a voxel is inside a box where its cell meets the box. */
 typedef struct sylva_obstacle_def {
   const char *label;
+  /** A box's corners; a prism's z range in min[2], max[2] (its x, y given are
+   *  ignored: the world gives back the footprint's bounds there). */
   double min[3], max[3];
   sylva_obstacle_kind kind; /**< SOLID when zero-initialised */
+  /** A prism's footprint (copied when added; from the world, pointing into it,
+   *  valid until the obstacle is removed); ring_count 0 for a box. */
+  sylva_footprint footprint;
 } sylva_obstacle_def;
 
 /** Farthest a solid obstacle may be from a stem's nodes and still be reported in its
@@ -230,7 +253,9 @@ int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const 
  *  (of a measured plant: the node) at fault, or -1. */
 int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root);
 /** Adds an obstacle; returns its id or a negative status (SYLVA_EINVAL for a
- *  duplicate label, an empty box or an unknown kind). A zone added over nodes counts
+ *  duplicate label, an empty box or z range, an unknown kind, or a footprint with a
+ *  ring of under 3 points, ring sizes that do not sum to its point count, more than
+ *  SYLVA_FOOTPRINT_MAX_POINTS points, a coordinate that is not finite, or no area). A zone added over nodes counts
  *  them as entering at the current iteration. */
 int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def);
 /** Removes an obstacle by id. */

@@ -79,12 +79,37 @@ typedef struct sylva_scenario_light {
 #define SYLVA_SITE_DIFFUSE 0.5
 #define SYLVA_SITE_SAMPLES 64
 
-/** An obstacle: kind "box" (solid) or "zone" (a clearance zone). */
+/** An obstacle: kind "box" or "prism" (solid) or "zone" (a clearance zone, a box or
+ *  a prism). A prism's footprint is owned (sylva_scenario_obstacle_clear()): its
+ *  points, the outline's ("polygon") then each hole's, and the rings' sizes;
+ *  ring_count 0 for a box. A prism's min and max hold its footprint's bounds and
+ *  its z range ("z"). */
 typedef struct sylva_scenario_obstacle {
   char id[SYLVA_LABEL_MAX];
   double min[3], max[3];
   sylva_obstacle_kind kind;
+  double (*points)[2];
+  int *ring_sizes;
+  int point_count, ring_count;
 } sylva_scenario_obstacle;
+
+/** The world's def of an obstacle, pointing into o. */
+sylva_obstacle_def sylva_scenario_obstacle_def(const sylva_scenario_obstacle *o);
+/** Frees what o owns (its footprint) and leaves it a box. */
+void sylva_scenario_obstacle_clear(sylva_scenario_obstacle *o);
+/** The JSON object of an obstacle as scenarios, snapshots and the command log write it
+ *  (docs/scenario.md, "Obstacles"): {"id", "kind": "box", "min", "max"} for a box,
+ *  {"id", "kind": "prism", "polygon", ["holes",] "z"} for a prism, "kind": "zone"
+ *  with either shape. Numbers in their shortest exact form; compact without spaces,
+ *  else with ", " and ": " as scenario files have them. NULL when out of memory;
+ *  free() it. */
+char *sylva_obstacle_json(const sylva_obstacle_def *o, bool compact);
+/** Reads one obstacle object from JSON text, as a scenario's obstacles are read, into
+ *  *out (zeroed first; its footprint owned on success, nothing on failure). On bad
+ *  input SYLVA_EINVAL, err naming "<at>/key: message" (at, the object's JSON pointer
+ *  in the caller's document, may be ""). */
+int sylva_obstacle_parse(const char *json, size_t len, const char *at, sylva_scenario_obstacle *out,
+                         char *err, size_t errlen);
 
 /** Most entries of `management`. */
 #define SYLVA_SCENARIO_MAX_MANAGEMENT 1000
