@@ -46,6 +46,10 @@ int cmd_report(int argc, char **argv);
  *  --date MM-DD -o OUT.csv|json|png`: a day's hours of sun on ground and facades. */
 int cmd_shade(int argc, char **argv);
 
+/** `sylva site [--buildings FILE] [--trees FILE] [--zones FILE] ... -o SITE.json`: a
+ *  scenario from GIS layers. */
+int cmd_site(int argc, char **argv);
+
 /** `sylva serve [options]`: the daemon. */
 int cmd_serve(int argc, char **argv);
 

@@ -40,6 +40,8 @@ static void usage(FILE *f) {
         "                          a sweep's runs compared at chosen years\n"
         "  shade (--db FILE --name NAME | SCENARIO.json) --date MM-DD -o OUT.csv|json|png\n"
         "                          a day's hours of sun on the ground and facades\n"
+        "  site [--buildings FILE] [--trees FILE] [--zones FILE] -o SITE.json\n"
+        "                          a scenario from GIS layers: buildings, zones, trees\n"
         "\n"
         "Options:\n"
         "  -h, --help              show this help\n"
@@ -77,6 +79,7 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "sweep") == 0) return cmd_sweep(argc - 1, argv + 1);
   if (strcmp(cmd, "report") == 0) return cmd_report(argc - 1, argv + 1);
   if (strcmp(cmd, "shade") == 0) return cmd_shade(argc - 1, argv + 1);
+  if (strcmp(cmd, "site") == 0) return cmd_site(argc - 1, argv + 1);
   if (cmd[0] == '-')
     fprintf(stderr, "sylva: unknown option '%s'\n", cmd);
   else
