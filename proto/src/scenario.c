@@ -861,9 +861,44 @@ static int check_age(sylva__parser *p, const sylva_scenario_plant *pl,
                             sylva__quote(q, sp->name));
 }
 
+/* The site's frame: {"crs": "EPSG:32618", "origin": [easting, northing]}. */
+static int parse_site(sylva__parser *p, const cJSON *obj, sylva_scenario *s) {
+  static const char *const keys[] = {"crs", "origin"};
+  size_t old = sylva__ptr_push(p, "site");
+  int rc = sylva__want_object(p, obj);
+  if (!rc) rc = sylva__check_keys(p, obj, keys, 2);
+  for (int i = 0; !rc && i < 2; i++)
+    if (!member(obj, keys[i])) rc = sylva__fail_at_key(p, keys[i], "required");
+  if (!rc) {
+    size_t o2 = sylva__ptr_push(p, "crs");
+    const char *crs = "";
+    rc = sylva__want_string(p, member(obj, "crs"), &crs);
+    size_t n = strlen(crs);
+    if (!rc && (n == 0 || n >= sizeof s->site_crs))
+      rc = sylva__fail(p, "must be 1 to %zu bytes long (\"EPSG:32618\"), got %zu", sizeof s->site_crs - 1, n);
+    if (!rc) memcpy(s->site_crs, crs, n + 1);
+    sylva__ptr_pop(p, o2);
+  }
+  if (!rc) {
+    size_t o2 = sylva__ptr_push(p, "origin");
+    const cJSON *o = member(obj, "origin");
+    if (!cJSON_IsArray(o) || cJSON_GetArraySize(o) != 2 || !cJSON_IsNumber(o->child) ||
+        !cJSON_IsNumber(o->child->next) || !isfinite(o->child->valuedouble) ||
+        !isfinite(o->child->next->valuedouble))
+      rc = sylva__fail(p, "expected [x, y], finite, in the CRS's units");
+    else {
+      s->site_origin[0] = o->child->valuedouble;
+      s->site_origin[1] = o->child->next->valuedouble;
+    }
+    sylva__ptr_pop(p, o2);
+  }
+  sylva__ptr_pop(p, old);
+  return rc;
+}
+
 static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
                                        "start_year", "world", "species", "plants",
-                                       "obstacles", "management", "light"};
+                                       "obstacles", "management", "light", "site"};
 
 static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_scenario *s) {
   int rc = sylva__want_object(p, root);
@@ -1033,6 +1068,7 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
   }
 
   if ((item = member(root, "light")) && (rc = sylva__parse_light(p, item, &s->light))) return rc;
+  if ((item = member(root, "site")) && (rc = parse_site(p, item, s))) return rc;
 
   if ((item = member(root, "obstacles"))) {
     old = sylva__ptr_push(p, "obstacles");
@@ -1246,6 +1282,15 @@ char *sylva_scenario_json(const sylva_scenario *s) {
   if (s->light.site) { /* the zenith sky is the default: its scenarios stay as they were */
     sylva__strbuf_puts(&b, ",\n  \"light\": ");
     sylva__put_light(&b, &s->light);
+  }
+  if (s->site_crs[0]) {
+    sylva__strbuf_puts(&b, ",\n  \"site\": {\"crs\": ");
+    sylva__strbuf_json_string(&b, s->site_crs);
+    sylva__strbuf_puts(&b, ", \"origin\": [");
+    sylva__strbuf_shortest(&b, s->site_origin[0]);
+    sylva__strbuf_puts(&b, ", ");
+    sylva__strbuf_shortest(&b, s->site_origin[1]);
+    sylva__strbuf_puts(&b, "]}");
   }
   sylva__strbuf_puts(&b, "\n}\n");
   return sylva__strbuf_finish(&b);

@@ -513,6 +513,53 @@ static void test_library_plants(void) {
          "%s", err);
 }
 
+/* Prisms (a building with a courtyard, a zone along a street at an angle) and the site's
+ * frame: read, written in the stored form and read back to the same bytes; built, the
+ * world holds the footprints as given. A GeoJSON-closed ring loses its last point. */
+static void test_prisms_and_site(void) {
+  static const char text[] =
+      "{\"format\": \"sylva.scenario/1\", \"iterations\": 2, "
+      "\"world\": {\"min\": [-20, -20, 0], \"max\": [20, 20, 20]}, "
+      "\"species\": {\"bush\": {\"preset\": \"igm-fig11\"}}, "
+      "\"plants\": [{\"id\": \"a\", \"species\": \"bush\", \"roots\": [[0, 0, 0]]}], "
+      "\"obstacles\": [{\"id\": \"house\", \"kind\": \"prism\", "
+      "\"polygon\": [[2, 2], [12, 2], [12, 10], [2, 10], [2, 2]], "
+      "\"holes\": [[[5, 5], [5, 7], [8, 7], [8, 5]]], \"z\": [0, 9.5]}, "
+      "{\"id\": \"street\", \"kind\": \"zone\", \"polygon\": [[-20, -8], [20, -2], [20, 1], [-20, -5]], "
+      "\"z\": [0, 4.5]}, {\"id\": \"wall\", \"kind\": \"box\", \"min\": [-5, 5, 0], \"max\": [-4.8, 9, 2]}], "
+      "\"site\": {\"crs\": \"EPSG:32618\", \"origin\": [583960, 4507523]}}";
+  sylva_scenario *s = parse_ok("prisms", text, strlen(text));
+  if (!s) return;
+  EXPECT(s->obstacle_count == 3 && s->obstacles[0].ring_count == 2 && s->obstacles[0].point_count == 8 &&
+             s->obstacles[1].kind == SYLVA_OBSTACLE_ZONE && s->obstacles[1].ring_count == 1 &&
+             s->obstacles[2].ring_count == 0,
+         "obstacles as given");
+  EXPECT(s->obstacles[0].min[0] == 2 && s->obstacles[0].max[1] == 10 && s->obstacles[0].max[2] == 9.5,
+         "bounds");
+  EXPECT(strcmp(s->site_crs, "EPSG:32618") == 0 && s->site_origin[0] == 583960 &&
+             s->site_origin[1] == 4507523, "the site");
+  char *canon = sylva_scenario_json(s);
+  EXPECT(canon && strstr(canon, "{\"id\": \"house\", \"kind\": \"prism\", \"polygon\": [[2, 2], [12, 2], "
+                                "[12, 10], [2, 10]], \"holes\": [[[5, 5], [5, 7], [8, 7], [8, 5]]], \"z\": [0, 9.5]}") &&
+             strstr(canon, "\"site\": {\"crs\": \"EPSG:32618\", \"origin\": [583960, 4507523]}"),
+         "%s", canon ? canon : "(null)");
+  sylva_scenario *back = canon ? parse_ok("stored form", canon, strlen(canon)) : NULL;
+  char *again = back ? sylva_scenario_json(back) : NULL;
+  EXPECT(again && strcmp(canon, again) == 0, "the stored form round-trips");
+  sylva_world *w = NULL;
+  char err[256] = "";
+  EXPECT(sylva_scenario_build(s, &w, err, sizeof err) == 0, "%s", err);
+  sylva_obstacle_def d;
+  EXPECT(w && sylva_world_obstacle_at(w, 0, NULL, &d) == 0 && d.footprint.ring_count == 2 &&
+             d.footprint.points[4][0] == 5 && d.footprint.ring_sizes[1] == 4,
+         "the world's footprint");
+  sylva_world_destroy(w);
+  free(again);
+  free(canon);
+  sylva_scenario_free(back);
+  sylva_scenario_free(s);
+}
+
 int main(int argc, char **argv) {
   if (argc != 2 && argc != 3) {
     fprintf(stderr, "usage: %s SCENARIO_DIR [TEST]\n", argv[0]);
@@ -524,7 +571,8 @@ int main(int argc, char **argv) {
       CHECK_TEST(parse_errors), CHECK_TEST(no_plants), CHECK_TEST(fmt_fixed),
       CHECK_TEST(fmt_shortest), CHECK_TEST(done_line), CHECK_TEST(odd_label), CHECK_TEST(light),
       CHECK_TEST(shipped_scenarios), CHECK_TEST(years), CHECK_TEST(foliage),
-      CHECK_TEST(library_foliage), CHECK_TEST(library_plants)};
+      CHECK_TEST(library_foliage), CHECK_TEST(library_plants),
+      CHECK_TEST(prisms_and_site)};
   CHECK_RUN(argc, argv, 2, tests);
   return check_summary("scenario-roundtrip");
 }

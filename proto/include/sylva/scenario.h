@@ -142,6 +142,12 @@ typedef struct sylva_scenario {
   sylva_scenario_prune *management;
   int management_count;
   sylva_scenario_light light;
+  /** Where the world stands on Earth (the `site` key, as `sylva site` writes it): a
+   *  CRS that PROJ understands ("EPSG:32618", "" when not given) and the
+   *  coordinates in it of the world's (0, 0): x east and y north in metres from
+   *  there. The core never reads it; exports to GIS do. */
+  char site_crs[256];
+  double site_origin[2];
 } sylva_scenario;
 
 /** Parses and validates a scenario: the strict JSON check, then every rule of
