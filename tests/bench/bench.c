@@ -322,16 +322,30 @@ static void random_box(sylva__rng *r, double side, double thick, double mn[3], d
 /* The light of every cell of the layer at 0.52 m (as sylva_msg_light_slice reads
  * it) with 1,000 boxes; then `edits` obstacles added, found by label, copied through
  * a snapshot and removed by id in the order they were added (the oldest first). */
-static void obstacles(int edits) {
-  printf("\n== obstacles\n");
+/* The light of every cell of the layer at 0.52 m with 1,000 boxes, or (turned) the
+ * same boxes as prisms turned by 30 degrees about their centres. */
+static void light_slice(bool turned) {
   sylva_world *w = obstacle_site();
   sylva__rng r;
   sylva__rng_seed(&r, 99);
+  double t_add = now(NULL), c = sqrt(3.0) / 2, s = 0.5; /* 30 degrees */
   for (int i = 0; i < 1000; i++) {
     char label[16];
     snprintf(label, sizeof label, "box%d", i);
     sylva_obstacle_def o = {label, {0}, {0}, SYLVA_OBSTACLE_SOLID, {0}};
     random_box(&r, 5.0, 2.0, o.min, o.max);
+    double pts[4][2];
+    int ring[1] = {4};
+    if (turned) {
+      double cx = (o.min[0] + o.max[0]) / 2, cy = (o.min[1] + o.max[1]) / 2;
+      double hx = (o.max[0] - o.min[0]) / 2, hy = (o.max[1] - o.min[1]) / 2;
+      const double corner[4][2] = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
+      for (int k = 0; k < 4; k++) {
+        pts[k][0] = cx + c * corner[k][0] - s * corner[k][1];
+        pts[k][1] = cy + s * corner[k][0] + c * corner[k][1];
+      }
+      o.footprint = (sylva_footprint){(const double(*)[2])pts, 4, ring, 1};
+    }
     if (sylva_world_add_obstacle(w, &o) < 0) exit(1);
   }
   int dims[3];
@@ -346,10 +360,25 @@ static void obstacles(int edits) {
       dark += l == 0.0;
     }
   double t1 = now(NULL);
-  printf("   light slice %d x %d, 1,000 boxes: %.3f s (%.1f ns per cell; %ld dark cells, "
-         "light sum %.17g)\n", dims[0], dims[1], t1 - t0,
-         (t1 - t0) * 1e9 / ((double)dims[0] * dims[1]), dark, sum);
+  printf("   light slice %d x %d, 1,000 %s: %.3f s (%.1f ns per cell; %ld dark cells, "
+         "light sum %.17g); added in %.3f s\n", dims[0], dims[1],
+         turned ? "prisms at 30 degrees" : "boxes", t1 - t0,
+         (t1 - t0) * 1e9 / ((double)dims[0] * dims[1]), dark, sum, t0 - t_add);
   sylva_world_destroy(w);
+}
+
+static void obstacles(int edits) {
+  printf("\n== obstacles\n");
+  light_slice(false);
+  light_slice(true);
+  sylva__rng r;
+  sylva__rng_seed(&r, 99);
+  for (int i = 0; i < 1000; i++) { /* the generator as the slices left it */
+    double mn[3], mx[3];
+    random_box(&r, 5.0, 2.0, mn, mx);
+  }
+  sylva_world *w;
+  double t0, t1;
 
   w = obstacle_site();
   int *ids = malloc((size_t)edits * sizeof *ids);
