@@ -12,6 +12,7 @@
 
 struct gis_proj {
   PJ_CONTEXT *ctx;
+  char said[256]; /* PROJ's last logged error: it says more than its error code */
 };
 
 struct gis_crs {
@@ -24,6 +25,11 @@ struct gis_transform {
   PJ *pj;
 };
 
+static void keep_log(void *data, int level, const char *msg) {
+  gis_proj *p = data;
+  if (level == PJ_LOG_ERROR && msg) snprintf(p->said, sizeof p->said, "%s", msg);
+}
+
 int gis_proj_create(gis_proj **out) {
   gis_proj *p = calloc(1, sizeof *p);
   if (!p || !(p->ctx = proj_context_create())) {
@@ -32,7 +38,8 @@ int gis_proj_create(gis_proj **out) {
     return SERVER_ENOMEM;
   }
   /* PROJ's own logging would go to stderr: its reasons are reported through err. */
-  proj_log_level(p->ctx, PJ_LOG_NONE);
+  proj_log_func(p->ctx, p, keep_log);
+  proj_log_level(p->ctx, PJ_LOG_ERROR);
   *out = p;
   return SERVER_OK;
 }
@@ -43,8 +50,9 @@ void gis_proj_free(gis_proj *p) {
   free(p);
 }
 
-/* PROJ's reason for the context's last failure. */
+/* PROJ's reason for the context's last failure: what it logged, else its code's. */
 static const char *proj_reason(gis_proj *p) {
+  if (p->said[0]) return p->said;
   int e = proj_context_errno(p->ctx);
   const char *m = e ? proj_context_errno_string(p->ctx, e) : NULL;
   return m && m[0] ? m : "unknown reason";
@@ -66,6 +74,7 @@ static bool is_crs(const PJ *pj) {
 
 int gis_crs_create(gis_proj *p, const char *text, gis_crs **out, char *err, size_t errlen) {
   *out = NULL;
+  p->said[0] = '\0';
   PJ *pj = proj_create(p->ctx, text);
   if (!pj)
     return server_fail(err, errlen, SERVER_EINPUT, "PROJ cannot read it (%s)", proj_reason(p));
@@ -158,6 +167,7 @@ char *gis_crs_name(gis_proj *p, const gis_crs *c) {
 int gis_transform_create(gis_proj *p, const gis_crs *from, const gis_crs *to, gis_transform **out,
                          char *err, size_t errlen) {
   *out = NULL;
+  p->said[0] = '\0';
   PJ *raw = proj_create_crs_to_crs_from_pj(p->ctx, from->pj, to->pj, NULL, NULL);
   PJ *pj = raw ? proj_normalize_for_visualization(p->ctx, raw) : NULL;
   proj_destroy(raw);
@@ -185,6 +195,7 @@ int gis_transform_points(const gis_transform *t, double (*xy)[2], size_t n, size
   *bad = 0;
   if (n == 0) return SERVER_OK;
   proj_errno_reset(t->pj);
+  t->proj->said[0] = '\0';
   size_t stride = sizeof xy[0];
   proj_trans_generic(t->pj, PJ_FWD, &xy[0][0], stride, n, &xy[0][1], stride, n, NULL, 0, 0, NULL, 0,
                      0);
@@ -192,7 +203,9 @@ int gis_transform_points(const gis_transform *t, double (*xy)[2], size_t n, size
     if (!isfinite(xy[i][0]) || !isfinite(xy[i][1]) || xy[i][0] == HUGE_VAL) {
       *bad = i;
       int e = proj_errno(t->pj);
-      const char *m = e ? proj_context_errno_string(t->proj->ctx, e) : NULL;
+      const char *m = t->proj->said[0] ? t->proj->said
+                      : e              ? proj_context_errno_string(t->proj->ctx, e)
+                                       : NULL;
       return server_fail(err, errlen, SERVER_EINPUT, "PROJ cannot transform it (%s)",
                          m && m[0] ? m : "no finite result");
     }

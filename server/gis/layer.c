@@ -53,7 +53,8 @@ static int open_dataset(const char *path, const char *shown, const char *prefer,
                         size_t errlen) {
   *out = NULL;
   CPLErrorReset();
-  GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, drivers, NULL, NULL);
+  GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
+                               drivers, NULL, NULL);
   if (!ds)
     return server_fail(err, errlen, SERVER_EINPUT, "%s: GDAL cannot open it as a vector layer: %s",
                        shown, gdal_reason("no driver reads it"));

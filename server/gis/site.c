@@ -329,6 +329,15 @@ static int place_lonlat(build *b, long *inside) {
           b, src, src->to_lonlat, (double(*)[2])ll, 1, tr ? b->trees[i].row : b->fp[k][i].row,
           tr ? b->trees[i].id : b->fp[k][i].id, tr ? b->trees[i].has_id : b->fp[k][i].has_id);
       if (rc) return rc;
+      if (!(fabs(ll[0]) <= 180.0 && fabs(ll[1]) <= 90.0))
+        return row_fail(
+            b, src, tr ? b->trees[i].row : b->fp[k][i].row, tr ? b->trees[i].id : b->fp[k][i].id,
+            tr ? b->trees[i].has_id : b->fp[k][i].has_id,
+            "the point (%.10g, %.10g) has no longitude and latitude: PROJ cannot transform it to "
+            "EPSG:4326%s",
+            ll[0], ll[1],
+            src->crs_default ? " (the file names no CRS and is read as EPSG:4326: give its CRS)"
+                             : "");
       if (!b->o->has_bbox) continue;
       if (in_bbox(b->o, ll))
         ++*inside;
@@ -861,7 +870,7 @@ static int place_trees(build *b, double *tallest) {
       if (strlen(t->id) >= sizeof p->id)
         return row_fail(b, &b->src[SRC_TREES], t->row, t->id, t->has_id,
                         "id '%s' is longer than %d bytes", t->id, SITE_ID_MAX - 1);
-      snprintf(p->id, sizeof p->id, "%s", t->id);
+      memcpy(p->id, t->id, strlen(t->id) + 1); /* its length checked above */
       p->species = t->species;
       p->xy[0] = llround((t->xy[0] - (double)s->origin[0]) * 1000.0);
       p->xy[1] = llround((t->xy[1] - (double)s->origin[1]) * 1000.0);
