@@ -9,15 +9,7 @@
 # site's latitude), then times the whole day of 07-21 at 10-minute steps on every
 # cell of the ground (the hectare has no obstacles).
 set -eu
-root=$(cd "$(dirname "$0")/../.." && pwd)
-exe=${1:-"$root/build/server/sylva"}
-if [ $# -ge 2 ]; then
-  tmp=$2
-  mkdir -p "$tmp"
-else
-  tmp=$(mktemp -d)
-  trap 'rm -rf "$tmp"' EXIT
-fi
+. "$(dirname "$0")/bench_args.sh"
 python3 - "$tmp/hectare.json" <<'PY'
 import json, sys
 rows, spacing = 20, 5.0

@@ -9,15 +9,7 @@
 # (the NoEast library's species but Malus, a cultivar or variety name for one in
 # ten, DBH 5 to 80 cm), each as a GeoPackage (ogr2ogr), then times sylva site on them.
 set -eu
-root=$(cd "$(dirname "$0")/../.." && pwd)
-exe=${1:-"$root/build/server/sylva"}
-if [ $# -ge 2 ]; then
-  tmp=$2
-  mkdir -p "$tmp"
-else
-  tmp=$(mktemp -d)
-  trap 'rm -rf "$tmp"' EXIT
-fi
+. "$(dirname "$0")/bench_args.sh"
 if [ ! -f "$tmp/buildings.gpkg" ] || [ ! -f "$tmp/trees.gpkg" ]; then
   python3 - "$tmp" <<'PY'
 import json, math, os, random, subprocess, sys
