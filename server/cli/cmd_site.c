@@ -15,6 +15,7 @@
 #include "site.h"
 #include "site_write.h"
 #include "sylva/scenario.h"
+#include "sylva/world.h"
 
 enum {
   OPT_BUILDINGS,
@@ -283,6 +284,28 @@ static int parse_args(int argc, char **argv, site_args *a) {
   return CLI_PARSED;
 }
 
+/* The notes of the site, and what would keep `sylva run` from taking the scenario. */
+static void warn(const site *s) {
+  for (const char *n = s->notes; *n;) {
+    size_t len = strcspn(n, "\n");
+    fprintf(stderr, "sylva: note: %.*s\n", (int)len, n);
+    n += len + (n[len] == '\n');
+  }
+  double voxels = 1;
+  for (int a = 0; a < 3; a++)
+    voxels *= ceil((double)(s->world_max[a] - s->world_min[a]) / s->voxel);
+  if (voxels > SYLVA_MAX_VOXELS)
+    fprintf(stderr,
+            "sylva: warning: the world spans %.2g voxels of %g m, more than the %.2g a scenario "
+            "may hold: cut the site with --bbox, or give --rho\n",
+            voxels, s->voxel, SYLVA_MAX_VOXELS);
+  if (s->obstacle_count > SYLVA_SCENARIO_MAX_OBSTACLES)
+    fprintf(stderr,
+            "sylva: warning: %d obstacles, more than the %d a scenario may hold: cut the "
+            "site with --bbox\n",
+            s->obstacle_count, SYLVA_SCENARIO_MAX_OBSTACLES);
+}
+
 int cmd_site(int argc, char **argv) {
   site_args a = {0};
   int rc = parse_args(argc, argv, &a);
@@ -303,6 +326,7 @@ int cmd_site(int argc, char **argv) {
     fprintf(stderr, "sylva: %s\n", err);
     return cli_outfile_close(&out, server_exit_status(rc));
   }
+  warn(&s);
   char *text = site_scenario_json(&s, &a.sc), *line = text ? site_summary_json(&s) : NULL;
   site_free(&s);
   if (!line) {

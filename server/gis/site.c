@@ -130,9 +130,10 @@ static int no_memory(build *b) {
 static int open_source(build *b, source *src, const char *path, const char *crs) {
   int rc = gis_layer_open(path, src->role, NULL, crs, &src->layer, b->err, b->errlen);
   if (rc) return rc;
-  if (gis_layer_file_layers(src->layer) > 1)
-    fprintf(stderr, "sylva: note: %s holds %d layers; reading '%s'\n", path,
-            gis_layer_file_layers(src->layer), gis_layer_name(src->layer));
+  size_t used = strlen(b->s->notes);
+  if (gis_layer_file_layers(src->layer) > 1 && used < sizeof b->s->notes)
+    snprintf(b->s->notes + used, sizeof b->s->notes - used, "%s holds %d layers: reading '%s'\n",
+             path, gis_layer_file_layers(src->layer), gis_layer_name(src->layer));
   const char *text = gis_layer_crs(src->layer);
   src->crs_default = !text;
   char why[512];

@@ -109,6 +109,7 @@ typedef struct site {
   site_tally *species; /**< plants per library name, in the order first planted */
   int species_count;
   species_library lib;
+  char notes[1024]; /**< lines for stderr: which layer of a file of several was read */
 } site;
 
 /** Builds the site: SERVER_OK and *s; SERVER_EINPUT for bad input, with err naming
