@@ -1,6 +1,6 @@
 // Clearance zones, as the page works them out: which obstacles are zones, which
-// internodes lie inside one (from their positions and the zone boxes, bounds
-// included, metres), and the conflicts table's rows from the stems' stats. Pure,
+// internodes lie inside one (from their positions and the zones' boxes or prisms,
+// bounds included, metres), and the conflicts table's rows from the stems' stats. Pure,
 // like helpers.mjs: no DOM, no network, no three.js; node runs the tests
 // (tests/web/test_helpers.mjs). Nothing here changes its arguments, except the
 // output array markInZones is given to fill.
@@ -19,24 +19,63 @@ export function insideBox(box, x, y, z) {
     z >= box.min[2] && z <= box.max[2];
 }
 
-// The zones' bounds as the page's Float32Arrays hold node positions: a node the
-// daemon places on a bound (at 4 decimals) is held as Math.fround of it, so the
-// bounds are rounded the same way and the test keeps "bounds included".
+// The box that holds an obstacle {min, max}: a box's own corners, or a prism's
+// (`polygon`, `holes`, `z`) footprint's bounds over its z range.
+export function boundsOf(o) {
+  if (!o.polygon) return { min: o.min, max: o.max };
+  const min = [Infinity, Infinity, o.z[0]], max = [-Infinity, -Infinity, o.z[1]];
+  for (const ring of [o.polygon, ...(o.holes || [])]) {
+    for (const [x, y] of ring) {
+      min[0] = Math.min(min[0], x);
+      min[1] = Math.min(min[1], y);
+      max[0] = Math.max(max[0], x);
+      max[1] = Math.max(max[1], y);
+    }
+  }
+  return { min, max };
+}
+
+// Whether (x, y) lies in a prism's footprint by the core's rule (core/src/prism.c):
+// inside its bounds, and a ray from it towards +x crosses its rings (the polygon
+// and its holes, each closed from its last point to its first) an odd number of
+// times, counting an edge whose ends lie on either side of y, one strictly above.
+export function insideFootprint(prism, x, y) {
+  let inside = false;
+  for (const ring of [prism.polygon, ...(prism.holes || [])]) {
+    for (let i = 0, n = ring.length; i < n; i++) {
+      const p = ring[i], q = ring[(i + 1) % n];
+      if ((p[1] > y) !== (q[1] > y) && x < p[0] + (y - p[1]) * (q[0] - p[0]) / (q[1] - p[1])) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+// Whether (x, y, z) lies in an obstacle, a box or a prism, bounds included.
+export function insideObstacle(o, x, y, z) {
+  return insideBox(boundsOf(o), x, y, z) && (!o.polygon || insideFootprint(o, x, y));
+}
+
+// The zones' bounds (boundsOf) as the page's Float32Arrays hold node positions: a
+// node the daemon places on a bound (at 4 decimals) is held as Math.fround of it,
+// so the bounds are rounded the same way and the test keeps "bounds included".
 function f32Bounds(zones) {
   const b = new Float64Array(zones.length * 6);
   zones.forEach((z, i) => {
+    const { min, max } = boundsOf(z);
     for (let a = 0; a < 3; a++) {
-      b[i * 6 + a] = Math.fround(z.min[a]);
-      b[i * 6 + 3 + a] = Math.fround(z.max[a]);
+      b[i * 6 + a] = Math.fround(min[a]);
+      b[i * 6 + 3 + a] = Math.fround(max[a]);
     }
   });
   return b;
 }
 
-// Whether (x, y, z) lies in box i of bounds b (f32Bounds).
-function inBounds(b, i, x, y, z) {
+// Whether (x, y, z) lies in zone i of zones, whose bounds are b (f32Bounds): in
+// its box, and for a prism in its footprint too.
+function inZone(b, zones, i, x, y, z) {
   const o = i * 6;
-  return x >= b[o] && x <= b[o + 3] && y >= b[o + 1] && y <= b[o + 4] && z >= b[o + 2] && z <= b[o + 5];
+  if (!(x >= b[o] && x <= b[o + 3] && y >= b[o + 1] && y <= b[o + 4] && z >= b[o + 2] && z <= b[o + 5])) return false;
+  return !zones[i].polygon || insideFootprint(zones[i], x, y);
 }
 
 // Marks slots from..to-1 of a skeleton's arrays (`end`: x, y, z per slot;
@@ -48,7 +87,7 @@ export function markInZones(end, dead, from, to, zones, out) {
     let mark = 0;
     if (!(dead && dead[k])) {
       const x = end[k * 3], y = end[k * 3 + 1], z = end[k * 3 + 2];
-      for (let i = 0; i < nz && !mark; i++) if (inBounds(b, i, x, y, z)) mark = i + 1;
+      for (let i = 0; i < nz && !mark; i++) if (inZone(b, zones, i, x, y, z)) mark = i + 1;
     }
     out[k] = mark;
   }
@@ -62,7 +101,7 @@ export function countInZones(end, dead, count, zones) {
     if (dead && dead[k]) continue;
     const x = end[k * 3], y = end[k * 3 + 1], z = end[k * 3 + 2];
     zones.forEach((zone, i) => {
-      if (inBounds(b, i, x, y, z)) counts[zone.id]++;
+      if (inZone(b, zones, i, x, y, z)) counts[zone.id]++;
     });
   }
   return counts;

@@ -9,6 +9,7 @@ import {
 } from '../../web/helpers.mjs';
 import {
   isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, clearanceRows, stemLabel,
+  boundsOf, insideFootprint, insideObstacle,
 } from '../../web/zones.mjs';
 
 const run = (id, name, status) => ({ run: id, name, status, iteration: 3, stems: 1, nodes: 40 });
@@ -295,6 +296,38 @@ test('internodes marked by the zone that holds them, as the page holds them (flo
   assert.deepEqual(countInZones(end, dead, 6, [road, strip, both]), { road: 3, strip: 1, both: 1 });
   assert.deepEqual(countInZones(end, dead, 2, [road]), { road: 2 });
   assert.deepEqual(Array.from(end), pts.flat().map(Math.fround), 'the positions are not changed');
+});
+
+// A prism zone: an L (its corner square holds a courtyard), wound clockwise, its
+// courtyard anticlockwise, from 1 m up to 4 m.
+const yard = {
+  id: 'yard', kind: 'zone', polygon: [[0, 0], [0, 4], [2, 4], [2, 2], [4, 2], [4, 0]],
+  holes: [[[0.5, 0.5], [1.5, 0.5], [1.5, 1.5], [0.5, 1.5]]], z: [1, 4],
+};
+
+test('a prism: its bounds, and a point inside its footprint by even-odd, holes left out', () => {
+  assert.deepEqual(boundsOf(yard), { min: [0, 0, 1], max: [4, 4, 4] });
+  assert.deepEqual(boundsOf(road), { min: road.min, max: road.max });
+  for (const p of [[0.25, 3], [3, 1], [1.75, 1.75], [1, 0.25]]) assert.ok(insideFootprint(yard, ...p), `inside ${p}`);
+  // the courtyard, the L's missing square, beyond it
+  for (const p of [[1, 1], [3, 3], [5, 1], [-0.5, 1]]) assert.ok(!insideFootprint(yard, ...p), `outside ${p}`);
+  // a closed ring (its last point the first) reads the same
+  const closed = { ...yard, polygon: [...yard.polygon, [0, 0]] };
+  for (const p of [[0.25, 3], [1, 1], [3, 3]]) assert.equal(insideFootprint(closed, ...p), insideFootprint(yard, ...p));
+  // in the z range, bounds included
+  assert.ok(insideObstacle(yard, 3, 1, 1) && insideObstacle(yard, 3, 1, 4));
+  assert.ok(!insideObstacle(yard, 3, 1, 0.99) && !insideObstacle(yard, 3, 1, 4.01) && !insideObstacle(yard, 1, 1, 2));
+  assert.ok(insideObstacle(road, 1, 0, 2));
+});
+
+test('internodes marked and counted in a prism zone: its footprint, not its bounds', () => {
+  // slots: in the L, in the courtyard, in the L's missing square, in the L below it, in the L and the box road
+  const pts = [[3, 1, 2], [1, 1, 2], [3, 3, 2], [0.25, 3, 0.5], [1.75, 0.75, 2]];
+  const end = new Float32Array(pts.flat());
+  const out = new Float32Array(5);
+  markInZones(end, null, 0, 5, [yard, road], out);
+  assert.deepEqual(Array.from(out), [1, 2, 0, 0, 1]);
+  assert.deepEqual(countInZones(end, null, 5, [yard, road]), { yard: 2, road: 2 });
 });
 
 test('the conflicts rows: one per stem and zone, from the stats\' zones', () => {
