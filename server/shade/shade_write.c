@@ -110,6 +110,22 @@ static void draw_legend(cairo_t *cr, double x, double y, double height, double t
   cairo_show_text(cr, "tree shade");
 }
 
+/* The plan's frame: metres, x right, y up, the plan ph pixels high at `scale`. */
+static void plan_frame(cairo_t *cr, const shade_result *r, double scale, int ph) {
+  cairo_translate(cr, PNG_MARGIN, PNG_MARGIN + 10 + ph);
+  cairo_scale(cr, scale, -scale);
+  cairo_translate(cr, -r->min[0], -r->min[1]);
+}
+
+/* Fills the path in grey and draws its outline (device units, 2 px). */
+static void draw_footprint(cairo_t *cr) {
+  cairo_set_source_rgb(cr, 0.78, 0.78, 0.78);
+  cairo_fill_preserve(cr);
+  cairo_set_source_rgb(cr, 0.35, 0.1, 0.1);
+  cairo_set_line_width(cr, 2.0);
+  cairo_stroke(cr);
+}
+
 int shade_write_png(FILE *f, const shade_result *r, const sylva_world *w, char *err,
                     size_t errlen) {
   if (r->nx <= 0 || r->surface_count < 1 || r->surfaces[0].face >= 0)
@@ -171,22 +187,39 @@ int shade_write_png(FILE *f, const shade_result *r, const sylva_world *w, char *
 
     /* from here on, metres: x right, y up */
     cairo_save(cr);
-    cairo_translate(cr, PNG_MARGIN, PNG_MARGIN + 10 + ph);
-    cairo_scale(cr, scale, -scale);
-    cairo_translate(cr, -r->min[0], -r->min[1]);
+    plan_frame(cr, r, scale, ph);
     int count = sylva_world_obstacle_count(w);
     for (int i = 0; i < count; i++) {
       int id;
       sylva_obstacle_def o;
-      if (sylva_world_obstacle_at(w, i, &id, &o) != 0 || o.kind != SYLVA_OBSTACLE_SOLID) continue;
+      if (sylva_world_obstacle_at(w, i, &id, &o) != 0 || o.kind != SYLVA_OBSTACLE_SOLID ||
+          o.footprint.ring_count > 0)
+        continue;
       cairo_rectangle(cr, o.min[0], o.min[1], o.max[0] - o.min[0], o.max[1] - o.min[1]);
     }
     cairo_restore(cr);
-    cairo_set_source_rgb(cr, 0.78, 0.78, 0.78);
-    cairo_fill_preserve(cr);
-    cairo_set_source_rgb(cr, 0.35, 0.1, 0.1);
-    cairo_set_line_width(cr, 2.0);
-    cairo_stroke(cr);
+    draw_footprint(cr);
+    /* each prism alone: its rings even-odd, as the world reads them */
+    for (int i = 0; i < count; i++) {
+      int id;
+      sylva_obstacle_def o;
+      if (sylva_world_obstacle_at(w, i, &id, &o) != 0 || o.kind != SYLVA_OBSTACLE_SOLID ||
+          o.footprint.ring_count == 0)
+        continue;
+      const sylva_footprint *fp = &o.footprint;
+      cairo_save(cr);
+      plan_frame(cr, r, scale, ph);
+      for (int ring = 0, first = 0; ring < fp->ring_count; first += fp->ring_sizes[ring++]) {
+        cairo_move_to(cr, fp->points[first][0], fp->points[first][1]);
+        for (int k = first + 1; k < first + fp->ring_sizes[ring]; k++)
+          cairo_line_to(cr, fp->points[k][0], fp->points[k][1]);
+        cairo_close_path(cr);
+      }
+      cairo_restore(cr);
+      cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
+      draw_footprint(cr);
+      cairo_set_fill_rule(cr, CAIRO_FILL_RULE_WINDING);
+    }
 
     cairo_set_source_rgb(cr, 0.4, 0.2, 0.05);
     int stems = sylva_world_stem_count(w);
