@@ -31,7 +31,9 @@ static const cli_option shade_cli_options[OPT_COUNT] = {
     [OPT_FROM] = {"from", 0, "HH:MM", "the first time (default 00:00)"},
     [OPT_TO] = {"to", 0, "HH:MM", "the end, not sampled (default 24:00)"},
     [OPT_STEP] = {"step", 0, "MIN", "minutes between samples, 1 to 1440 (default 10)"},
-    [OPT_SURFACE] = {"surface", 0, "S", "only 'ground' or one face, OBSTACLE_ID:+x|-x|+y|-y"},
+    [OPT_SURFACE] = {"surface", 0, "S",
+                     "only 'ground' or one face, OBSTACLE_ID:FACE: +x|-x|+y|-y of a box, "
+                     "e0, e1, ... (its footprint's edges) of a prism"},
     [OPT_OUT] = {"output", 'o', "OUT", "the file to write: OUT.csv, OUT.json or OUT.png (required)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };

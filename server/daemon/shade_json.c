@@ -81,8 +81,14 @@ static void put_added(FILE *f, const shade_result *r, size_t first, size_t count
   fputc(']', f);
 }
 
+/* A unit vector's x and y, with -0 written as 0. */
+static void put_xy(FILE *f, const double v[2]) {
+  fprintf(f, "[%.17g,%.17g]", v[0] + 0.0, v[1] + 0.0);
+}
+
 /* The faces' part: per face with cells, its obstacle, its face, its grid (nu cells
- * along it, fastest, by nz up it) and the centre of its first cell. */
+ * along it, fastest, by nz up it), the centre of its first cell, which way its cells
+ * run, its outward normal and its cells' width along it. */
 static int put_faces(FILE *f, const shade_result *r, const sylva_world *w) {
   fputs(",\"faces\":[", f);
   bool any = false;
@@ -97,9 +103,12 @@ static int put_faces(FILE *f, const shade_result *r, const sylva_world *w) {
     fputs(any ? ",{\"obstacle\":" : "{\"obstacle\":", f);
     any = true;
     if (put_string(f, o.label)) return SERVER_ENOMEM;
-    fprintf(f, ",\"face\":\"%s\",\"nu\":%zu,\"nz\":%zu,\"first\":[%.4f,%.4f,%.4f],\"added\":",
-            shade_face_name((shade_face)sf->face), nu, sf->count / nu, c0->p[0], c0->p[1],
-            c0->p[2]);
+    fprintf(f, ",\"face\":\"%s\",\"nu\":%zu,\"nz\":%zu,\"first\":[%.4f,%.4f,%.4f],\"along\":",
+            sf->face_name, nu, sf->count / nu, c0->p[0], c0->p[1], c0->p[2]);
+    put_xy(f, sf->along);
+    fputs(",\"normal\":", f);
+    put_xy(f, sf->normal);
+    fprintf(f, ",\"du\":%.17g,\"added\":", sf->width);
     put_added(f, r, sf->first, sf->count);
     fputc('}', f);
   }

@@ -1,10 +1,11 @@
 /* The site's sun hours (shade.h; docs/model.md, "Shade on the site"): cells, the
- * sun's samples, rays past the boxes and through the leaves' voxels. */
+ * sun's samples, rays past the boxes and prisms and through the leaves' voxels. */
 #include "shade.h"
 
 #include <libnova/julian_day.h>
 #include <libnova/sidereal_time.h>
 #include <libnova/solar.h>
+#include <limits.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -81,15 +82,9 @@ int shade_parse_surface(const sylva_world *w, const char *text, shade_filter *ou
   const char *colon = strrchr(text, ':');
   if (!colon || colon == text)
     return server_fail(err, errlen, SERVER_EINPUT,
-                       "expected 'ground' or OBSTACLE_ID:FACE (FACE +x, -x, +y or -y), got '%s'",
+                       "expected 'ground' or OBSTACLE_ID:FACE (FACE +x, -x, +y or -y of a box, "
+                       "e0, e1, ... of a prism), got '%s'",
                        text);
-  int face = -1;
-  for (int f = 0; f < SHADE_FACE_COUNT; f++)
-    if (strcmp(colon + 1, face_names[f]) == 0) face = f;
-  if (face < 0)
-    return server_fail(err, errlen, SERVER_EINPUT,
-                       "'%s': unknown face '%s' (a box's vertical faces are +x, -x, +y and -y)",
-                       text, colon + 1);
   char id[SYLVA_LABEL_MAX];
   size_t len = (size_t)(colon - text);
   int obstacle = SYLVA_ENOTFOUND;
@@ -104,8 +99,33 @@ int shade_parse_surface(const sylva_world *w, const char *text, shade_filter *ou
                        text, (int)len, text);
   if (def.kind != SYLVA_OBSTACLE_SOLID)
     return server_fail(err, errlen, SERVER_EINPUT,
-                       "'%s': obstacle '%s' is a zone, which has no faces (only boxes do)", text,
-                       def.label);
+                       "'%s': obstacle '%s' is a zone, which has no faces (only solid boxes and "
+                       "prisms do)",
+                       text, def.label);
+  const char *name = colon + 1;
+  int face = -1;
+  if (def.footprint.ring_count > 0) {
+    /* "e" and the edge's number in decimal, without sign or leading zeros */
+    int edges = def.footprint.point_count;
+    if (name[0] == 'e' && name[1] >= '0' && name[1] <= '9' && (name[1] != '0' || !name[2])) {
+      long n = 0;
+      const char *q = name + 1;
+      while (*q >= '0' && *q <= '9' && n < edges) n = n * 10 + (*q++ - '0');
+      if (!*q && n < edges) face = (int)n;
+    }
+    if (face < 0)
+      return server_fail(err, errlen, SERVER_EINPUT,
+                         "'%s': unknown face '%s' (prism '%s' has a wall on each edge of its "
+                         "footprint, e0 to e%d)",
+                         text, name, def.label, edges - 1);
+  } else {
+    for (int f = 0; f < SHADE_FACE_COUNT; f++)
+      if (strcmp(name, face_names[f]) == 0) face = f;
+    if (face < 0)
+      return server_fail(err, errlen, SERVER_EINPUT,
+                         "'%s': unknown face '%s' (a box's vertical faces are +x, -x, +y and -y)",
+                         text, name);
+  }
   *out = (shade_filter){.ground = false, .faces = true, .obstacle = obstacle, .face = face};
   return SERVER_OK;
 }
@@ -388,28 +408,71 @@ static double transmission(const leaf_grid *g, double voxel, const double o[3],
   return exp(-depth);
 }
 
-/* A solid box of the world, with its id. */
+/* A solid obstacle of the world, with its id: a box, or a prism (its bounds and z
+ * range in min, max, and its footprint, pointing into the world). */
 typedef struct shade_box {
   int id;
   double min[3], max[3];
+  sylva_footprint fp; /* ring_count 0 for a box */
 } shade_box;
 
-/* Is the ray from o towards d stopped by a box other than `own`? */
+/* The end of edge i of a footprint whose ring starts at point `first` and has n
+ * points: the next point of the ring. */
+static const double *edge_end(const sylva_footprint *f, int first, int n, int i) {
+  return f->points[i + 1 < first + n ? i + 1 : first];
+}
+
+/* Does the ray o + t d, t0 < t < t1 (its part inside a prism's bounds and z range),
+ * pass inside the footprint? Where it crosses an edge it is inside on one side of
+ * it; crossing none, it is inside all along or nowhere, as its middle is (even-odd:
+ * a half-line from it crosses the rings an odd number of times). */
+static bool ray_footprint(const sylva_footprint *f, const double o[3], const double d[3],
+                          double t0, double t1) {
+  double ax = o[0] + t0 * d[0], ay = o[1] + t0 * d[1];
+  double dx = (t1 - t0) * d[0], dy = (t1 - t0) * d[1];
+  double mx = ax + 0.5 * dx, my = ay + 0.5 * dy;
+  bool in = false;
+  for (int r = 0, first = 0; r < f->ring_count; first += f->ring_sizes[r++])
+    for (int i = first; i < first + f->ring_sizes[r]; i++) {
+      const double *p = f->points[i], *q = edge_end(f, first, f->ring_sizes[r], i);
+      double ex = q[0] - p[0], ey = q[1] - p[1], den = dx * ey - dy * ex;
+      if (den != 0.0) {
+        /* a + s (dx, dy) = p + u (ex, ey) */
+        double wx = p[0] - ax, wy = p[1] - ay;
+        double s = (wx * ey - wy * ex) / den, u = (wx * dy - wy * dx) / den;
+        if (s > 0.0 && s < 1.0 && u >= 0.0 && u <= 1.0) return true;
+      }
+      if ((p[1] > my) != (q[1] > my) && mx < p[0] + (my - p[1]) * ex / ey) in = !in;
+    }
+  return in;
+}
+
+/* Is the ray from o towards d stopped by a solid obstacle other than `own`? A
+ * prism's bounds first, its footprint's edges only for a ray that meets them. */
 static bool blocked(const shade_box *boxes, int count, int own, const double o[3],
                     const double d[3]) {
   for (int b = 0; b < count; b++) {
     if (boxes[b].id == own) continue;
     double t0, t1;
-    if (ray_box(o, d, boxes[b].min, boxes[b].max, &t0, &t1)) return true;
+    if (ray_box(o, d, boxes[b].min, boxes[b].max, &t0, &t1) &&
+        (boxes[b].fp.ring_count == 0 || ray_footprint(&boxes[b].fp, o, d, t0, t1)))
+      return true;
   }
   return false;
 }
 
-/* A cell waiting for its hours: its normal axis and sign, its own box. */
+/* How far a prism wall's cells send their rays from outside the wall, metres: off
+ * the edge (a ray from on it could count its own wall), far below any cell's size. */
+#define SHADE_WALL_OFFSET 1e-6
+
+/* How the cells of one surface meet the sun: their outward normal, the obstacle
+ * their rays pass through (a box's own: a box cannot shade its own face; -1 for
+ * the ground and for a prism, whose courtyard walls its other walls shade), and how
+ * far out along the normal the rays start. */
 typedef struct cell_work {
-  int axis;   /* 0 x, 1 y, 2 z (the ground) */
-  double sign;
-  int own;    /* obstacle id, -1 for the ground */
+  double n[3];
+  int own;
+  double offset;
 } cell_work;
 
 /* Grows r->cells to hold `more` more. */
@@ -424,15 +487,21 @@ static int reserve_cells(shade_result *r, size_t *cap, size_t more) {
   return SERVER_OK;
 }
 
-static int add_surface(shade_result *r, const char *label, int obstacle, int face) {
+/* A new surface, its cells to come; face_name NULL for the ground. */
+static shade_surface *add_surface(shade_result *r, const char *label, int obstacle, int face,
+                                  const char *face_name) {
   shade_surface *s = realloc(r->surfaces, (size_t)(r->surface_count + 1) * sizeof *s);
-  if (!s) return SERVER_ENOMEM;
+  if (!s) return NULL;
   r->surfaces = s;
   shade_surface *n = &s[r->surface_count++];
   *n = (shade_surface){.obstacle = obstacle, .face = face, .first = r->cell_count};
-  if (face < 0) snprintf(n->name, sizeof n->name, "%s", label);
-  else snprintf(n->name, sizeof n->name, "%s:%s", label, face_names[face]);
-  return SERVER_OK;
+  if (!face_name) {
+    snprintf(n->name, sizeof n->name, "%s", label);
+  } else {
+    snprintf(n->face_name, sizeof n->face_name, "%s", face_name);
+    snprintf(n->name, sizeof n->name, "%s:%s", label, face_name);
+  }
+  return n;
 }
 
 /* The first voxel centre index along an axis at or above x (centres at min +
@@ -444,30 +513,118 @@ static void centre_range(double min, double voxel, int dim, double x, double y, 
   *last = b >= dim ? dim - 1 : b < -1 ? -1 : (int)b;
 }
 
+/* The point u cells along a face: origin + (u + 0.5) step, on each axis of x, y
+ * (the origin itself where the step is 0). */
+static double face_at(const double origin[2], const double step[2], int u, int a) {
+  return step[a] != 0.0 ? origin[a] + (u + 0.5) * step[a] : origin[a];
+}
+
+/* The cells u0 .. u1 along the last surface of r (face_at), by the world's voxels
+ * in z whose centres [zlo, zhi] holds, along it fastest. */
+static int face_cells(shade_result *r, size_t *cap, const sylva_world_def *def,
+                      const int dims[3], double zlo, double zhi, int u0, int u1,
+                      const double origin[2], const double step[2]) {
+  int z0, z1;
+  centre_range(def->min[2], def->voxel, dims[2], zlo, zhi, &z0, &z1);
+  if (u1 < u0 || z1 < z0) return SERVER_OK;
+  size_t n = (size_t)(u1 - u0 + 1) * (size_t)(z1 - z0 + 1);
+  if (reserve_cells(r, cap, n)) return SERVER_ENOMEM;
+  for (int k = z0; k <= z1; k++)
+    for (int u = u0; u <= u1; u++)
+      r->cells[r->cell_count++] =
+          (shade_cell){.p = {face_at(origin, step, u, 0), face_at(origin, step, u, 1),
+                             def->min[2] + (k + 0.5) * def->voxel},
+                       .surface = r->surface_count - 1};
+  r->surfaces[r->surface_count - 1].count = n;
+  return SERVER_OK;
+}
+
 /* The cells of one face of box o, in the world's voxel grid. */
 static int add_face(shade_result *r, size_t *cap, const sylva_world_def *def,
                     const int dims[3], const sylva_obstacle_def *o, int id, int face) {
   int axis = face < 2 ? 0 : 1, across = 1 - axis;
   double plane = face % 2 == 0 ? o->max[axis] : o->min[axis];
-  int rc = add_surface(r, o->label, id, face);
-  if (rc) return rc;
+  shade_surface *sf = add_surface(r, o->label, id, face, face_names[face]);
+  if (!sf) return SERVER_ENOMEM;
+  sf->normal[axis] = face % 2 == 0 ? 1.0 : -1.0;
+  sf->along[across] = 1.0;
+  sf->width = def->voxel;
   if (plane < def->min[axis] || plane > def->max[axis]) return SERVER_OK;
-  int u0, u1, z0, z1;
+  int u0, u1;
   centre_range(def->min[across], def->voxel, dims[across], o->min[across], o->max[across], &u0,
                &u1);
-  centre_range(def->min[2], def->voxel, dims[2], o->min[2], o->max[2], &z0, &z1);
-  if (u1 < u0 || z1 < z0) return SERVER_OK;
-  size_t n = (size_t)(u1 - u0 + 1) * (size_t)(z1 - z0 + 1);
-  if (reserve_cells(r, cap, n)) return SERVER_ENOMEM;
-  for (int k = z0; k <= z1; k++)
-    for (int u = u0; u <= u1; u++) {
-      shade_cell *c = &r->cells[r->cell_count++];
-      *c = (shade_cell){.surface = r->surface_count - 1};
-      c->p[axis] = plane;
-      c->p[across] = def->min[across] + (u + 0.5) * def->voxel;
-      c->p[2] = def->min[2] + (k + 0.5) * def->voxel;
+  double origin[2], step[2];
+  origin[axis] = plane;
+  step[axis] = 0.0;
+  origin[across] = def->min[across];
+  step[across] = def->voxel;
+  return face_cells(r, cap, def, dims, o->min[2], o->max[2], u0, u1, origin, step);
+}
+
+/* Is the left of footprint edge k (from p to q, of the ring starting at `first` with
+ * n points) inside the footprint? The parity of the crossings of the half-line from
+ * the edge's middle to its left with the other edges (a crossing where an end lies
+ * on the half-line's line counted once: that end as if to the right of it). */
+static bool left_inside(const sylva_footprint *f, const double p[2], const double q[2], int k) {
+  double mx = 0.5 * (p[0] + q[0]), my = 0.5 * (p[1] + q[1]);
+  double lx = p[1] - q[1], ly = q[0] - p[0]; /* the left normal, unscaled */
+  bool in = false;
+  for (int r = 0, first = 0; r < f->ring_count; first += f->ring_sizes[r++])
+    for (int i = first; i < first + f->ring_sizes[r]; i++) {
+      if (i == k) continue;
+      const double *a = f->points[i], *b = edge_end(f, first, f->ring_sizes[r], i);
+      double sa = lx * (a[1] - my) - ly * (a[0] - mx), sb = lx * (b[1] - my) - ly * (b[0] - mx);
+      if ((sa > 0.0) == (sb > 0.0)) continue;
+      double ta = lx * (a[0] - mx) + ly * (a[1] - my), tb = lx * (b[0] - mx) + ly * (b[1] - my);
+      if (ta + (tb - ta) * sa / (sa - sb) > 0.0) in = !in;
     }
-  r->surfaces[r->surface_count - 1].count = n;
+  return in;
+}
+
+_Static_assert(SYLVA_FOOTPRINT_MAX_POINTS <= 100000, "an edge's name, e99999, fits its field");
+
+/* The cells of the wall on edge k (from p to q) of prism o: round(length / voxel)
+ * cells along it (at least one), centred, by the world's voxels in z that its z
+ * range holds; those whose centres lie inside the world's box. */
+static int add_wall(shade_result *r, size_t *cap, const sylva_world_def *def,
+                    const int dims[3], const sylva_obstacle_def *o, int id, int k,
+                    const double p[2], const double q[2]) {
+  char name[SHADE_FACE_NAME_MAX]; /* k < SYLVA_FOOTPRINT_MAX_POINTS, 100000 */
+  snprintf(name, sizeof name, "e%u", (unsigned)k % 100000u);
+  shade_surface *sf = add_surface(r, o->label, id, k, name);
+  if (!sf) return SERVER_ENOMEM;
+  double ex = q[0] - p[0], ey = q[1] - p[1], len = hypot(ex, ey);
+  if (!(len > 0.0)) return SERVER_OK; /* a repeated point: a wall of no width */
+  double side = left_inside(&o->footprint, p, q, k) ? -1.0 : 1.0;
+  sf->normal[0] = -side * ey / len;
+  sf->normal[1] = side * ex / len;
+  sf->along[0] = ex / len;
+  sf->along[1] = ey / len;
+  long cells = lround(len / def->voxel);
+  int nu = cells < 1 ? 1 : cells > INT_MAX / 2 ? INT_MAX / 2 : (int)cells;
+  sf->width = len / nu;
+  double step[2] = {ex / nu, ey / nu};
+  int u0 = nu, u1 = -1;
+  for (int u = 0; u < nu; u++) {
+    double x = face_at(p, step, u, 0), y = face_at(p, step, u, 1);
+    if (x < def->min[0] || x > def->max[0] || y < def->min[1] || y > def->max[1]) continue;
+    if (u < u0) u0 = u;
+    u1 = u; /* the world's box is convex: the cells inside it are a run */
+  }
+  return face_cells(r, cap, def, dims, o->min[2], o->max[2], u0, u1, p, step);
+}
+
+/* The walls of prism o that the filter asks for (face: one edge, or -1). */
+static int add_walls(shade_result *r, size_t *cap, const sylva_world_def *def,
+                     const int dims[3], const sylva_obstacle_def *o, int id, int face) {
+  const sylva_footprint *f = &o->footprint;
+  for (int ring = 0, first = 0; ring < f->ring_count; first += f->ring_sizes[ring++])
+    for (int i = first; i < first + f->ring_sizes[ring]; i++) {
+      if (face >= 0 && i != face) continue;
+      int rc = add_wall(r, cap, def, dims, o, id, i, f->points[i],
+                        edge_end(f, first, f->ring_sizes[ring], i));
+      if (rc) return rc;
+    }
   return SERVER_OK;
 }
 
@@ -478,7 +635,9 @@ static int make_cells(const sylva_world *w, const shade_filter *f, shade_result 
   sylva_world_dims(w, dims);
   size_t cap = 0;
   if (f->ground) {
-    if (add_surface(r, "ground", -1, -1)) return SERVER_ENOMEM;
+    shade_surface *g = add_surface(r, "ground", -1, -1, NULL);
+    if (!g) return SERVER_ENOMEM;
+    g->normal[2] = 1.0;
     size_t n = (size_t)dims[0] * (size_t)dims[1];
     if (reserve_cells(r, &cap, n)) return SERVER_ENOMEM;
     for (int j = 0; j < dims[1]; j++)
@@ -499,6 +658,11 @@ static int make_cells(const sylva_world *w, const shade_filter *f, shade_result 
     sylva_obstacle_def o;
     if (sylva_world_obstacle_at(w, i, &id, &o) != 0 || o.kind != SYLVA_OBSTACLE_SOLID) continue;
     if (f->obstacle >= 0 && id != f->obstacle) continue;
+    if (o.footprint.ring_count > 0) {
+      int rc = add_walls(r, &cap, def, dims, &o, id, f->face);
+      if (rc) return rc;
+      continue;
+    }
     for (int face = 0; face < SHADE_FACE_COUNT; face++) {
       if (f->face >= 0 && face != f->face) continue;
       int rc = add_face(r, &cap, def, dims, &o, id, face);
@@ -508,7 +672,23 @@ static int make_cells(const sylva_world *w, const shade_filter *f, shade_result 
   return SERVER_OK;
 }
 
-/* The solid boxes of w (NULL and 0 when there are none). */
+/* How each surface of r meets the sun (one cell_work per surface, into work). */
+static void surface_work(const shade_result *r, const shade_box *boxes, int box_count,
+                         cell_work *work) {
+  for (int s = 0; s < r->surface_count; s++) {
+    const shade_surface *sf = &r->surfaces[s];
+    cell_work *cw = &work[s];
+    *cw = (cell_work){.own = sf->obstacle};
+    memcpy(cw->n, sf->normal, sizeof cw->n);
+    for (int b = 0; b < box_count; b++)
+      if (boxes[b].id == sf->obstacle && boxes[b].fp.ring_count > 0) {
+        cw->own = -1;
+        cw->offset = SHADE_WALL_OFFSET;
+      }
+  }
+}
+
+/* The solid boxes and prisms of w (NULL and 0 when there are none). */
 static int collect_boxes(const sylva_world *w, shade_box **out, int *count) {
   int n = sylva_world_obstacle_count(w);
   *out = NULL;
@@ -524,6 +704,7 @@ static int collect_boxes(const sylva_world *w, shade_box **out, int *count) {
     x->id = id;
     memcpy(x->min, o.min, sizeof x->min);
     memcpy(x->max, o.max, sizeof x->max);
+    x->fp = o.footprint;
   }
   *out = b;
   return SERVER_OK;
@@ -586,6 +767,7 @@ typedef struct shade_job {
   double voxel, dt;
   const shade_box *boxes;
   int box_count;
+  const cell_work *work; /* per surface */
   const double (*dirs)[3]; /* the sun's directions of the samples with the sun up */
   int dir_count;
   size_t from, to;
@@ -596,19 +778,21 @@ static void shade_cells(const shade_job *j) {
     const double *d = j->dirs[i];
     for (int s = 0; s < j->r->surface_count; s++) {
       const shade_surface *sf = &j->r->surfaces[s];
-      cell_work cw = {.axis = 2, .sign = 1.0, .own = sf->obstacle};
-      if (sf->face >= 0) {
-        cw.axis = sf->face < 2 ? 0 : 1;
-        cw.sign = sf->face % 2 == 0 ? 1.0 : -1.0;
-      }
-      if (!(cw.sign * d[cw.axis] > 0.0)) continue;
+      const cell_work *cw = &j->work[s];
+      if (!(cw->n[0] * d[0] + cw->n[1] * d[1] + cw->n[2] * d[2] > 0.0)) continue;
       size_t lo = sf->first > j->from ? sf->first : j->from;
       size_t hi = sf->first + sf->count < j->to ? sf->first + sf->count : j->to;
       for (size_t c = lo; c < hi; c++) {
         shade_cell *cell = &j->cells[c];
-        if (blocked(j->boxes, j->box_count, cw.own, cell->p, d)) continue;
+        double moved[3];
+        const double *o = cell->p;
+        if (cw->offset > 0.0) {
+          for (int a = 0; a < 3; a++) moved[a] = cell->p[a] + cw->offset * cw->n[a];
+          o = moved;
+        }
+        if (blocked(j->boxes, j->box_count, cw->own, o, d)) continue;
         cell->open += j->dt;
-        cell->with += j->dt * transmission(j->g, j->voxel, cell->p, d);
+        cell->with += j->dt * transmission(j->g, j->voxel, cell->p, d); /* as a box's */
       }
     }
   }
@@ -676,6 +860,7 @@ int shade_compute_threads(const sylva_world *w, const shade_site *site, const sh
   shade_box *boxes = NULL;
   int box_count = 0;
   double(*dirs)[3] = NULL;
+  cell_work *work = NULL;
   leaf_grid g = {.kd = NULL, .full = NULL};
   if (!hours || !sun || collect_boxes(w, &boxes, &box_count)) {
     rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the sun's samples");
@@ -691,16 +876,18 @@ int shade_compute_threads(const sylva_world *w, const shade_site *site, const sh
   double len = hypot(site->north[0], site->north[1]);
   double north[2] = {site->north[0] / len, site->north[1] / len};
   dirs = malloc((size_t)count * sizeof *dirs);
-  if (!dirs) {
+  work = malloc((size_t)(out->surface_count > 0 ? out->surface_count : 1) * sizeof *work);
+  if (!dirs || !work) {
     rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory for the sun's samples");
     goto done;
   }
+  surface_work(out, boxes, box_count, work);
   int lit = 0;
   for (int i = 0; i < count; i++)
     if (sun[i].elevation > 0.0) sun_direction(north, sun[i].elevation, sun[i].azimuth, dirs[lit++]);
   shade_run((shade_job){.r = out, .cells = out->cells, .g = &g, .voxel = def->voxel,
                         .dt = day->step / 60.0, .boxes = boxes, .box_count = box_count,
-                        .dirs = (const double(*)[3])dirs, .dir_count = lit, .from = 0,
+                        .work = work, .dirs = (const double(*)[3])dirs, .dir_count = lit, .from = 0,
                         .to = out->cell_count},
             threads);
   for (int s = 0; s < out->surface_count; s++)
@@ -708,6 +895,7 @@ int shade_compute_threads(const sylva_world *w, const shade_site *site, const sh
 done:
   free(hours);
   free(dirs);
+  free(work);
   free(sun);
   free(boxes);
   free(g.kd);

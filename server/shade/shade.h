@@ -2,10 +2,12 @@
  * its solid obstacles over one day, without the plants and with them
  * (docs/model.md, "Shade on the site"; `sylva shade` in docs/cli.md).
  *
- * A cell is a voxel-sized square: the floor's voxel squares (the ground) and the
- * voxel squares of each vertical face of each solid obstacle that lie inside the
- * world's box. From each cell's centre a ray towards the sun is stopped by solid
- * obstacles (exact ray-box tests) and keeps exp(-k LAD path) through the leaves
+ * A cell is a voxel-sized square: the floor's voxel squares (the ground), the
+ * voxel squares of each vertical face of each solid box, and about a voxel wide
+ * and a voxel high on each wall of each solid prism (one wall per edge of its
+ * footprint), those whose centres lie inside the world's box. From each cell's
+ * centre a ray towards the sun is stopped by solid obstacles (exact ray-box and
+ * ray-prism tests) and keeps exp(-k LAD path) through the leaves
  * (Beer-Lambert, k = SHADE_K), the leaf area density per voxel coming from the
  * leaves the world reports, placed as foliage_place() places them.
  *
@@ -45,7 +47,10 @@
 /** Minutes in a day: the latest `to`. */
 #define SHADE_DAY_MINUTES 1440
 
-/** The four vertical faces of a box obstacle, by outward normal. */
+/** The four vertical faces of a box obstacle, by outward normal. A prism's faces
+ *  are its footprint's edges instead, numbered 0, 1, ... in ring order (the
+ *  outline's, then each hole's), edge i running from point i to the next point of
+ *  its ring, and named "e0", "e1", ... */
 typedef enum shade_face {
   SHADE_FACE_PX = 0, /**< "+x" */
   SHADE_FACE_MX = 1, /**< "-x" */
@@ -85,7 +90,8 @@ typedef struct shade_filter {
   bool ground;   /**< the ground's cells */
   bool faces;    /**< the obstacles' faces (all of them when obstacle < 0) */
   int obstacle;  /**< only this obstacle's faces (id), or -1 */
-  int face;      /**< only this face of it (shade_face), or -1 for its four */
+  int face;      /**< only this face of it (a box's shade_face, a prism's edge
+                      number), or -1 for all its faces */
 } shade_filter;
 
 /** One cell: its centre, its surface and its hours of direct sun. */
@@ -96,11 +102,25 @@ typedef struct shade_cell {
   double with; /**< hours of sun with them, leaves passing part of it (sun_hours) */
 } shade_cell;
 
+/** Longest face name with its NUL: "e99999", a prism's last edge. */
+#define SHADE_FACE_NAME_MAX 8
+
 /** A surface: the ground, or one face of one solid obstacle, with its summary. */
 typedef struct shade_surface {
-  char name[SYLVA_LABEL_MAX + 4]; /**< "ground" or "OBSTACLE_ID:FACE" */
+  char name[SYLVA_LABEL_MAX + SHADE_FACE_NAME_MAX]; /**< "ground" or "OBSTACLE_ID:FACE" */
+  char face_name[SHADE_FACE_NAME_MAX]; /**< FACE: "+x", ... for a box, "e0", ... for a
+                                            prism; "" for the ground */
   int obstacle;                   /**< obstacle id, -1 for the ground */
-  int face;                       /**< shade_face, -1 for the ground */
+  int face;                       /**< a box's shade_face or a prism's edge number, -1
+                                       for the ground */
+  double normal[3];               /**< outward unit normal: (0, 0, 1) for the ground; a
+                                       prism wall's points to the side of its edge
+                                       outside the footprint (even-odd) */
+  double along[2];                /**< a face's cells run along it this way (unit,
+                                       x-y), fastest, then up; 0 for the ground */
+  double width;                   /**< a face's cells' width along it, metres (the
+                                       voxel for a box's; a prism edge's length over
+                                       its cell count) */
   size_t first, count;            /**< its cells: cells[first .. first + count) */
   double mean_open, mean_with;    /**< mean hours of sun (0 without cells) */
   double mean_added;              /**< mean hours of shade the plants add: open - with */
@@ -109,7 +129,8 @@ typedef struct shade_surface {
 } shade_surface;
 
 /** A day's shade. The ground's cells come first (when computed), x fastest, then
- *  each face's, surfaces in obstacle order and face order. */
+ *  each face's, surfaces in obstacle order and face order; a face's cells along
+ *  it fastest (surface.along), then up. */
 typedef struct shade_result {
   shade_cell *cells;
   size_t cell_count;
@@ -141,12 +162,13 @@ int shade_parse_date(const char *text, int *month, int *day, char *err, size_t e
 /** Parses "HH:MM" (00:00 to 24:00) into minutes after midnight; SERVER_EINPUT. */
 int shade_parse_time(const char *text, int *minutes, char *err, size_t errlen);
 
-/** Parses a surface name, "ground" or "OBSTACLE_ID:FACE" (FACE +x, -x, +y or -y, the
- *  id a solid obstacle of w), into a filter; SERVER_EINPUT naming what is unknown. */
+/** Parses a surface name, "ground" or "OBSTACLE_ID:FACE" (the id a solid obstacle
+ *  of w; FACE +x, -x, +y or -y of a box, e0 to e(N-1) of a prism of N footprint
+ *  points), into a filter; SERVER_EINPUT naming what is unknown. */
 int shade_parse_surface(const sylva_world *w, const char *text, shade_filter *out, char *err,
                         size_t errlen);
 
-/** The name of a face: "+x", "-x", "+y" or "-y". */
+/** The name of a box's face: "+x", "-x", "+y" or "-y". */
 const char *shade_face_name(shade_face f);
 
 /** Computes the day's shade of world w (as it stands: its live nodes and their

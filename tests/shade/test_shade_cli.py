@@ -4,7 +4,8 @@ meson runs `python3 test_shade_cli.py SYLVA_EXE TESTS_SHADE_DIR`: a small yard
 (site.json, 3 iterations at 0.2 m voxels) is grown into a store; the same iteration
 shaded twice gives the same bytes (CSV, JSON, PNG); the CSV's rows, the summary's
 means and the stdout line agree; bad input exits 2 with the reason on stderr and
-writes nothing.
+writes nothing. A site of prisms (prisms.json): their walls named by edge, e0, e1,
+..., one wall alone by --surface, a box's face name refused for a prism.
 """
 import csv
 import json
@@ -110,6 +111,41 @@ with tempfile.TemporaryDirectory() as tmp:
     p = sylva("shade", os.path.join(HERE, "zenith.json"), "--date", "06-21", "-o", out + ".csv")
     check(p.returncode == 2 and "light.latitude" in p.stderr and not os.path.exists(out + ".csv"),
           "zenith: " + p.stderr)
+
+    # prisms: a wall per edge of the footprint, outline then holes; the zone none
+    prisms = os.path.join(HERE, "prisms.json")
+    pday = ["--date", "06-21", "--step", "30"]
+    out = os.path.join(tmp, "prisms.csv")
+    p = sylva("shade", prisms, *pday, "-o", out)
+    check(p.returncode == 0, "prisms: " + p.stderr)
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    names = [s["surface"] for s in json.loads(p.stdout.strip().splitlines()[-1])["surfaces"]]
+    want = ["ground"] + ["block:e%d" % e for e in range(10)] + ["kiosk:e%d" % e for e in range(4)]
+    check(names == want, "prism surfaces: %s" % names)
+    seen = []
+    for r in rows:
+        if not seen or seen[-1] != r["surface"]:
+            seen.append(r["surface"])
+    check(seen == want, "the CSV's surfaces in order: %s" % seen)
+    by = {s["surface"]: s for s in json.loads(p.stdout.strip().splitlines()[-1])["surfaces"]}
+    check(by["block:e8"]["sun_hours_open"] < by["block:e0"]["sun_hours_open"],
+          "the courtyard's south-facing wall gets less sun than the outer one")
+    court = [r for r in rows if r["surface"] == "block:e8"]
+    check(len(court) == 8 * 12 and all(abs(float(r["y"]) - 6) < 1e-9 for r in court),
+          "the courtyard's wall on its edge: %d cells" % len(court))
+    out = os.path.join(tmp, "wall.csv")
+    p = sylva("shade", prisms, *pday, "--surface", "kiosk:e2", "-o", out)
+    check(p.returncode == 0, "--surface kiosk:e2: " + p.stderr)
+    with open(out) as f:
+        check({r["surface"] for r in csv.DictReader(f)} == {"kiosk:e2"}, "--surface e2 rows")
+    p = sylva("shade", prisms, *pday, "-o", os.path.join(tmp, "prisms.png"))
+    check(p.returncode == 0, "prisms' plan: " + p.stderr)
+    for face, word in (("+x", "e0 to e3"), ("e4", "e0 to e3"), ("e01", "e0 to e3")):
+        out = os.path.join(tmp, "bad.csv")
+        p = sylva("shade", prisms, *pday, "--surface", "kiosk:" + face, "-o", out)
+        check(p.returncode == 2 and word in p.stderr and not os.path.exists(out),
+              "kiosk:%s: %d %s" % (face, p.returncode, p.stderr))
 
 if failures:
     print("%d failed" % len(failures))
