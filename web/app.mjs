@@ -147,13 +147,14 @@ window.sylva = {
     leafStride: view.leaves.stride,
     leafBudget: view.leaves.budget,
     leafPending: view.leaves.visible && view.leaves.pending(),
-    drawnObstacles: view.drawnBoxes('obstacle').map((b) => b.id),
-    drawnZones: view.drawnBoxes('zone'),
+    drawnObstacles: view.drawnBounds('obstacle').map((b) => b.id),
+    drawnZones: view.drawnBounds('zone'),
     zones: zonesOf(watch.shown().obstacles).map((o) => o.id),
     highlighted: view.branches.highlighted(),
     inZones: countInZones(watch.shown().end, watch.shown().dead, watch.shown().count, zonesOf(watch.shown().obstacles)),
     conflicts: conflicts.rows(),
     sky: light.sky,
+    compass: view.compassAngle,
     frames: view.frames,
     auth: session.auth,
     authed: session.authed,
@@ -175,6 +176,13 @@ window.sylva = {
   shadeAt: (x, y) => shade.groundAt(x, y),
   shadeTexel: (x, y) => view.shadeTexel(x, y),
   setObstacleVisible: (id, on) => { view.setObstacleVisible(id, on); view.render(); },
+  // an obstacle's or zone's mesh as drawn: its bounds, triangles and volume
+  obstacleMesh: (id) => {
+    const m = view.obstacleMesh(id);
+    return m && { ...m, ...[...view.drawnBounds('obstacle'), ...view.drawnBounds('zone')].find((b) => b.id === id) };
+  },
+  // the obstacles and zones a vertical ray down through (x, y) meets, from the top
+  obstaclesAt: (x, y) => view.obstaclesAt(x, y),
   render: () => view.render(),
   compare: () => compare.state(),
   compareImages: () => compare.images(),

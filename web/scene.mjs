@@ -1,12 +1,14 @@
 // The 3D view: branches as instanced cylinders drawn straight from the skeleton's
 // typed arrays (a vertex shader places each unit cylinder between a node and its
-// parent, scaled by the node's radius), solid obstacles as translucent boxes and
-// clearance zones as fainter amber ones, the internodes inside a zone in a colour
-// of their own, the ground with a 1 m grid and labelled scales, a light-slice heat
-// map, and orbit/front/side/top cameras. z is up, as in the model. The leaves
-// (leaves.mjs) are lit by a sky light and a sun straight above (the zenith sky of
-// the model's light), which casts the crown's shadow on the ground, under a
-// sky-coloured background. The view measures its frames (frameMs: the time
+// parent, scaled by the node's radius), solid obstacles as translucent boxes or
+// prisms (a footprint with its holes, extruded over its z range) and clearance
+// zones as fainter amber ones, the internodes inside a zone in a colour of their
+// own, the ground with a 1 m grid and labelled scales, a light-slice heat map,
+// orbit/front/side/top cameras and a compass that turns with them. The scene's
+// axes are the model's (x east, y north, z up): world points go in as they are.
+// The leaves (leaves.mjs) are lit by a sky light and a sun straight above (the
+// zenith sky of the model's light), which casts the crown's shadow on the ground,
+// under a sky-coloured background. The view measures its frames (frameMs: the time
 // between two frames drawn one after the other) and lowers the leaves' budget
 // of instances when they are slow.
 import * as THREE from 'three';
@@ -56,6 +58,46 @@ function seeThrough(geometry, options) {
     transparent: false, blending: THREE.CustomBlending, blendSrcAlpha: THREE.ZeroFactor, blendDstAlpha: THREE.OneFactor }));
   mesh.renderOrder = SEE_THROUGH_ORDER;
   return mesh;
+}
+
+// The geometry of an obstacle, in world coordinates: a box's, or a prism's
+// footprint (its polygon, its holes as paths; three.js's triangulation winds each
+// ring as it needs) extruded from z[0] to z[1]. At least 1 mm along each axis.
+function obstacleGeometry(o) {
+  if (!o.polygon) {
+    const size = [0, 1, 2].map((i) => Math.max(o.max[i] - o.min[i], 1e-3));
+    return new THREE.BoxGeometry(...size).translate(...[0, 1, 2].map((i) => (o.min[i] + o.max[i]) / 2));
+  }
+  const ring = (pts) => pts.map(([x, y]) => new THREE.Vector2(x, y));
+  const shape = new THREE.Shape(ring(o.polygon));
+  for (const h of o.holes || []) shape.holes.push(new THREE.Path(ring(h)));
+  const geo = new THREE.ExtrudeGeometry(shape, { depth: Math.max(o.z[1] - o.z[0], 1e-3), bevelEnabled: false });
+  return geo.translate(0, 0, o.z[0]);
+}
+
+// The compass in a corner of the view: an arrow with an N, turned as north lies
+// from the camera (see View.updateCompass).
+const SVG_NS = 'http://www.w3.org/2000/svg';
+// (a red with some green in it: the tests count the zone highlight's deeper red,
+// ZONE_NODE_COLOR, in screenshots of the view, which show the compass too)
+const NEEDLE_RED = '#d9534f';
+function compassElement() {
+  const el = (name, attrs) => {
+    const e = document.createElementNS(SVG_NS, name);
+    for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+    return e;
+  };
+  const svg = el('svg', { class: 'compass', viewBox: '-24 -24 48 48', role: 'img', 'aria-label': 'north' });
+  const title = el('title', {});
+  title.textContent = 'north';
+  const n = el('text', { x: 0, y: -15, 'text-anchor': 'middle', 'font-size': 10, 'font-weight': 700, fill: '#333' });
+  n.textContent = 'N';
+  const needle = el('g', {});
+  needle.append(el('circle', { r: 13, fill: '#fffc', stroke: '#8a8a8a', 'stroke-width': 1 }),
+    el('path', { d: 'M0 11 L4 0 L-4 0 Z', fill: '#9a9a9a' }),
+    el('path', { d: 'M0 -11 L4 0 L-4 0 Z', fill: NEEDLE_RED }), n);
+  svg.append(title, needle);
+  return svg;
 }
 
 // One colour per plant (by its index in the snapshot), shared with the plots.
@@ -321,6 +363,11 @@ export class View {
     this.slice = null;
     this.shadeGroup = new THREE.Group();   // the shade layer: 'shade:ground', 'shade:OBSTACLE:FACE'
     this.scene.add(this.shadeGroup);
+    // the compass: north is the world's +y (the daemon sends no other north)
+    this.north = [0, 1];
+    this.compass = compassElement();
+    this.compassAngle = null;   // degrees clockwise on screen from up to north, as drawn
+    container.appendChild(this.compass);
     this.dirty = true;
     this.frames = 0;
     this.renderMs = [];
@@ -425,6 +472,23 @@ export class View {
     this.renderMs.push(performance.now() - t0);
     if (this.renderMs.length > 200) this.renderMs.shift();
     this.frames++;
+    this.updateCompass();
+  }
+
+  // Turns the compass by the camera's heading: the needle points up when the
+  // camera looks north and turns as the camera orbits about the vertical (the
+  // azimuth only, not the tilt). The heading is the camera's forward direction
+  // on the ground, or, looking straight down, its screen's up on the ground.
+  updateCompass() {
+    const f = this.camera.getWorldDirection(new THREE.Vector3());
+    if (Math.hypot(f.x, f.y) < 1e-9) f.set(0, 1, 0).applyQuaternion(this.camera.quaternion);
+    const heading = Math.atan2(f.x, f.y), north = Math.atan2(this.north[0], this.north[1]);
+    let angle = THREE.MathUtils.radToDeg(north - heading) % 360;
+    if (angle < 0) angle += 360;
+    angle = Math.round(angle * 100) / 100;
+    if (angle === this.compassAngle) return;
+    this.compassAngle = angle;
+    this.compass.lastElementChild.setAttribute('transform', `rotate(${angle})`);
   }
 
   // Shows a skeleton (the live one or a stored iteration's).
@@ -497,7 +561,8 @@ export class View {
     if (first) this.setView('persp');
   }
 
-  // Solid obstacles (`obstacle:ID`) and clearance zones (`zone:ID`) as boxes.
+  // Solid obstacles (`obstacle:ID`) and clearance zones (`zone:ID`), boxes or
+  // prisms, each a see-through mesh and its edges.
   setObstacles(obstacles) {
     const key = JSON.stringify(obstacles);
     if (key === this.obstacleKey) return;
@@ -509,30 +574,61 @@ export class View {
     this.obstacleGroup.clear();
     for (const o of obstacles) {
       const zone = isZone(o);
-      const size = [0, 1, 2].map((i) => Math.max(o.max[i] - o.min[i], 1e-3));
-      const geo = new THREE.BoxGeometry(...size);
-      const box = seeThrough(geo, { color: zone ? ZONE_COLOR : 0x8c7b6b, opacity: zone ? 0.25 : 0.35 });
-      box.position.set(...[0, 1, 2].map((i) => (o.min[i] + o.max[i]) / 2));
-      box.name = `${zone ? 'zone' : 'obstacle'}:${o.id}`;
+      const geo = obstacleGeometry(o);
+      const mesh = seeThrough(geo, { color: zone ? ZONE_COLOR : 0x8c7b6b, opacity: zone ? 0.25 : 0.35 });
+      mesh.name = `${zone ? 'zone' : 'obstacle'}:${o.id}`;
       const edges = new THREE.LineSegments(new THREE.EdgesGeometry(geo),
         new THREE.LineBasicMaterial({ color: zone ? 0xb87400 : 0x5a4a3a }));
-      edges.position.copy(box.position);
-      box.userData.id = edges.userData.id = o.id;
-      this.obstacleGroup.add(box, edges);
+      mesh.userData.id = edges.userData.id = o.id;
+      mesh.userData.shape = o.polygon ? 'prism' : 'box';
+      this.obstacleGroup.add(mesh, edges);
     }
     this.branches.setZones(zonesOf(obstacles));
     this.invalidate();
   }
 
-  // The boxes drawn for obstacles of a kind ('obstacle' or 'zone'), from their
-  // meshes: [{id, min, max}].
-  drawnBoxes(kind) {
+  // The obstacles of a kind ('obstacle' or 'zone') as drawn, from their meshes:
+  // [{id, shape ('box' or 'prism'), min, max}], the bounds of each mesh.
+  drawnBounds(kind) {
     const prefix = `${kind}:`;
     return this.obstacleGroup.children.filter((m) => m.name.startsWith(prefix)).map((m) => {
-      const p = m.geometry.parameters, half = [p.width / 2, p.height / 2, p.depth / 2];
-      const c = m.position.toArray();
-      return { id: m.name.slice(prefix.length), min: c.map((v, i) => v - half[i]), max: c.map((v, i) => v + half[i]) };
+      if (!m.geometry.boundingBox) m.geometry.computeBoundingBox();
+      const b = m.geometry.boundingBox;
+      return { id: m.name.slice(prefix.length), shape: m.userData.shape, min: b.min.toArray(), max: b.max.toArray() };
     });
+  }
+
+  // The mesh of an obstacle or zone (id) measured: {name, shape, triangles, volume
+  // (m³, from its triangles: positive when they face outwards)}, or null.
+  obstacleMesh(id) {
+    const m = this.obstacleGroup.children.find((c) => c.isMesh && c.userData.id === id);
+    if (!m) return null;
+    const g = m.geometry, pos = g.getAttribute('position'), idx = g.index;
+    const n = idx ? idx.count : pos.count;
+    const a = new THREE.Vector3(), b = new THREE.Vector3(), c = new THREE.Vector3();
+    let volume = 0;
+    for (let i = 0; i < n; i += 3) {
+      const [i0, i1, i2] = idx ? [idx.getX(i), idx.getX(i + 1), idx.getX(i + 2)] : [i, i + 1, i + 2];
+      a.fromBufferAttribute(pos, i0);
+      b.fromBufferAttribute(pos, i1);
+      c.fromBufferAttribute(pos, i2);
+      volume += a.dot(b.cross(c)) / 6;
+    }
+    return { name: m.name, shape: m.userData.shape, triangles: n / 3, volume };
+  }
+
+  // The obstacles and zones whose drawn tops a vertical ray down through (x, y)
+  // meets (their meshes' faces that face up, so a prism's holes let it through),
+  // from the highest: [{id, z}].
+  obstaclesAt(x, y) {
+    let top = this.world?.max[2] ?? 0;
+    for (const m of this.obstacleGroup.children) {
+      if (!m.geometry.boundingBox) m.geometry.computeBoundingBox();
+      top = Math.max(top, m.geometry.boundingBox.max.z);
+    }
+    const ray = new THREE.Raycaster(new THREE.Vector3(x, y, top + 1), new THREE.Vector3(0, 0, -1));
+    const meshes = this.obstacleGroup.children.filter((m) => m.isMesh);
+    return ray.intersectObjects(meshes, false).map((h) => ({ id: h.object.userData.id, z: h.point.z }));
   }
 
   // Cameras: 'persp' orbits; 'front' (looking along +y), 'side' (along -x) and
