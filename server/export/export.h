@@ -37,7 +37,7 @@ typedef struct export_spec {
   int iteration;        /**< a stored iteration, 0 to the run's last */
   export_format format;
   int sides;            /**< obj, ply, glb: vertices per branch ring (mesh.h) */
-  bool obstacles;       /**< obj, ply, glb: also the obstacle boxes */
+  bool obstacles;       /**< obj, ply, glb: also the obstacles (boxes and prisms) */
 } export_spec;
 
 /** Writes spec to f (flushed, not closed): the world is restored from the store

@@ -6,6 +6,7 @@
  * which the glTF export shares) gives ring after ring, stem by stem; it keeps one
  * frame (u, t) per node so children can carry their parent's frame. */
 #include "mesh.h"
+#include "prism_mesh.h"
 #include "vec3.h"
 
 #include <assert.h>
@@ -103,12 +104,32 @@ static bool options_ok(sylva_mesh_format format, const sylva_mesh_options *opt) 
          opt->sides >= SYLVA_MESH_MIN_SIDES && opt->sides <= SYLVA_MESH_MAX_SIDES;
 }
 
-static void plan_counts(const mesh_plan *p, const sylva_world *w, const sylva_mesh_options *opt,
-                        size_t *vertices, size_t *faces) {
+/* The vertices and faces of an obstacle: a box's 8 and 12, a prism's (mesh.h). */
+static void obstacle_counts(const prism_mesh *m, size_t *vertices, size_t *faces) {
+  *vertices = m->prism ? 2 * m->points : 8;
+  *faces = m->prism ? 2 * m->walls + 2 * m->triangles : 12;
+}
+
+/* The counts of the branches and of the n obstacles' meshes. */
+static void plan_counts(const mesh_plan *p, const prism_mesh *obstacles, int n,
+                        const sylva_mesh_options *opt, size_t *vertices, size_t *faces) {
   size_t sides = (size_t)opt->sides;
-  size_t boxes = opt->obstacles ? (size_t)sylva_world_obstacle_count(w) : 0;
-  *vertices = sides * p->rings + 8 * boxes;
-  *faces = 2 * sides * p->internodes + (sides - 2) * p->caps + 12 * boxes;
+  *vertices = sides * p->rings;
+  *faces = 2 * sides * p->internodes + (sides - 2) * p->caps;
+  for (int i = 0; i < n; i++) {
+    size_t v, f;
+    obstacle_counts(&obstacles[i], &v, &f);
+    *vertices += v;
+    *faces += f;
+  }
+}
+
+/* The meshes of w's obstacles when opt asks for them (*n 0 and *out NULL when not). */
+static int plan_obstacles(const sylva_world *w, const sylva_mesh_options *opt, prism_mesh **out,
+                          int *n) {
+  *out = NULL;
+  *n = 0;
+  return opt->obstacles ? prism_meshes_build(w, out, n) : 0;
 }
 
 sylva_mesh_options sylva_mesh_default_options(void) {
@@ -122,12 +143,18 @@ int sylva_mesh_count(const sylva_world *w, sylva_mesh_format format,
   if (!opt) opt = &defaults;
   *vertices = *faces = 0;
   if (!options_ok(format, opt)) return SYLVA_EINVAL;
-  mesh_plan p;
-  int rc = plan_build(w, &p);
+  prism_mesh *obstacles;
+  int n;
+  int rc = plan_obstacles(w, opt, &obstacles, &n);
   if (rc < 0) return rc;
-  plan_counts(&p, w, opt, vertices, faces);
-  plan_free(&p);
-  return 0;
+  mesh_plan p;
+  rc = plan_build(w, &p);
+  if (rc == 0) {
+    plan_counts(&p, obstacles, n, opt, vertices, faces);
+    plan_free(&p);
+  }
+  prism_meshes_free(obstacles, n);
+  return rc;
 }
 
 
@@ -351,10 +378,11 @@ typedef struct mesh_writer {
   const sylva_world *w;
   sylva_mesh_branches *b;
   sylva_mesh_format format;
-  bool obstacles;
-  size_t box_base; /* global index of the first obstacle vertex */
-  size_t base;     /* global index of the current stem's first vertex */
-  int stem;        /* the current stem: the PLY face property */
+  const prism_mesh *obstacles; /* one per obstacle (a box's all zero) */
+  int nobstacles;              /* 0 when they are not written */
+  size_t obstacle_base;        /* global index of the next obstacle's first vertex */
+  size_t base;                 /* global index of the current stem's first vertex */
+  int stem;                    /* the current stem: the PLY face property */
 } mesh_writer;
 
 static bool stream_ok(const mesh_writer *mw) { return !ferror(mw->out); }
@@ -402,24 +430,52 @@ static bool write_stem_faces(mesh_writer *mw, int s) {
   return sylva_mesh_branches_triangles(mw->b, s, stem_face, mw);
 }
 
-static void write_box_vertices(mesh_writer *mw, int i) {
-  sylva_obstacle_def o;
-  sylva_world_obstacle_at(mw->w, i, NULL, &o);
-  for (int v = 0; v < 8; v++) {
-    double q[3];
-    sylva_mesh_box_corner(&o, v, q);
-    write_vertex(mw, q);
+static void write_obstacle_vertices(mesh_writer *mw, int i) {
+  const prism_mesh *m = &mw->obstacles[i];
+  if (!m->prism) {
+    sylva_obstacle_def o;
+    sylva_world_obstacle_at(mw->w, i, NULL, &o);
+    for (int v = 0; v < 8; v++) {
+      double q[3];
+      sylva_mesh_box_corner(&o, v, q);
+      write_vertex(mw, q);
+    }
+    return;
   }
+  for (int level = 0; level < 2; level++)
+    for (size_t k = 0; k < m->points; k++) {
+      double q[3] = {m->xy[k][0], m->xy[k][1], level ? m->top : m->bottom};
+      write_vertex(mw, q);
+    }
 }
 
-static void write_box_faces(mesh_writer *mw, int i) {
-  /* each side as a quad, counter-clockwise seen from outside */
-  size_t b = mw->box_base + 8 * (size_t)i;
-  for (int f = 0; f < 6; f++) {
-    const int *q = sylva_mesh_box_quads[f];
-    write_face(mw, b + (size_t)q[0], b + (size_t)q[1], b + (size_t)q[2], -1 - i);
-    write_face(mw, b + (size_t)q[0], b + (size_t)q[2], b + (size_t)q[3], -1 - i);
+/* Obstacle i's faces on its vertices from mw->obstacle_base, which moves past them. */
+static void write_obstacle_faces(mesh_writer *mw, int i) {
+  const prism_mesh *m = &mw->obstacles[i];
+  size_t b = mw->obstacle_base;
+  if (!m->prism) {
+    /* each side as a quad, counter-clockwise seen from outside */
+    for (int f = 0; f < 6; f++) {
+      const int *q = sylva_mesh_box_quads[f];
+      write_face(mw, b + (size_t)q[0], b + (size_t)q[1], b + (size_t)q[2], -1 - i);
+      write_face(mw, b + (size_t)q[0], b + (size_t)q[2], b + (size_t)q[3], -1 - i);
+    }
+    mw->obstacle_base += 8;
+    return;
   }
+  /* a wall from its edge's bottom (the solid on its left) up to the top; the
+   * bottom cap turned over; the top cap as the tessellator gives it */
+  size_t n = m->points;
+  for (size_t k = 0; k < m->walls; k++) {
+    size_t u = b + m->wall[k][0], v = b + m->wall[k][1];
+    write_face(mw, u, v, v + n, -1 - i);
+    write_face(mw, u, v + n, u + n, -1 - i);
+  }
+  for (size_t k = 0; k < m->triangles; k++)
+    write_face(mw, b + m->tri[k][0], b + m->tri[k][2], b + m->tri[k][1], -1 - i);
+  for (size_t k = 0; k < m->triangles; k++)
+    write_face(mw, b + n + m->tri[k][0], b + n + m->tri[k][1], b + n + m->tri[k][2], -1 - i);
+  mw->obstacle_base += 2 * n;
 }
 
 static int stem_plant(const sylva_world *w, int s, int *stem) {
@@ -444,14 +500,14 @@ static void stem_name(const sylva_world *w, int s, char *buf, size_t size) {
 static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
   FILE *out = mw->out;
   const sylva_world *w = mw->w;
-  int boxes = mw->obstacles ? sylva_world_obstacle_count(w) : 0;
+  int obstacles = mw->nobstacles;
   char name[SYLVA_LABEL_MAX + 16];
   if (mw->format == SYLVA_MESH_OBJ) {
     fprintf(out,
             "# sylva mesh export: branches as generalized cylinders, one object per stem\n"
             "# iteration %d, %d stems, %d sides, %d obstacles; metres, z up, triangles\n"
             "# vertices %zu, faces %zu\n",
-            sylva_world_iteration(w), mw->b->p.stems, mw->b->sides, boxes, vertices, faces);
+            sylva_world_iteration(w), mw->b->p.stems, mw->b->sides, obstacles, vertices, faces);
     return;
   }
   fprintf(out,
@@ -460,16 +516,16 @@ static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
           "comment sylva mesh export: branches as generalized cylinders\n"
           "comment iteration %d, %d stems, %d sides, %d obstacles; metres, z up\n"
           "comment face property stem: global stem index, or -1 - i for obstacle i\n",
-          sylva_world_iteration(w), mw->b->p.stems, mw->b->sides, boxes);
+          sylva_world_iteration(w), mw->b->p.stems, mw->b->sides, obstacles);
   for (int s = 0; s < mw->b->p.stems; s++) {
     stem_name(w, s, name, sizeof name);
     fprintf(out, "comment stem %d %s\n", s, name);
   }
-  for (int i = 0; i < boxes; i++) {
+  for (int i = 0; i < obstacles; i++) {
     sylva_obstacle_def o;
     sylva_world_obstacle_at(w, i, NULL, &o);
     name_token(o.label, name);
-    /* a clearance zone is written as a box too, named for what it is */
+    /* a clearance zone is written as its box or prism too, named for what it is */
     fprintf(out, "comment %s %d %s\n", o.kind == SYLVA_OBSTACLE_ZONE ? "zone" : "obstacle", i, name);
   }
   fprintf(out,
@@ -486,7 +542,7 @@ static void write_header(mesh_writer *mw, size_t vertices, size_t faces) {
 
 static bool write_body(mesh_writer *mw) {
   int stems = mw->b->p.stems;
-  int boxes = mw->obstacles ? sylva_world_obstacle_count(mw->w) : 0;
+  int obstacles = mw->nobstacles;
   char name[SYLVA_LABEL_MAX + 16];
   size_t first, vertices, triangles;
   if (mw->format == SYLVA_MESH_OBJ) {
@@ -499,23 +555,23 @@ static bool write_body(mesh_writer *mw) {
       if (!sylva_mesh_branches_vertices(mw->b, s, stem_vertex, mw) || !write_stem_faces(mw, s))
         return false;
     }
-    for (int i = 0; i < boxes; i++) {
+    for (int i = 0; i < obstacles; i++) {
       sylva_obstacle_def o;
       sylva_world_obstacle_at(mw->w, i, NULL, &o);
       name_token(o.label, name);
       fprintf(mw->out, "o %s_%s\n", o.kind == SYLVA_OBSTACLE_ZONE ? "zone" : "obstacle", name);
-      write_box_vertices(mw, i);
-      write_box_faces(mw, i);
+      write_obstacle_vertices(mw, i);
+      write_obstacle_faces(mw, i);
       if (!stream_ok(mw)) return false;
     }
     return true;
   }
   for (int s = 0; s < stems; s++)
     if (!sylva_mesh_branches_vertices(mw->b, s, stem_vertex, mw)) return false;
-  for (int i = 0; i < boxes; i++) write_box_vertices(mw, i);
+  for (int i = 0; i < obstacles; i++) write_obstacle_vertices(mw, i);
   for (int s = 0; s < stems; s++)
     if (!write_stem_faces(mw, s)) return false;
-  for (int i = 0; i < boxes; i++) write_box_faces(mw, i);
+  for (int i = 0; i < obstacles; i++) write_obstacle_faces(mw, i);
   return stream_ok(mw);
 }
 
@@ -524,22 +580,31 @@ int sylva_mesh_write(FILE *out, const sylva_world *w, sylva_mesh_format format,
   sylva_mesh_options defaults = sylva_mesh_default_options();
   if (!opt) opt = &defaults;
   if (!options_ok(format, opt)) return SYLVA_EINVAL;
-  sylva_mesh_branches *b;
-  int rc = sylva_mesh_branches_create(w, opt->sides, &b);
+  prism_mesh *obstacles;
+  int n;
+  int rc = plan_obstacles(w, opt, &obstacles, &n);
   if (rc < 0) return rc;
+  sylva_mesh_branches *b;
+  rc = sylva_mesh_branches_create(w, opt->sides, &b);
+  if (rc < 0) {
+    prism_meshes_free(obstacles, n);
+    return rc;
+  }
   size_t vertices, faces;
-  plan_counts(&b->p, w, opt, &vertices, &faces);
+  plan_counts(&b->p, obstacles, n, opt, &vertices, &faces);
   if (format == SYLVA_MESH_PLY && vertices > (size_t)INT32_MAX) {
     sylva_mesh_branches_destroy(b);
+    prism_meshes_free(obstacles, n);
     return SYLVA_ETOOBIG;
   }
-  mesh_writer mw = {.out = out, .w = w, .b = b, .format = format, .obstacles = opt->obstacles,
-                    .box_base = (size_t)opt->sides * b->p.rings};
+  mesh_writer mw = {.out = out, .w = w, .b = b, .format = format, .obstacles = obstacles,
+                    .nobstacles = n, .obstacle_base = (size_t)opt->sides * b->p.rings};
   write_header(&mw, vertices, faces);
   bool ok = stream_ok(&mw) && write_body(&mw);
   ok = fflush(out) == 0 && ok;
   int saved = errno;
   sylva_mesh_branches_destroy(b);
+  prism_meshes_free(obstacles, n);
   errno = saved;
   return ok ? 0 : SYLVA_MESH_EWRITE;
 }

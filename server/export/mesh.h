@@ -10,11 +10,18 @@
  *   - each internode: 2 * sides triangles joining the parent's ring to the node's;
  *   - each tip (a node with a parent and no children) and each root with children
  *     is closed by a fan of sides - 2 triangles over its ring;
- *   - an obstacle box (when requested): 8 vertices and 12 triangles.
+ *   - an obstacle (when requested): a box, 8 vertices and 12 triangles; a prism
+ *     (prism_mesh.h), the P points of its triangulated footprint at its bottom,
+ *     then at its top (2 P vertices), two triangles per wall (W of them, one per
+ *     edge of the footprint's boundary, a hole's facing into it), then the C
+ *     triangles of the bottom cap and of the top cap (2 W + 2 C triangles). Rings
+ *     that cross nowhere, n points in all, h of them holes: P = W = n,
+ *     C = n + 2 h - 2; every edge of the mesh is then shared by exactly two of its
+ *     triangles (it is closed).
  * A root without children has no internode and no geometry. So, with I internodes,
- * T tips, R roots that have children and B obstacles:
- *   vertices = sides * (I + R) + 8 * B
- *   faces    = 2 * sides * I + (sides - 2) * (T + R) + 12 * B
+ * T tips, R roots that have children, B boxes and the prisms as above:
+ *   vertices = sides * (I + R) + 8 * B + the prisms' 2 P
+ *   faces    = 2 * sides * I + (sides - 2) * (T + R) + 12 * B + the prisms' 2 W + 2 C
  * Faces are wound counter-clockwise seen from outside (normals point outwards).
  *
  * Layout, the same in both formats: stems in global stem order (plants in id
@@ -50,7 +57,7 @@ typedef enum sylva_mesh_format {
 /** What to export. */
 typedef struct sylva_mesh_options {
   int sides;      /**< vertices per ring, SYLVA_MESH_MIN_SIDES..SYLVA_MESH_MAX_SIDES */
-  bool obstacles; /**< also write the obstacle boxes */
+  bool obstacles; /**< also write the obstacles (boxes and prisms, zones too) */
 } sylva_mesh_options;
 
 /** Fewest vertices per ring. */
@@ -65,16 +72,17 @@ typedef struct sylva_mesh_options {
 sylva_mesh_options sylva_mesh_default_options(void);
 
 /** Writes the branches of w (and, if asked, its obstacles) to out. opt NULL means
- *  the defaults. Returns 0; SYLVA_EINVAL for a bad format or options and
- *  SYLVA_ENOMEM (nothing written); SYLVA_ETOOBIG for a PLY with more than
- *  INT32_MAX vertices (nothing written); SYLVA_MESH_EWRITE when a write to out
- *  failed (errno set; out is left as far as it got). out is flushed, not closed. */
+ *  the defaults. Returns 0; SYLVA_EINVAL for a bad format or options or a prism
+ *  the tessellator refuses (prism_mesh.h) and SYLVA_ENOMEM (nothing written);
+ *  SYLVA_ETOOBIG for a PLY with more than INT32_MAX vertices (nothing written);
+ *  SYLVA_MESH_EWRITE when a write to out failed (errno set; out is left as far as
+ *  it got). out is flushed, not closed. */
 int sylva_mesh_write(FILE *out, const sylva_world *w, sylva_mesh_format format,
                      const sylva_mesh_options *opt);
 
 /** Counts the vertices and faces sylva_mesh_write would write (the formula above;
- *  the same for both formats). Returns 0, SYLVA_EINVAL for a bad format or
- *  options, or SYLVA_ENOMEM; on failure both counts are 0. */
+ *  the same for both formats; prisms are triangulated to count them). Returns 0,
+ *  SYLVA_EINVAL as sylva_mesh_write, or SYLVA_ENOMEM; on failure both counts are 0. */
 int sylva_mesh_count(const sylva_world *w, sylva_mesh_format format,
                      const sylva_mesh_options *opt, size_t *vertices, size_t *faces);
 

@@ -4,7 +4,9 @@
  * (sylva_mesh_count must agree), against each other (same layout), for the same
  * bytes on a second write, and for geometry: finite vertices, rings of the node's
  * radius perpendicular to its internode, frames carried by parallel transport,
- * outward faces. Write errors and bad options are checked too.
+ * outward faces. Write errors and bad options are checked too. The prisms of
+ * prism_world.h (an L-shaped building with a courtyard at 30 degrees, a prism equal
+ * to a box, the box, a zone) as closed meshes of their footprints' volume.
  *
  * Usage: test_mesh [OUTDIR|- [TEST]]; TEST runs one test alone. With OUTDIR (not -),
  * the files are also written there with a manifest expected.tsv for assimp_check.py:
@@ -17,6 +19,7 @@
 #include "../check.h"
 #include "export_world.h"
 #include "mesh.h"
+#include "prism_world.h"
 #include "sylva/sylva.h"
 
 /* ---- the world and what the export of it must hold ---- */
@@ -672,6 +675,150 @@ static void test_box_faces(void) {
     if (parsed_as_expected(k)) check_box_faces(&world_model, &k->po, k->sides, k->boxes, world);
 }
 
+/* ---- prisms ---- */
+
+/* Per obstacle of prism_world: its vertices, faces and wall triangles. The house
+ * and the yard: 10 points, 10 walls and 10 cap triangles (a footprint of n points
+ * and h holes, its rings crossing nowhere: n + 2h - 2); the slab as the block. */
+static const size_t prism_vertices[PRISMS] = {20, 8, 20};
+static const size_t prism_faces[PRISMS] = {40, 12, 40};
+static const size_t prism_walls[PRISMS] = {20, 8, 20};
+static const char *const prism_objects[PRISMS] = {"obstacle_house", "obstacle_slab",
+                                                  "zone_yard"};
+
+/* Copies the faces of obstacle i of a parsed file (OBJ: object i, the world having
+ * no stems; PLY: stem tag -1 - i) into out; returns their number, and in *foreign
+ * the corners on vertices outside [first, first + vertices). */
+static size_t obstacle_faces(const parsed *p, bool ply, int i, size_t first, size_t vertices,
+                             size_t (*out)[3], size_t *foreign) {
+  size_t n = 0;
+  *foreign = 0;
+  for (size_t f = 0; f < p->nf; f++) {
+    if (p->face_tag[f] != (ply ? -1 - i : i)) continue;
+    for (int c = 0; c < 3; c++) {
+      out[n][c] = p->f[f][c];
+      if (out[n][c] < first || out[n][c] >= first + vertices) ++*foreign;
+    }
+    n++;
+  }
+  return n;
+}
+
+/* One obstacle's faces of a parsed file: closed, of its footprint's volume and cap
+ * areas, walls facing out (into the courtyard for a hole), its bounds; returns its
+ * measures. */
+static mesh_measure check_prism(const sylva_world *w, const parsed *p, bool ply, int i,
+                                size_t first, size_t (*f)[3]) {
+  sylva_obstacle_def o;
+  sylva_world_obstacle_at(w, i, NULL, &o);
+  size_t foreign, n = obstacle_faces(p, ply, i, first, prism_vertices[i], f, &foreign);
+  CHECK_INT(n, prism_faces[i]);
+  CHECK_INT(foreign, 0);
+  mesh_measure m = measure_mesh((const double(*)[3])p->v, (const size_t(*)[3])f, n, &o);
+  check_measures(&m, &o, prism_walls[i]);
+  return m;
+}
+
+/* The prisms written as OBJ and PLY: each a closed mesh of its own vertices, of its
+ * footprint's volume (polygon area x height) and cap areas (the L's less its
+ * courtyard), walls facing out; the slab's mesh has the volume and bounds of the
+ * box of its corners (block_world). */
+static void test_prisms(void) {
+  sylva_world *w = prism_world();
+  CHECK(w != NULL);
+  if (!w) return;
+  sylva_obstacle_def house;
+  sylva_world_obstacle_at(w, 0, NULL, &house);
+  /* the L of 36 m2 less the courtyard's 1, as snapped */
+  CHECK_NEAR(footprint_area(&house), 35.0, 0.05);
+  sylva_mesh_options opt = sylva_mesh_default_options();
+  opt.obstacles = true;
+  size_t cv = 0, cf = 0, ev = 0, ef = 0;
+  for (int i = 0; i < PRISMS; i++) ev += prism_vertices[i], ef += prism_faces[i];
+  CHECK_INT(sylva_mesh_count(w, SYLVA_MESH_PLY, &opt, &cv, &cf), 0);
+  CHECK_INT(cv, ev);
+  CHECK_INT(cf, ef);
+  for (int fmt = 0; fmt < 2; fmt++) {
+    bool ply = fmt == 1;
+    blob b = write_blob(w, ply ? SYLVA_MESH_PLY : SYLVA_MESH_OBJ, &opt);
+    parsed p = ply ? parse_ply(&b) : parse_obj(&b);
+    CHECK(b.rc == 0 && p.ok);
+    CHECK_INT(p.nv, ev);
+    CHECK_INT(p.nf, ef);
+    size_t(*f)[3] = malloc((p.nf + 1) * sizeof *f);
+    if (!f) exit(1);
+    mesh_measure m[PRISMS];
+    for (int i = 0, first = 0; p.ok && i < PRISMS; first += (int)prism_vertices[i++])
+      m[i] = check_prism(w, &p, ply, i, (size_t)first, f);
+    if (p.ok) {
+      /* a prism on a rectangle is its box */
+      sylva_world *bw = block_world();
+      blob bb = write_blob(bw, ply ? SYLVA_MESH_PLY : SYLVA_MESH_OBJ, &opt);
+      parsed bp = ply ? parse_ply(&bb) : parse_obj(&bb);
+      CHECK(bw && bb.rc == 0 && bp.ok && bp.nf == 12);
+      if (bp.ok && bp.nf == 12) {
+        sylva_obstacle_def o;
+        sylva_world_obstacle_at(bw, 0, NULL, &o);
+        mesh_measure box =
+            measure_mesh((const double(*)[3])bp.v, (const size_t(*)[3])bp.f, 12, &o);
+        CHECK(box.closed);
+        CHECK_NEAR(box.volume, 6.0, 1e-12);
+        CHECK_NEAR(m[1].volume, box.volume, 1e-12);
+        for (int d = 0; d < 3; d++) CHECK(m[1].lo[d] == box.lo[d] && m[1].hi[d] == box.hi[d]);
+      }
+      parsed_free(&bp);
+      free(bb.data);
+      sylva_world_destroy(bw);
+    }
+    if (!ply && p.nobj == PRISMS)
+      for (int i = 0; i < PRISMS; i++) CHECK(strcmp(p.obj_name[i], prism_objects[i]) == 0);
+    if (ply) {
+      CHECK(strstr(b.data, "comment obstacle 0 house\n") != NULL);
+      CHECK(strstr(b.data, "comment zone 2 yard\n") != NULL);
+    }
+    free(f);
+    parsed_free(&p);
+    free(b.data);
+  }
+  sylva_world_destroy(w);
+}
+
+/* A footprint of a ring that crosses itself at (1.5, 1.5) (a bow-tie of triangles
+ * of 4.5 and 0.5 m2) and a separate square of 1 m2, read even-odd: cut at the
+ * crossing, which becomes a point of its own (9 points, 10 walls, 4 cap
+ * triangles), of volume 6 m2 x its height, its walls facing out. At the crossing
+ * four walls meet, so its vertical edge is in four triangles: no closedness here. */
+static void test_crossing(void) {
+  static const double points[8][2] = {{0, 0}, {2, 2}, {2, 0}, {0, 6},
+                                      {5, 0}, {6, 0}, {6, 1}, {5, 1}};
+  static const int rings[2] = {4, 4};
+  const sylva_obstacle_def def = {"bow", {0, 0, 0}, {0, 0, 2}, SYLVA_OBSTACLE_SOLID,
+                                  {points, 8, rings, 2}};
+  sylva_world *w = obstacles_world(&def, 1);
+  CHECK(w != NULL);
+  if (!w) return;
+  sylva_mesh_options opt = sylva_mesh_default_options();
+  opt.obstacles = true;
+  blob b = write_blob(w, SYLVA_MESH_OBJ, &opt);
+  parsed p = parse_obj(&b);
+  CHECK(b.rc == 0 && p.ok);
+  CHECK_INT(p.nv, 18);
+  CHECK_INT(p.nf, 28);
+  if (p.ok) {
+    sylva_obstacle_def o;
+    sylva_world_obstacle_at(w, 0, NULL, &o);
+    mesh_measure m = measure_mesh((const double(*)[3])p.v, (const size_t(*)[3])p.f, p.nf, &o);
+    CHECK_NEAR(m.volume, 6.0 * 2.0, 1e-12);
+    CHECK_NEAR(m.top, 6.0, 1e-12);
+    CHECK_NEAR(m.bottom, 6.0, 1e-12);
+    CHECK_INT(m.walls, 20);
+    CHECK_INT(m.bad_walls, 0);
+  }
+  parsed_free(&p);
+  free(b.data);
+  sylva_world_destroy(w);
+}
+
 static FILE *manifest;
 static const char *outdir;
 
@@ -708,6 +855,25 @@ static void test_files(void) {
     save(name, &k->ply);
     fprintf(manifest, "file\t%s\tply\t%zu\t%zu\n", name, k->ev, k->ef);
   }
+  /* the prisms, one object each */
+  sylva_world *w = prism_world();
+  CHECK(w != NULL);
+  if (!w) return;
+  sylva_mesh_options opt = sylva_mesh_default_options();
+  opt.obstacles = true;
+  size_t ev = 0, ef = 0;
+  for (int i = 0; i < PRISMS; i++) ev += prism_vertices[i], ef += prism_faces[i];
+  for (int fmt = 0; fmt < 2; fmt++) {
+    const char *name = fmt ? "prisms.ply" : "prisms.obj";
+    blob b = write_blob(w, fmt ? SYLVA_MESH_PLY : SYLVA_MESH_OBJ, &opt);
+    save(name, &b);
+    fprintf(manifest, "file\t%s\t%s\t%zu\t%zu\n", name, fmt ? "ply" : "obj", ev, ef);
+    for (int i = 0; !fmt && i < PRISMS; i++)
+      fprintf(manifest, "object\t%s\t%s\t%zu\t%zu\n", name, prism_objects[i], prism_faces[i],
+              prism_vertices[i]);
+    free(b.data);
+  }
+  sylva_world_destroy(w);
 }
 
 static void mesh_cases_free(void) {
@@ -825,8 +991,9 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(world), CHECK_TEST(counts), CHECK_TEST(deterministic), CHECK_TEST(parse_back),
       CHECK_TEST(same_layout), CHECK_TEST(objects), CHECK_TEST(rings), CHECK_TEST(branch_faces),
-      CHECK_TEST(box_faces), CHECK_TEST(files), CHECK_TEST(options), CHECK_TEST(write_error),
-      CHECK_TEST(empty)};
+      CHECK_TEST(box_faces), CHECK_TEST(prisms), CHECK_TEST(crossing), CHECK_TEST(files),
+      CHECK_TEST(options),
+      CHECK_TEST(write_error), CHECK_TEST(empty)};
   CHECK_RUN(argc, argv, 2, tests);
   if (manifest) CHECK_INT(fclose(manifest), 0);
   mesh_cases_free();
