@@ -1,7 +1,8 @@
 /* Binary glTF export (gltf.h). Three passes: a plan (the primitives of every stem
- * and obstacle with their counts, the materials, the layout of the buffer), the fill
- * of the buffer (the branches from sylva_mesh_branches, the leaf cards from
- * foliage_place, the boxes), then the JSON (cJSON), which needs the fill's bounds. */
+ * and obstacle with their counts, the prisms' meshes, the materials, the layout of
+ * the buffer), the fill of the buffer (the branches from sylva_mesh_branches, the
+ * leaf cards from foliage_place, the boxes and prisms), then the JSON (cJSON), which
+ * needs the fill's bounds. */
 #include "gltf.h"
 
 #include <cjson/cJSON.h>
@@ -13,7 +14,9 @@
 
 #include "foliage.h"
 #include "leaf_texture.h"
+#include "prism_mesh.h"
 #include "sylva/status.h"
+#include "vec3.h"
 
 /* The GL enums glTF uses. */
 enum {
@@ -40,12 +43,12 @@ enum {
 /* The buffer's views, in their order in the buffer. */
 enum { VIEW_VEC3, VIEW_VEC2, VIEW_INDEX, VIEW_IMAGE, VIEW_COUNT };
 
-typedef enum prim_kind { PRIM_BARK, PRIM_LEAVES, PRIM_BOX } prim_kind;
+typedef enum prim_kind { PRIM_BARK, PRIM_LEAVES, PRIM_BOX, PRIM_PRISM } prim_kind;
 
 /* One primitive: what it is, its material and where its data goes. */
 typedef struct prim {
   prim_kind kind;
-  int owner;    /* global stem (bark, leaves) or obstacle index (box) */
+  int owner;    /* global stem (bark, leaves) or obstacle index (box, prism) */
   int species;  /* leaves: the species, for the material */
   int material;
   size_t vertices, indices;
@@ -65,9 +68,10 @@ typedef struct material {
 typedef struct gltf {
   const sylva_world *w;
   sylva_mesh_branches *b;
-  bool obstacles;
   int stems;
   int *stem_plant, *stem_number; /* per global stem: its plant and its index there */
+  prism_mesh *obstacles;         /* with obstacles, one per obstacle (a box's all zero) */
+  int nobstacles;
   prim *prims;
   size_t nprims;
   material *mats;       /* those in use, in the file's order */
@@ -84,6 +88,7 @@ static void gltf_free(gltf *g) {
   sylva_mesh_branches_destroy(g->b);
   free(g->stem_plant);
   free(g->stem_number);
+  prism_meshes_free(g->obstacles, g->nobstacles);
   free(g->prims);
   free(g->mats);
   free(g->bin);
@@ -91,6 +96,8 @@ static void gltf_free(gltf *g) {
 }
 
 static size_t pad4(size_t n) { return (n + 3) & ~(size_t)3; }
+
+static bool is_obstacle(prim_kind kind) { return kind == PRIM_BOX || kind == PRIM_PRISM; }
 
 /* ---- the plan ---- */
 
@@ -135,7 +142,7 @@ static int plan_materials(gltf *g) {
     const prim *p = &g->prims[i];
     if (p->kind == PRIM_BARK) bark = true;
     if (p->kind == PRIM_LEAVES) leafy[p->species] = true;
-    if (p->kind == PRIM_BOX) {
+    if (is_obstacle(p->kind)) {
       sylva_obstacle_def o;
       sylva_world_obstacle_at(g->w, p->owner, NULL, &o);
       if (o.kind == SYLVA_OBSTACLE_ZONE) zone = true;
@@ -193,11 +200,10 @@ static int plan_materials(gltf *g) {
 static int plan(gltf *g) {
   const sylva_world *w = g->w;
   int plants = sylva_world_plant_count(w);
-  int boxes = g->obstacles ? sylva_world_obstacle_count(w) : 0;
   size_t m = (size_t)g->stems + 1;
   g->stem_plant = malloc(m * sizeof *g->stem_plant);
   g->stem_number = malloc(m * sizeof *g->stem_number);
-  g->prims = malloc((2 * (size_t)g->stems + (size_t)boxes + 1) * sizeof *g->prims);
+  g->prims = malloc((2 * (size_t)g->stems + (size_t)g->nobstacles + 1) * sizeof *g->prims);
   if (!g->stem_plant || !g->stem_number || !g->prims) return SYLVA_ENOMEM;
   for (int pl = 0; pl < plants; pl++)
     for (int k = 0; k < sylva_world_plant_stem_count(w, pl); k++) {
@@ -215,7 +221,19 @@ static int plan(gltf *g) {
       g->prims[g->nprims - 1].species = sylva_world_plant_species(w, g->stem_plant[s]);
     }
   }
-  for (int i = 0; i < boxes; i++) fits = add_prim(g, PRIM_BOX, i, 24, 36) && fits;
+  for (int i = 0; i < g->nobstacles; i++) {
+    const prism_mesh *pm = &g->obstacles[i];
+    if (!pm->prism) {
+      fits = add_prim(g, PRIM_BOX, i, 24, 36) && fits;
+      continue;
+    }
+    /* four vertices per wall, each cap's points; two triangles per wall, the caps' */
+    fits = pm->walls <= SIZE_MAX / 8 && pm->points <= SIZE_MAX / 8 &&
+           pm->triangles <= SIZE_MAX / 8 &&
+           add_prim(g, PRIM_PRISM, i, 4 * pm->walls + 2 * pm->points,
+                    3 * (2 * pm->walls + 2 * pm->triangles)) &&
+           fits;
+  }
   if (!fits) return SYLVA_ETOOBIG;
   int rc = plan_materials(g);
   if (rc < 0) return rc;
@@ -375,6 +393,40 @@ static void fill_box(gltf *g, cursor *c) {
   }
 }
 
+/* Obstacle i's prism: four vertices per wall with the wall's outward normal (the
+ * solid lies left of its edge), then the bottom cap's points facing down and the
+ * top cap's facing up, with their triangles. */
+static void fill_prism(gltf *g, cursor *c) {
+  const prism_mesh *m = &g->obstacles[c->p->owner];
+  for (size_t k = 0; k < m->walls; k++) {
+    const double *u = m->xy[m->wall[k][0]], *v = m->xy[m->wall[k][1]];
+    double normal[3] = {v[1] - u[1], u[0] - v[0], 0.0};
+    if (!normalize3(normal)) {
+      /* an edge too short to have a direction: any unit normal keeps the file valid */
+      normal[0] = 1.0;
+      normal[1] = 0.0;
+    }
+    const double q[4][3] = {{u[0], u[1], m->bottom}, {v[0], v[1], m->bottom},
+                            {v[0], v[1], m->top}, {u[0], u[1], m->top}};
+    uint32_t base = c->next;
+    for (int j = 0; j < 4; j++) put_vertex(c, q[j], normal);
+    put_triangle(c, base, base + 1, base + 2);
+    put_triangle(c, base, base + 2, base + 3);
+  }
+  for (int level = 0; level < 2; level++) {
+    double normal[3] = {0.0, 0.0, level ? 1.0 : -1.0};
+    uint32_t base = c->next;
+    for (size_t k = 0; k < m->points; k++) {
+      double q[3] = {m->xy[k][0], m->xy[k][1], level ? m->top : m->bottom};
+      put_vertex(c, q, normal);
+    }
+    /* the bottom cap turned over, so it faces down */
+    for (size_t k = 0; k < m->triangles; k++)
+      put_triangle(c, base + m->tri[k][0], base + m->tri[k][level ? 1 : 2],
+                   base + m->tri[k][level ? 2 : 1]);
+  }
+}
+
 static int fill(gltf *g) {
   g->bin = calloc(g->bin_len ? g->bin_len : 1, 1);
   if (!g->bin) return SYLVA_ENOMEM;
@@ -388,6 +440,7 @@ static int fill(gltf *g) {
       break;
     case PRIM_LEAVES: fill_leaves(g, &c); break;
     case PRIM_BOX: fill_box(g, &c); break;
+    case PRIM_PRISM: fill_prism(g, &c); break;
     }
   }
   if (g->png_len) memcpy(g->bin + g->view_start[VIEW_IMAGE], g->png, g->png_len);
@@ -519,7 +572,7 @@ static void add_primitive(bool *failed, cJSON *prims, cJSON *accessors, int *cou
 
 /* The name of primitive p's node. */
 static void owner_name(const gltf *g, const prim *p, char *buf, size_t size) {
-  if (p->kind == PRIM_BOX) {
+  if (is_obstacle(p->kind)) {
     sylva_obstacle_def o;
     sylva_world_obstacle_at(g->w, p->owner, NULL, &o);
     snprintf(buf, size, "%s/%s", o.kind == SYLVA_OBSTACLE_ZONE ? "zone" : "obstacle", o.label);
@@ -655,8 +708,9 @@ int gltf_write(FILE *out, const sylva_world *w, const sylva_mesh_options *opt) {
   if (!opt) opt = &defaults;
   if (opt->sides < SYLVA_MESH_MIN_SIDES || opt->sides > SYLVA_MESH_MAX_SIDES)
     return SYLVA_EINVAL;
-  gltf g = {.w = w, .obstacles = opt->obstacles, .stems = sylva_world_stem_count(w)};
-  int rc = sylva_mesh_branches_create(w, opt->sides, &g.b);
+  gltf g = {.w = w, .stems = sylva_world_stem_count(w)};
+  int rc = opt->obstacles ? prism_meshes_build(w, &g.obstacles, &g.nobstacles) : 0;
+  if (rc == 0) rc = sylva_mesh_branches_create(w, opt->sides, &g.b);
   if (rc == 0) rc = plan(&g);
   if (rc == 0) rc = fill(&g);
   cJSON *root = rc == 0 ? build_json(&g) : NULL;

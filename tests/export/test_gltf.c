@@ -5,7 +5,11 @@
  * gltf.h, every bark vertex, normal and index against sylva_mesh_branches (turned
  * y up), every leaf card against foliage_place, the bounds of every POSITION, the
  * same bytes on a second write, one "leaves" material when the colours agree, an
- * empty world, bad options and a failed write.
+ * empty world, bad options and a failed write. The prisms of prism_world.h (an
+ * L-shaped building with a courtyard at 30 degrees, a prism equal to a box, a zone):
+ * closed meshes (welded by position) of their footprints' volume and cap areas,
+ * flat normals facing out. The Khronos validator reads the files of OUTDIR
+ * (gltf_validate.mjs).
  *
  * Usage: test_gltf [OUTDIR|- [TEST]]; with OUTDIR (not -), the files are also
  * written there and listed in OUTDIR/expected.tsv for assimp_check.py:
@@ -21,6 +25,7 @@
 #include "export_world.h"
 #include "foliage.h"
 #include "gltf.h"
+#include "prism_world.h"
 #include "sylva/sylva.h"
 
 #define LEAF_GREEN 0x2f8f2f
@@ -285,10 +290,10 @@ static bool collect_triangle(void *ctx, size_t a, size_t b, size_t c) {
 }
 
 /* POSITION's min and max are those of its data, in single precision. */
-static void check_bounds(int a) {
+static void check_bounds(const glb *g, int a) {
   size_t n, stride;
-  const unsigned char *d = accessor_data(&world_read, a, &n, &stride);
-  const cJSON *acc = item(world_read.json, "accessors", a);
+  const unsigned char *d = accessor_data(g, a, &n, &stride);
+  const cJSON *acc = item(g->json, "accessors", a);
   for (int c = 0; c < 3; c++) {
     float lo = 0, hi = 0;
     for (size_t i = 0; i < n; i++) {
@@ -343,7 +348,7 @@ static void test_bark(void) {
       for (int c = 0; c < 3; c++)
         if (u32_at(idx + (3 * t + (size_t)c) * 4) != e.tri[t][c]) bad++;
     CHECK_INT(bad, 0);
-    check_bounds(attribute(prim, "POSITION"));
+    check_bounds(&world_read, attribute(prim, "POSITION"));
     free(e.pos);
     free(e.nrm);
     free(e.tri);
@@ -425,7 +430,7 @@ static void test_leaves(void) {
     }
     CHECK_INT(card, leaves);
     CHECK_INT(bad, 0);
-    check_bounds(attribute(prim, "POSITION"));
+    check_bounds(&world_read, attribute(prim, "POSITION"));
   }
 }
 
@@ -450,8 +455,172 @@ static void test_boxes(void) {
       CHECK_NEAR(cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(acc, "max"), a)->valuedouble,
                  want_hi, 1e-6);
     }
-    check_bounds(attribute(prim, "POSITION"));
+    check_bounds(&world_read, attribute(prim, "POSITION"));
   }
+}
+
+/* ---- prisms ---- */
+
+/* Per obstacle of prism_world: its node, and its primitive's vertices and indices
+ * (four vertices per wall, each cap's points; two triangles per wall, the caps'):
+ * the house and the yard have 10 points, 10 walls and 10 cap triangles. */
+static const char *const prism_nodes[PRISMS] = {"obstacle/house", "obstacle/slab", "zone/yard"};
+static const size_t prism_vertices[PRISMS] = {60, 24, 60};
+static const size_t prism_indices[PRISMS] = {120, 36, 120};
+static const size_t prism_walls[PRISMS] = {20, 8, 20};
+
+/* A primitive read back: its positions turned z up again, its triangles with each
+ * corner on the first vertex of its position (welded: a flat-shaded mesh repeats
+ * its vertices), and the corners whose NORMAL is not their triangle's unit normal. */
+typedef struct soup {
+  size_t nv, nt;
+  double (*v)[3];
+  size_t (*welded)[3];
+  size_t bad_normals;
+} soup;
+
+/* A position and its vertex, to weld by sorting. */
+typedef struct placed {
+  double p[3];
+  size_t i;
+} placed;
+
+static int compare_placed(const void *a, const void *b) {
+  const placed *s = a, *t = b;
+  for (int d = 0; d < 3; d++)
+    if (s->p[d] != t->p[d]) return s->p[d] < t->p[d] ? -1 : 1;
+  return (s->i > t->i) - (s->i < t->i);
+}
+
+static bool same_position(const placed *a, const placed *b) {
+  return a->p[0] == b->p[0] && a->p[1] == b->p[1] && a->p[2] == b->p[2];
+}
+
+/* A glTF vector (y up) as the world's (z up). */
+static void z_up(const float v[3], double out[3]) {
+  out[0] = v[0];
+  out[1] = -(double)v[2];
+  out[2] = v[1];
+}
+
+static soup read_soup(const glb *g, const cJSON *prim) {
+  soup s = {0, 0, NULL, NULL, 0};
+  size_t n, stride, nn, nstride, ni, istride;
+  const unsigned char *pos = accessor_data(g, attribute(prim, "POSITION"), &n, &stride);
+  const unsigned char *nrm = accessor_data(g, attribute(prim, "NORMAL"), &nn, &nstride);
+  const unsigned char *idx = accessor_data(g, (int)num(prim, "indices"), &ni, &istride);
+  CHECK_INT(nn, n);
+  s.nv = n;
+  s.nt = ni / 3;
+  s.v = malloc((n + 1) * sizeof *s.v);
+  double(*normal)[3] = malloc((n + 1) * sizeof *normal);
+  placed *order = malloc((n + 1) * sizeof *order);
+  size_t *first = malloc((n + 1) * sizeof *first);
+  s.welded = malloc((s.nt + 1) * sizeof *s.welded);
+  if (!s.v || !normal || !order || !first || !s.welded) exit(1);
+  for (size_t i = 0; i < n; i++) {
+    float q[3], m[3];
+    for (int a = 0; a < 3; a++) {
+      q[a] = f32_at(pos + i * stride + 4 * (size_t)a);
+      m[a] = f32_at(nrm + i * nstride + 4 * (size_t)a);
+    }
+    z_up(q, s.v[i]);
+    z_up(m, normal[i]);
+    memcpy(order[i].p, s.v[i], sizeof order[i].p);
+    order[i].i = i;
+  }
+  qsort(order, n, sizeof *order, compare_placed);
+  for (size_t k = 0; k < n; k++)
+    first[order[k].i] = k > 0 && same_position(&order[k - 1], &order[k]) ? first[order[k - 1].i]
+                                                                         : order[k].i;
+  for (size_t t = 0; t < s.nt; t++) {
+    size_t c[3];
+    for (int k = 0; k < 3; k++) {
+      c[k] = u32_at(idx + (3 * t + (size_t)k) * 4);
+      if (c[k] >= n) exit(1);
+      s.welded[t][k] = first[c[k]];
+    }
+    const double *a = s.v[c[0]], *b = s.v[c[1]], *d = s.v[c[2]];
+    double e1[3], e2[3], u[3];
+    for (int q = 0; q < 3; q++) e1[q] = b[q] - a[q], e2[q] = d[q] - a[q];
+    u[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    u[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    u[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double len = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    for (int k = 0; k < 3; k++)
+      for (int q = 0; q < 3; q++)
+        if (!(fabs(normal[c[k]][q] - u[q] / len) <= 1e-6)) s.bad_normals++;
+  }
+  free(normal);
+  free(order);
+  free(first);
+  return s;
+}
+
+static void soup_free(soup *s) {
+  free(s->v);
+  free(s->welded);
+}
+
+/* The prisms' meshes: a node and a primitive each, material "obstacle" or "zone",
+ * the counts above; welded, each a closed mesh of its footprint's volume and cap
+ * areas with walls facing out (into the courtyard for its hole), flat unit normals
+ * facing out, its bounds; the slab's the volume and bounds of the box of its
+ * corners (block_world). */
+static void test_prisms(void) {
+  sylva_world *w = prism_world(), *bw = block_world();
+  CHECK(w != NULL && bw != NULL);
+  if (!w || !bw) exit(1);
+  sylva_mesh_options opt = {.sides = 8, .obstacles = true};
+  blob b = write_blob(w, &opt), bb = write_blob(bw, &opt);
+  glb g = read_glb(&b), bg = read_glb(&bb);
+  CHECK(g.ok && bg.ok);
+  if (g.ok && bg.ok) {
+    CHECK_INT(count(g.json, "nodes"), 1 + PRISMS);
+    CHECK_INT(count(g.json, "materials"), 2);
+    CHECK(strcmp(str(item(g.json, "materials", 0), "name"), "obstacle") == 0);
+    CHECK(strcmp(str(item(g.json, "materials", 1), "name"), "zone") == 0);
+    mesh_measure slab = {0};
+    for (int i = 0; i < PRISMS; i++) {
+      CHECK(strcmp(str(item(g.json, "nodes", 1 + i), "name"), prism_nodes[i]) == 0);
+      const cJSON *prim = cJSON_GetArrayItem(
+          cJSON_GetObjectItemCaseSensitive(item(g.json, "meshes", i), "primitives"), 0);
+      CHECK_INT(num(prim, "material"), i == 2 ? 1 : 0);
+      soup s = read_soup(&g, prim);
+      CHECK_INT(s.nv, prism_vertices[i]);
+      CHECK_INT(3 * s.nt, prism_indices[i]);
+      CHECK_INT(s.bad_normals, 0);
+      sylva_obstacle_def o;
+      sylva_world_obstacle_at(w, i, NULL, &o);
+      mesh_measure m =
+          measure_mesh((const double(*)[3])s.v, (const size_t(*)[3])s.welded, s.nt, &o);
+      check_measures(&m, &o, prism_walls[i]);
+      check_bounds(&g, attribute(prim, "POSITION"));
+      if (i == 1) slab = m;
+      soup_free(&s);
+    }
+    /* the box of the slab's corners: 24 vertices and 12 triangles as well */
+    const cJSON *prim = cJSON_GetArrayItem(
+        cJSON_GetObjectItemCaseSensitive(item(bg.json, "meshes", 0), "primitives"), 0);
+    soup s = read_soup(&bg, prim);
+    CHECK_INT(s.nv, 24);
+    CHECK_INT(s.nt, 12);
+    sylva_obstacle_def o;
+    sylva_world_obstacle_at(bw, 0, NULL, &o);
+    mesh_measure box =
+        measure_mesh((const double(*)[3])s.v, (const size_t(*)[3])s.welded, s.nt, &o);
+    CHECK(box.closed);
+    CHECK_NEAR(box.volume, 6.0, 1e-12);
+    CHECK_NEAR(slab.volume, box.volume, 1e-12);
+    for (int d = 0; d < 3; d++) CHECK(slab.lo[d] == box.lo[d] && slab.hi[d] == box.hi[d]);
+    soup_free(&s);
+  }
+  cJSON_Delete(g.json);
+  cJSON_Delete(bg.json);
+  free(b.data);
+  free(bb.data);
+  sylva_world_destroy(w);
+  sylva_world_destroy(bw);
 }
 
 /* The same world and options: the same bytes; other sides: other bytes. */
@@ -550,8 +719,43 @@ static void test_write_error(void) {
   CHECK_INT(err, ENOSPC);
 }
 
-/* With OUTDIR: the file written there and listed for assimp_check.py. */
+/* With OUTDIR: the files written there and listed for assimp_check.py and
+ * gltf_validate.mjs: the world's with obstacles and 8 sides, without and with 3,
+ * and the prisms'. */
 static const char *outdir;
+
+/* Writes b to OUTDIR/name and lists it and its primitives in the manifest. */
+static void save_glb(FILE *manifest, const char *name, const blob *b) {
+  char path[4096];
+  glb g = read_glb(b);
+  snprintf(path, sizeof path, "%s/%s", outdir, name);
+  FILE *f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (f) {
+    CHECK_INT(fwrite(b->data, 1, b->size, f), b->size);
+    CHECK_INT(fclose(f), 0);
+  }
+  size_t vertices = 0, faces = 0;
+  int meshes = count(g.json, "meshes");
+  for (int m = 0; m < meshes; m++) {
+    const cJSON *mesh = item(g.json, "meshes", m);
+    int prims = count(mesh, "primitives");
+    for (int k = 0; k < prims; k++) {
+      const cJSON *prim =
+          cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(mesh, "primitives"), k);
+      size_t v = (size_t)num(item(g.json, "accessors", attribute(prim, "POSITION")), "count");
+      size_t t = (size_t)num(item(g.json, "accessors", (int)num(prim, "indices")), "count") / 3;
+      vertices += v;
+      faces += t;
+      char mesh_name[160];
+      if (prims > 1) snprintf(mesh_name, sizeof mesh_name, "%s-%d", str(mesh, "name"), k);
+      else snprintf(mesh_name, sizeof mesh_name, "%s", str(mesh, "name"));
+      fprintf(manifest, "object\t%s\t%s\t%zu\t%zu\n", name, mesh_name, t, v);
+    }
+  }
+  fprintf(manifest, "file\t%s\tglb\t%zu\t%zu\n", name, vertices, faces);
+  cJSON_Delete(g.json);
+}
 
 static void test_files(void) {
   if (!outdir) return;
@@ -565,37 +769,19 @@ static void test_files(void) {
   for (int c = 0; c < 2; c++) {
     sylva_mesh_options opt = {.sides = sides[c], .obstacles = c == 0};
     blob b = write_blob(w, &opt);
-    glb g = read_glb(&b);
     char name[64];
     snprintf(name, sizeof name, "scene_s%d%s.glb", sides[c], c == 0 ? "_obstacles" : "");
-    snprintf(path, sizeof path, "%s/%s", outdir, name);
-    FILE *f = fopen(path, "wb");
-    CHECK(f != NULL);
-    if (f) {
-      CHECK_INT(fwrite(b.data, 1, b.size, f), b.size);
-      CHECK_INT(fclose(f), 0);
-    }
-    size_t vertices = 0, faces = 0;
-    int meshes = count(g.json, "meshes");
-    for (int m = 0; m < meshes; m++) {
-      const cJSON *mesh = item(g.json, "meshes", m);
-      int prims = count(mesh, "primitives");
-      for (int k = 0; k < prims; k++) {
-        const cJSON *prim =
-            cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(mesh, "primitives"), k);
-        size_t v = (size_t)num(item(g.json, "accessors", attribute(prim, "POSITION")), "count");
-        size_t t = (size_t)num(item(g.json, "accessors", (int)num(prim, "indices")), "count") / 3;
-        vertices += v;
-        faces += t;
-        char mesh_name[160];
-        if (prims > 1) snprintf(mesh_name, sizeof mesh_name, "%s-%d", str(mesh, "name"), k);
-        else snprintf(mesh_name, sizeof mesh_name, "%s", str(mesh, "name"));
-        fprintf(manifest, "object\t%s\t%s\t%zu\t%zu\n", name, mesh_name, t, v);
-      }
-    }
-    fprintf(manifest, "file\t%s\tglb\t%zu\t%zu\n", name, vertices, faces);
-    cJSON_Delete(g.json);
+    save_glb(manifest, name, &b);
     free(b.data);
+  }
+  sylva_world *pw = prism_world();
+  CHECK(pw != NULL);
+  if (pw) {
+    sylva_mesh_options opt = {.sides = 8, .obstacles = true};
+    blob b = write_blob(pw, &opt);
+    save_glb(manifest, "prisms.glb", &b);
+    free(b.data);
+    sylva_world_destroy(pw);
   }
   CHECK_INT(fclose(manifest), 0);
 }
@@ -609,6 +795,7 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(world),      CHECK_TEST(nodes),         CHECK_TEST(materials),
       CHECK_TEST(bark),       CHECK_TEST(leaves),        CHECK_TEST(boxes),
+      CHECK_TEST(prisms),
       CHECK_TEST(deterministic), CHECK_TEST(one_colour), CHECK_TEST(empty),
       CHECK_TEST(options),    CHECK_TEST(write_error),   CHECK_TEST(files)};
   CHECK_RUN(argc, argv, 2, tests);
