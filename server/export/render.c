@@ -255,15 +255,39 @@ static void set_rgb(cairo_t *cr, unsigned rgb) {
                        (rgb & 255) / 255.0);
 }
 
+/* Obstacle o's outline as the current path. Seen from above, a prism is its
+ * footprint's rings, and true is returned: the path is to be filled even-odd, the
+ * model's inside rule, so a courtyard stays open. Otherwise the rectangle of its
+ * box, or of a prism's extent seen from the side (its footprint's bounds along the
+ * view's axis and its z range: the outline of the extruded footprint). */
+static bool obstacle_path(cairo_t *cr, const sylva_obstacle_def *o, const panel *p) {
+  const sylva_footprint *fp = &o->footprint;
+  if (fp->ring_count == 0 || p->v->sight != 2) {
+    double x0 = panel_x(p, o->min[p->v->u]), x1 = panel_x(p, o->max[p->v->u]);
+    double y0 = panel_y(p, o->max[p->v->v]), y1 = panel_y(p, o->min[p->v->v]);
+    cairo_rectangle(cr, x0, y0, x1 - x0, y1 - y0);
+    return false;
+  }
+  int k = 0;
+  for (int r = 0; r < fp->ring_count; r++) {
+    for (int j = 0; j < fp->ring_sizes[r]; j++, k++) {
+      double x = panel_x(p, fp->points[k][p->v->u]), y = panel_y(p, fp->points[k][p->v->v]);
+      if (j == 0) cairo_move_to(cr, x, y);
+      else cairo_line_to(cr, x, y);
+    }
+    cairo_close_path(cr);
+  }
+  return true;
+}
+
 static void draw_obstacles(cairo_t *cr, const sylva_world *w, const panel *p) {
   int count = sylva_world_obstacle_count(w);
   for (int i = 0; i < count; i++) {
     int id;
     sylva_obstacle_def o;
     sylva_world_obstacle_at(w, i, &id, &o);
-    double x0 = panel_x(p, o.min[p->v->u]), x1 = panel_x(p, o.max[p->v->u]);
-    double y0 = panel_y(p, o.max[p->v->v]), y1 = panel_y(p, o.min[p->v->v]);
-    cairo_rectangle(cr, x0, y0, x1 - x0, y1 - y0);
+    bool even_odd = obstacle_path(cr, &o, p);
+    if (even_odd) cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
     if (o.kind == SYLVA_OBSTACLE_ZONE) { /* a clearance zone: a light amber wash, dashed */
       cairo_set_source_rgba(cr, 1.0, 0.75, 0.2, RENDER_ZONE_ALPHA);
       cairo_fill_preserve(cr);
@@ -273,14 +297,15 @@ static void draw_obstacles(cairo_t *cr, const sylva_world *w, const panel *p) {
       cairo_set_line_width(cr, 1);
       cairo_stroke(cr);
       cairo_set_dash(cr, NULL, 0, 0);
-      continue;
+    } else {
+      cairo_set_source_rgba(cr, RENDER_OBSTACLE_GREY, RENDER_OBSTACLE_GREY,
+                            RENDER_OBSTACLE_GREY, RENDER_OBSTACLE_ALPHA);
+      cairo_fill_preserve(cr);
+      cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
+      cairo_set_line_width(cr, 1);
+      cairo_stroke(cr);
     }
-    cairo_set_source_rgba(cr, RENDER_OBSTACLE_GREY, RENDER_OBSTACLE_GREY, RENDER_OBSTACLE_GREY,
-                          RENDER_OBSTACLE_ALPHA);
-    cairo_fill_preserve(cr);
-    cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
-    cairo_set_line_width(cr, 1);
-    cairo_stroke(cr);
+    if (even_odd) cairo_set_fill_rule(cr, CAIRO_FILL_RULE_WINDING);
   }
 }
 

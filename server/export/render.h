@@ -12,7 +12,11 @@
  * clipped to it and in this order:
  *   - a white background;
  *   - every obstacle as a translucent grey rectangle (its box projected,
- *     RENDER_OBSTACLE_FILL) with a darker outline;
+ *     RENDER_OBSTACLE_FILL) with a darker outline; a prism from above as its
+ *     footprint's rings, filled with the even-odd rule (the model's inside: a
+ *     courtyard stays open), outlined ring by ring; from the front and the side as
+ *     the rectangle of its extent (its footprint's bounds and its z range), which
+ *     is the outline of the extruded footprint seen from there;
  *   - every internode (a node with a parent) as a straight line from its parent to
  *     the node, as wide as the node's diameter (2 * radius * scale, at least
  *     RENDER_MIN_LINE), with round caps, in its plant's colour (RENDER_PALETTE,

@@ -14,7 +14,11 @@ meson runs `python3 test_render.py SYLVA_EXE TESTS_RENDER_DIR SERVER_DIR PART`, 
             without --no-leaves: leaf-coloured pixels, shaded as render.h says, in
             the crown's box and none in the sky above it or without leaves; the
             same world gives the same bytes; a world whose nodes bear no leaves
-            gives the skeleton's picture.
+            gives the skeleton's picture;
+  prisms    an L-shaped building at 30 degrees with a courtyard (prism_top.json)
+            from above: grey in its leg, white in its courtyard and in the notch of
+            the L; in the SVG one path of its two rings filled even-odd; from the
+            front, its bounds' rectangle grey.
 The layout constants and the palette are read from server/export/render.h and
 server/export/render.c, so the pixel test maps metres to pixels as the renderer does.
 """
@@ -508,8 +512,63 @@ def no_leaves_borne(env, c, spec):
         c.check(same_bytes(a, b), "no leaves borne: the same bytes as --no-leaves")
 
 
+PRISM = "prism_top.json"
+
+
+class TopView(FrontView):
+    """A top view decoded: x to the right, y up, on FrontView's scale."""
+
+    def py(self, y):
+        return self.top + (self.hi[1] - y) * self.scale
+
+
+def mean_point(points):
+    return [sum(p[a] for p in points) / len(points) for a in (0, 1)]
+
+
+def part_prisms(env, c):
+    k = render_constants(env.server)
+    scenario = env.scenario(PRISM)
+    with open(scenario) as f:
+        spec = json.load(f)
+    house = spec["obstacles"][0]
+    outline, hole = house["polygon"], house["holes"][0]
+    width = 800
+    top = env.path("top.png")
+    rc, _, err = env.render(scenario, "--view", "top", "--width", width, "-o", top)
+    if c.check(rc == 0 and clean_stderr(err), "render prism_top.json --view top", err):
+        view = TopView(top, k, spec["world"], width)
+        # outline[2:5], the inner corner and the legs' inner ends: their mean is in the notch
+        for what, (x, y), white in (("the courtyard's centre", mean_point(hole), True),
+                                    ("the notch of the L", mean_point(outline[2:5]), True),
+                                    ("the long leg", mean_point(outline[0:4]), False)):
+            p = view.png.pixel(int(view.px(x)), int(view.py(y)))
+            c.check(p == (255, 255, 255) if white else view.is_grey(p),
+                    "from above, %s (%.2f, %.2f) is %s" % (what, x, y,
+                                                          "white" if white else "grey"), p)
+    svg = env.path("top.svg")
+    rc, _, err = env.render(scenario, "--view", "top", "-o", svg)
+    if c.check(rc == 0 and clean_stderr(err), "render prism_top.json --view top -o top.svg", err):
+        with open(svg, encoding="utf-8") as f:
+            paths = re.findall(r'<path style="[^"]*fill-rule:evenodd;[^"]*" d="([^"]*)"', f.read())
+        c.check(len(paths) == 1 and paths[0].count("Z") == 2,
+                "the SVG fills the footprint even-odd, one path of two rings", paths)
+    front = env.path("front.png")
+    rc, _, err = env.render(scenario, "--view", "front", "--width", width, "-o", front)
+    if c.check(rc == 0 and clean_stderr(err), "render prism_top.json --view front", err):
+        view = FrontView(front, k, spec["world"], width)
+        xs = [p[0] for p in outline]
+        # the bounds' corners, 0.1 m inside, and the middle
+        for x, z in ((min(xs) + 0.1, 0.1), (max(xs) - 0.1, house["z"][1] - 0.1),
+                     ((min(xs) + max(xs)) / 2, house["z"][1] / 2)):
+            p = view.png.pixel(int(view.px(x)), int(view.py(z)))
+            c.check(view.is_grey(p), "from the front, (%.2f, %.2f) in the bounds is grey"
+                    % (x, z), p)
+
+
 PARTS = {"formats": part_formats, "pixels": part_pixels, "errors": part_errors,
-         "scenario": part_scenario, "years": part_years, "leaves": part_leaves}
+         "scenario": part_scenario, "years": part_years, "leaves": part_leaves,
+         "prisms": part_prisms}
 
 
 def main():
