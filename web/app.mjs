@@ -175,6 +175,7 @@ window.sylva = {
   lookAt: (from, to) => { view.lookAt(from, to); view.render(); },
   shadeAt: (x, y) => shade.groundAt(x, y),
   shadeTexel: (x, y) => view.shadeTexel(x, y),
+  shadeQuads: () => view.shadeQuads(),
   setObstacleVisible: (id, on) => { view.setObstacleVisible(id, on); view.render(); },
   // an obstacle's or zone's mesh as drawn: its bounds, triangles and volume
   obstacleMesh: (id) => {

@@ -305,6 +305,13 @@ const FACE_AXES = {
 };
 // How far the layer's quads stand off the ground and the faces, m.
 const SHADE_LIFT = 0.01;
+// How a face of the shade layer lies, as FACE_AXES: from its `along` and `normal`
+// (a prism's walls, and boxes' faces from a daemon that sends them), else by its
+// name; null for a face the page cannot place.
+function faceAxes(f) {
+  if (f.along && f.normal) return [[f.along[0], f.along[1], 0], [0, 0, 1], [f.normal[0], f.normal[1], 0]];
+  return FACE_AXES[f.face] ?? null;
+}
 
 export class View {
   constructor(container) {
@@ -718,13 +725,15 @@ export class View {
       ground.renderOrder = GROUND_ORDER;
       this.shadeGroup.add(ground);
       for (const f of data.faces) {
-        const [u, up, n] = FACE_AXES[f.face].map((a) => new THREE.Vector3(...a));
-        const quad = seeThrough(new THREE.PlaneGeometry(f.nu * v, f.nz * v),
+        const axes = faceAxes(f);
+        if (!axes) continue;
+        const [u, up, n] = axes.map((a) => new THREE.Vector3(...a)), du = f.du ?? v;
+        const quad = seeThrough(new THREE.PlaneGeometry(f.nu * du, f.nz * v),
           { map: shadeTexture(f.added, f.nu, f.nz, scale), side: THREE.DoubleSide, opacity: 0.8 });
-        // (the plane's own normal is u x up, which is -n on two of the faces: it is
-        // drawn from both sides)
+        // (the plane's own normal is u x up, which is -n on some faces: it is drawn
+        // from both sides)
         quad.quaternion.setFromRotationMatrix(new THREE.Matrix4().makeBasis(u, up, new THREE.Vector3().crossVectors(u, up)));
-        const c = new THREE.Vector3(...f.first).addScaledVector(u, (f.nu - 1) * v / 2)
+        const c = new THREE.Vector3(...f.first).addScaledVector(u, (f.nu - 1) * du / 2)
           .addScaledVector(up, (f.nz - 1) * v / 2).addScaledVector(n, SHADE_LIFT);
         quad.position.copy(c);
         quad.name = `shade:${f.obstacle}:${f.face}`;
@@ -732,6 +741,15 @@ export class View {
       }
     }
     this.invalidate();
+  }
+
+  // The shade layer's quads of faces as drawn: [{name, centre, normal (of the
+  // plane, drawn from both sides), width, height}].
+  shadeQuads() {
+    return this.shadeGroup.children.filter((m) => m.name !== 'shade:ground').map((m) => ({
+      name: m.name, centre: m.position.toArray(), normal: new THREE.Vector3(0, 0, 1).applyQuaternion(m.quaternion).toArray(),
+      width: m.geometry.parameters.width, height: m.geometry.parameters.height,
+    }));
   }
 
   // The colour [r, g, b] of the shade layer's ground texture at (x, y), or null.

@@ -2,12 +2,13 @@
 // (an L with a courtyard, turned 30 degrees) and a clearance zone drawn as prisms
 // (their meshes' bounds, triangles and volume, a ray down through the courtyard),
 // the internodes inside the zone's footprint highlighted as the daemon counts them,
-// and the compass turning with the camera.
+// the shade layer on the building's walls, and the compass turning with the camera.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
 import { ROOT, SLOW, startDaemon, stopDaemon, serverSnapshot, cleanup } from '../server/harness.mjs';
 import { launch, openViewer, until, createAndWatch } from './browser.mjs';
+import { insideFootprint } from '../../web/zones.mjs';
 
 const WEB = ['--web', join(ROOT, 'web')];
 let browser;
@@ -103,6 +104,38 @@ test('prisms drawn: an L with a courtyard at 30 degrees and a zone, their meshes
     assert.deepEqual(t.inZones, { lane: inside });
     assert.equal(t.highlighted, inside);
     await page.waitForFunction(() => document.querySelectorAll('#conflicts tbody tr[data-zone="lane"]').length === 1);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+test('the shade layer on a prism: a quad on each wall of the L and its courtyard, off the wall, as long as it', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const { page, errors } = await openViewer(browser, d.http);
+    await createAndWatch(d, page, { ...SITE, light: { sky: 'site', latitude: 48.1, samples: 16 } }, 'prisms');
+    await page.click('#shade-toggle');
+    const s = await until(page, (x) => x.shade.iteration === 0 && !x.shade.busy, 'the shade layer', 60000 * SLOW);
+    // the walls by the daemon's names: the L's six edges in ring order, then the courtyard's four
+    const walls = [...HOUSE.polygon.map((p, i, r) => [p, r[(i + 1) % r.length]]),
+      ...HOUSE.holes[0].map((p, i, r) => [p, r[(i + 1) % r.length]])];
+    const names = walls.map((_, i) => `shade:house:e${i}`);
+    assert.deepEqual(s.shade.meshes.filter((m) => m.startsWith('shade:house:')), names);
+    const quads = new Map((await page.evaluate(() => window.sylva.shadeQuads())).map((q) => [q.name, q]));
+    walls.forEach(([[ax, ay], [bx, by]], i) => {
+      const q = quads.get(names[i]), len = Math.hypot(bx - ax, by - ay);
+      const [ux, uy] = [(bx - ax) / len, (by - ay) / len], [cx, cy, cz] = q.centre;
+      const what = `${names[i]}: ${JSON.stringify(q)}`;
+      // upright, along its edge, its middle 1 cm off the edge's middle, outside the
+      // footprint (into the courtyard for its walls), as long and as high as the wall
+      assert.ok(Math.abs(q.normal[2]) < 1e-6 && Math.abs(q.normal[0] * ux + q.normal[1] * uy) < 1e-5, what);
+      assert.ok(Math.abs((cx - ax) * ux + (cy - ay) * uy - len / 2) < 0.03, what);
+      assert.ok(Math.abs(Math.abs((cx - ax) * uy - (cy - ay) * ux) - 0.01) < 1e-4, what);
+      assert.ok(!insideFootprint(HOUSE, cx, cy), what);
+      assert.ok(Math.abs(q.width - len) < 0.05 && Math.abs(q.height - 6) < 1e-6 && Math.abs(cz - 3) < 1e-6, what);
+    });
     assert.deepEqual(errors, []);
   } finally {
     await stopDaemon(d);
