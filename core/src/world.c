@@ -1234,7 +1234,10 @@ uint64_t sylva_world_hash(const sylva_world *w) {
     h = fnv(h, o->label, strlen(o->label));
     h = fnv(h, o->min, sizeof(double) * 3);
     h = fnv(h, o->max, sizeof(double) * 3);
-    if (o->fp) h = fnv(h, o->fp->pt, sizeof *o->fp->pt * (size_t)o->fp->point_count);
+    if (o->fp) {
+      h = fnv(h, o->fp->ring_size, sizeof *o->fp->ring_size * (size_t)o->fp->ring_count);
+      h = fnv(h, o->fp->pt, sizeof *o->fp->pt * (size_t)o->fp->point_count);
+    }
   }
   return h;
 }

@@ -231,17 +231,15 @@ int sylva__parse_obstacle(sylva__parser *p, const cJSON *obj, sylva_scenario_obs
   return rc;
 }
 
-int sylva_obstacle_parse(const char *json, size_t len, const char *at, sylva_scenario_obstacle *out,
-                         char *err, size_t errlen) {
+int sylva_obstacle_read(const cJSON *obj, const char *at, sylva_scenario_obstacle *out,
+                        char *err, size_t errlen) {
   memset(out, 0, sizeof *out);
   sylva__parser p = {.err = err, .errlen = errlen};
   size_t n = strlen(at);
   if (n >= sizeof p.ptr) n = sizeof p.ptr - 1;
   memcpy(p.ptr, at, n);
   p.plen = n;
-  cJSON *doc = cJSON_ParseWithLength(json, len);
-  int rc = doc ? sylva__parse_obstacle(&p, doc, out) : sylva__fail(&p, "not JSON");
-  cJSON_Delete(doc);
+  int rc = sylva__parse_obstacle(&p, obj, out);
   if (rc) sylva_scenario_obstacle_clear(out);
   return rc;
 }

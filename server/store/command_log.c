@@ -157,11 +157,8 @@ static int read_array(reader *r, const cJSON *root, const char *key, const cJSON
 
 /* A format-4 obstacle, a box or a prism, read as a scenario's are. */
 static int read_obstacle_4(reader *r, const cJSON *item, edit_obstacle *o) {
-  char *text = cJSON_PrintUnformatted(item);
-  if (!text) return SERVER_ENOMEM;
   sylva_scenario_obstacle so;
-  int rc = sylva_obstacle_parse(text, strlen(text), r->ptr, &so, r->err, r->errlen);
-  free(text);
+  int rc = sylva_obstacle_read(item, r->ptr, &so, r->err, r->errlen);
   if (rc) return rc == SYLVA_ENOMEM ? SERVER_ENOMEM : SERVER_EINPUT;
   if (!(o->id = strdup(so.id))) {
     sylva_scenario_obstacle_clear(&so);

@@ -618,6 +618,53 @@ test('edit: a wall and a seedling between iterations; subscribers get a fresh sn
 
 // A scenario file needs plants (`sylva run` and `validate` refuse one without),
 // but create makes an empty site, to be planted by edits.
+// A prism (an L with a courtyard, at an angle) and a prism zone added by an edit:
+// the snapshot gives them back as sent; the command log keeps them through kill -9;
+// the run grows as the same scenario with them from the start.
+const L_HOUSE = { id: 'house', kind: 'prism', polygon: [[1.2, -3], [4, -1.4], [3, 0.3], [2.1, -0.2], [1, 1.7], [0.5, 1.4]],
+  holes: [[[1.6, -1.8], [2.4, -1.3], [2, -0.6]]], z: [0, 4.5] };
+const LANE = { id: 'lane', kind: 'zone', polygon: [[-5, -3], [5, -1], [5, 0], [-5, -2]], z: [0.5, 10] };
+
+test('edit: a prism and a prism zone over the wire, kept by the log through kill -9, grown as in a scenario', async () => {
+  const dir = tempDir();
+  let d = await startDaemon({ dir });
+  try {
+    const base = scenario('wall.json', { iterations: 8, obstacles: [] });
+    const c = await connect(d.url);
+    c.send({ type: 'create', name: 'P', start: false, scenario: base });
+    const runP = (await c.type('created')).run;
+    c.send({ type: 'create', name: 'Q', start: false, scenario: { ...base, obstacles: [L_HOUSE, LANE] } });
+    const runQ = (await c.type('created')).run;
+    c.send({ type: 'subscribe', run: runP });
+    await c.next((m) => m.type === 'snapshot' && m.run === runP);
+    c.send({ type: 'edit', run: runP, id: 'e1', add_obstacles: [L_HOUSE, LANE] });
+    assert.equal((await c.next((m) => m.ref === 'e1')).type, 'status');
+    const fresh = await c.next((m) => m.type === 'snapshot' && m.run === runP);
+    assert.deepEqual(fresh.obstacles, [L_HOUSE, LANE], 'the snapshot gives the prisms back as sent');
+    await kill9(d);
+    d = await startDaemon({ dir });
+    const cc = await connect(d.url);
+    cc.send({ type: 'subscribe', run: runP });
+    const snap = await cc.next((m) => m.type === 'snapshot' && m.run === runP);
+    assert.deepEqual(snap.obstacles, [L_HOUSE, LANE], 'the edit survived kill -9');
+    const mP = await stepAndFollow(cc, runP, 8, new Model(snap));
+    cc.send({ type: 'subscribe', run: runQ });
+    const mQ = await stepAndFollow(cc, runQ, 8, new Model(await cc.next((m) => m.type === 'snapshot' && m.run === runQ)));
+    samePlants(mP.plantsJSON(), mQ.plantsJSON(), 'edited at 0 = the scenario with them');
+    const nodes = JSON.parse(mP.plantsJSON())[0].stems[0].nodes.length;
+    assert.ok(nodes > 10, `the tree grew (${nodes} nodes)`);
+    const exported = exportSkeleton(d.db, 'P');
+    assert.deepEqual(exported.obstacles, [L_HOUSE, LANE], "the export's obstacles");
+    c.close();
+    cc.close();
+    await stopClean(d);
+  } finally {
+    await stopDaemon(d);
+    cleanup(dir);
+    cleanup(d.dir);
+  }
+});
+
 test('create: an empty site, without plants or with an empty list, planted by an edit', async () => {
   const d = await startDaemon();
   try {

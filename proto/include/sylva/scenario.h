@@ -104,12 +104,13 @@ void sylva_scenario_obstacle_clear(sylva_scenario_obstacle *o);
  *  else with ", " and ": " as scenario files have them. NULL when out of memory;
  *  free() it. */
 char *sylva_obstacle_json(const sylva_obstacle_def *o, bool compact);
-/** Reads one obstacle object from JSON text, as a scenario's obstacles are read, into
+/** Reads one obstacle object (a cJSON tree), as a scenario's obstacles are read, into
  *  *out (zeroed first; its footprint owned on success, nothing on failure). On bad
  *  input SYLVA_EINVAL, err naming "<at>/key: message" (at, the object's JSON pointer
- *  in the caller's document, may be ""). */
-int sylva_obstacle_parse(const char *json, size_t len, const char *at, sylva_scenario_obstacle *out,
-                         char *err, size_t errlen);
+ *  in the caller's document, may be ""); SYLVA_ENOMEM. */
+struct cJSON;
+int sylva_obstacle_read(const struct cJSON *obj, const char *at, sylva_scenario_obstacle *out,
+                        char *err, size_t errlen);
 
 /** Most entries of `management`. */
 #define SYLVA_SCENARIO_MAX_MANAGEMENT 1000
