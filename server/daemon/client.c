@@ -65,9 +65,12 @@ static void closer_soon(client_set *s) {
  * stays in the kernel's buffers instead of being read, unmasked and dropped on
  * the loop while lws waits for a close frame in reply; the connection is dropped
  * DROP_MS after its own close frame was asked for. */
+static void reader_end(client *c);
+
 static void refuse(client *c, int code, const char *reason) {
   if (c->close_code) return;
   lws_rx_flow_control(c->wsi, 0);
+  reader_end(c); /* its place goes to the next in the queue */
   c->refused = true;
   client_close(c, code, reason);
 }
@@ -121,6 +124,12 @@ void client_set_close(client_set *s) {
   uv_close((uv_handle_t *)&s->watch, NULL);
 }
 
+int client_set_waiting(const client_set *s) {
+  int n = 0;
+  for (const client *w = s->wait_head; w; w = w->wait_next) n++;
+  return n;
+}
+
 client *client_find(client_set *s, uint64_t serial) {
   for (client *c = s->head; c; c = c->next)
     if (c->serial == serial) return c;
@@ -144,8 +153,69 @@ void client_open(client_set *s, client *c, struct lws *wsi, server *d, bool auth
   s->count++;
 }
 
+/* ---- long messages, CLIENT_READERS at a time -------------------------------------
+ * A message that does not arrive in the read that starts it takes a reader's place
+ * until it is complete or done with. A client that finds every place taken is read
+ * no more, and waits in a queue: a thousand clients sending long messages at once
+ * would otherwise all be read, a few KiB each, in every turn of the loop, and make
+ * each turn last tens of ms (abuse row 8). Its time limit runs while it waits. */
+
+static void readers_wake(client_set *s) {
+  while (s->readers < CLIENT_READERS && s->wait_head) {
+    client *w = s->wait_head;
+    s->wait_head = w->wait_next;
+    if (!s->wait_head) s->wait_tail = NULL;
+    w->waiting = false;
+    w->wait_next = NULL;
+    if (w->close_code) continue; /* refused while it waited: stays unread */
+    w->reading = true;
+    s->readers++;
+    lws_rx_flow_control(w->wsi, 1);
+  }
+}
+
+static void reader_start(client *c) {
+  client_set *s = c->set;
+  if (c->reading || c->waiting) return;
+  if (s->readers < CLIENT_READERS) {
+    c->reading = true;
+    s->readers++;
+    return;
+  }
+  c->waiting = true;
+  if (s->wait_tail)
+    s->wait_tail->wait_next = c;
+  else
+    s->wait_head = c;
+  s->wait_tail = c;
+  lws_rx_flow_control(c->wsi, 0);
+}
+
+static void reader_end(client *c) {
+  client_set *s = c->set;
+  if (c->waiting) { /* leaves the queue */
+    client *prev = NULL;
+    for (client *w = s->wait_head; w; prev = w, w = w->wait_next)
+      if (w == c) {
+        if (prev)
+          prev->wait_next = c->wait_next;
+        else
+          s->wait_head = c->wait_next;
+        if (s->wait_tail == c) s->wait_tail = prev;
+        break;
+      }
+    c->waiting = false;
+    c->wait_next = NULL;
+  }
+  if (!c->reading) return;
+  c->reading = false;
+  s->readers--;
+  readers_wake(s);
+}
+
 /* The unfinished message is done with (handled, refused or the client gone). */
 static void rx_end(client *c) {
+  reader_end(c);
   c->set->input -= c->rx_len;
   c->rx_len = 0;
   c->rx_start = 0;
@@ -220,9 +290,12 @@ bool client_receive(client *c, const void *in, size_t len) {
     if (c->rx_too_large) {
       rx_end(c);
       refuse(c, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+    } else {
+      reader_start(c);
     }
     return false;
   }
+  reader_end(c);
   c->rx_start = 0;
   s->messages_received++;
   if (now - c->window_start >= 1000) {

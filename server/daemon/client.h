@@ -17,6 +17,10 @@ typedef struct client client;
 
 /** How long a close may wait for the client's queued messages to leave, ms. */
 #define CLIENT_FLUSH_MS 1000
+/** Clients read at once while their message takes more than one read: the others
+ *  wait their turn unread (client.c), so that a turn of the loop reads at most
+ *  this many long messages however many clients send one. */
+#define CLIENT_READERS 64
 
 /** The limits every client is held to. */
 typedef struct client_limits {
@@ -34,6 +38,8 @@ typedef struct client_set {
   int64_t count;                  /**< clients connected now */
   int64_t bytes_sent, messages_received;
   size_t input;                   /**< bytes of unfinished messages now */
+  int readers;                    /**< clients reading a long message now */
+  client *wait_head, *wait_tail;  /**< clients waiting to read theirs, first first */
   bool trim;                      /**< large receive buffers were freed: give the
                                        memory back to the system (client.c) */
   client_limits limits;
@@ -49,6 +55,8 @@ bool client_set_has_room(const client_set *s);
 void client_set_close_all(client_set *s, int code, const char *reason);
 /** Closes the set's handle (when the loop winds down; the clients are gone). */
 void client_set_close(client_set *s);
+/** Clients waiting for a reader's place (CLIENT_READERS). */
+int client_set_waiting(const client_set *s);
 /** The client with this serial, or NULL. */
 client *client_find(client_set *s, uint64_t serial);
 
@@ -73,6 +81,9 @@ struct client {
   size_t rx_len, rx_cap;
   uint64_t rx_start;    /**< when its first frame came (loop ms); 0: none unfinished */
   bool rx_binary, rx_too_large;
+  bool reading;         /**< holds one of the CLIENT_READERS places */
+  bool waiting;         /**< in the set's queue for one, read no more until then */
+  client *wait_next;
   int window_count;     /**< messages in the current one-second window */
   uint64_t window_start;
   subscription *subs;

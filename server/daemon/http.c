@@ -177,6 +177,14 @@ static char *metrics_text(server *d) {
           (long long)runs, (long long)running, (long long)d->clients.count,
           (long long)d->iterations_total, d->iteration_ms_total / 1e3,
           (long long)d->clients.messages_received, (long long)d->clients.bytes_sent);
+  fprintf(f,
+          "# HELP sylva_input_bytes Bytes of unfinished client messages held.\n"
+          "# TYPE sylva_input_bytes gauge\nsylva_input_bytes %zu\n"
+          "# HELP sylva_clients_reading Clients whose long message is being read.\n"
+          "# TYPE sylva_clients_reading gauge\nsylva_clients_reading %d\n"
+          "# HELP sylva_clients_waiting Clients waiting for their long message to be read.\n"
+          "# TYPE sylva_clients_waiting gauge\nsylva_clients_waiting %d\n",
+          d->clients.input, d->clients.readers, client_set_waiting(&d->clients));
   fprintf(f, "# HELP sylva_nodes_pruned_total Nodes pruned by management schedules while growing.\n"
              "# TYPE sylva_nodes_pruned_total counter\nsylva_nodes_pruned_total %lld\n",
           (long long)d->pruned_total);

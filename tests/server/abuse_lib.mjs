@@ -103,6 +103,13 @@ export class Samples {
       failed: xs.filter((s) => s.error || s.ms === null).map((s) => s.error || 'no answer') };
   }
 
+  // The n slowest /healthz requests sent in [from, to), slowest first: [{t, ms}].
+  slowestIn(from, to, n) {
+    return this.healthz.filter((s) => s.t >= from && s.t < to)
+      .map((s) => ({ t: s.t, ms: s.error || s.ms === null ? Infinity : s.ms }))
+      .sort((a, b) => b.ms - a.ms).slice(0, n);
+  }
+
   // Deltas of the watched run that arrived in [from, to), per second.
   rateIn(from, to) {
     return this.deltas.filter((x) => x.type === 'delta' && x.t >= from && x.t < to).length / ((to - from) / 1000);

@@ -151,7 +151,8 @@ function othersPct(a, b) {
 // measured once more (row 8 sits close to its limits: its /healthz p99 came out
 // between 57 and 112 ms, its rate between 76 and 104 %, in twenty runs; on a
 // slower machine 124-183 ms, 65-110 ms once refused clients were read no more and
-// replies left in one turn, docs/performance.md), and a
+// replies left in one turn, 19-26 ms once long messages were read 64 at a time,
+// docs/performance.md), and a
 // second miss fails the test; every miss is reported. Correctness checks are
 // asserted on every attempt.
 const BUSY_PCT = 25;
@@ -257,7 +258,8 @@ async function abuseOnce(t, row, attempt) {
     const rec = { name, hz, base, during, ratio: watched ? ratio : NaN, rssPeak,
       others: [othersPct(m0, m1), othersPct(m1, m2)], timing: [] };
     t.diagnostic(`${name}: /healthz p50 ${fmt(hz.p50)} ms, p99 ${fmt(hz.p99)} ms, max ${fmt(hz.max)} ms ` +
-      `(${hz.n} fresh connections, ${hz.failed.length} failed${hz.failed.length ? `: ${[...new Set(hz.failed)].join(', ')}` : ''})`);
+      `(${hz.n} fresh connections, ${hz.failed.length} failed${hz.failed.length ? `: ${[...new Set(hz.failed)].join(', ')}` : ''}); ` +
+      `the slowest, at s into the abuse: ${samples.slowestIn(ctx.start, ctx.end, 6).map((x) => `${fmt(x.ms)} ms at ${fmt((x.t - ctx.start) / 1000, 2)}`).join(', ')}`);
     if (watched) {
       const perSecond = (from) => Array.from({ length: Math.round(window / 1000) },
         (_, i) => fmt(samples.rateIn(from + 1000 * i, from + 1000 * (i + 1)), 0)).join(' ');

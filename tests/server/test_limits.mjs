@@ -343,3 +343,54 @@ test('the pool: two growing runs take turns on one worker; SIGTERM drops what ha
     cleanup(d.dir);
   }
 });
+
+// The daemon's gauges of client input (/metrics): {input, reading, waiting}.
+async function inputGauges(d) {
+  const text = await fetch(`${d.http}/metrics`).then((r) => r.text());
+  const g = (name) => Number(text.match(new RegExp(`^${name} (\\d+)$`, 'm'))[1]);
+  return { input: g('sylva_input_bytes'), reading: g('sylva_clients_reading'), waiting: g('sylva_clients_waiting') };
+}
+
+async function until(what, ok, ms = 5000) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const v = await what();
+    if (ok(v)) return v;
+    if (Date.now() > end) throw new Error(`still ${JSON.stringify(v)}`);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+}
+
+test('long messages are read 64 at a time: the next waits unread, in turn, and is answered once a place frees', () => withDaemon({}, async (d) => {
+  // 64 clients each start a message (a fragment that is not the last) and never end it
+  const holders = [];
+  for (let i = 0; i < 64; i++) {
+    const h = await connect(d.url);
+    h.ws.send(`{"type":"list","id":"h${i}","pad":"${'x'.repeat(1000)}`, { fin: false });
+    holders.push(h);
+  }
+  await until(() => inputGauges(d), (g) => g.reading === 64);
+  // two more, each a whole message of 200 kB, longer than one read: they wait in turn
+  const late = [await connect(d.url), await connect(d.url)];
+  late.forEach((c, i) => c.send({ type: 'list', id: `late${i}`, pad: 'y'.repeat(200000) }));
+  let g = await until(() => inputGauges(d), (x) => x.waiting === 2);
+  assert.equal(g.reading, 64);
+  await new Promise((r) => setTimeout(r, 300));
+  assert.deepEqual(late.map((c) => c.messages.filter((m) => m.ref).length), [0, 0], 'no answer while they wait');
+  // one holder goes: its place goes to the first in line, read whole and answered
+  // (for what it holds: an unknown key); its place then goes to the second
+  const order = [];
+  const answered = late.map((c, i) => c.next((m) => m.ref === `late${i}`, 5000).then((m) => { order.push(i); return m; }));
+  holders[0].ws.terminate();
+  for (const m of await Promise.all(answered)) {
+    assert.equal(m.code, 'bad_request', JSON.stringify(m).slice(0, 300));
+    assert.match(m.message, /^\/pad: unknown key/);
+  }
+  assert.deepEqual(order, [0, 1]);
+  g = await until(() => inputGauges(d), (x) => x.waiting === 0 && x.reading === 63);
+  // the other holders' unfinished messages are still held: ~1 kB each
+  assert.ok(g.input > 63 * 1000 && g.input < 63 * 1100, `input ${g.input} bytes`);
+  for (const h of holders) h.ws.terminate();
+  for (const c of late) c.close();
+  await until(() => inputGauges(d), (x) => x.input === 0 && x.reading === 0);
+}));
