@@ -1,6 +1,7 @@
 /* Per-stem measures of docs/model.md: height, dbh, crown width and base, nodes, light. */
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "light.h"
@@ -307,28 +308,59 @@ static void canopy_foot(sylva_world *w) {
   w->foot_dirty = false;
 }
 
+/* The cells a leaf-bearing internode a-b (x, y) covers: lo..hi (inclusive) bounds
+ * them; within() tells which of those lie within r of it. */
+typedef struct cover_reach {
+  double a[2], d[2], len2, r;
+  int lo[2], hi[2];
+} cover_reach;
+
+static cover_reach reach_of(const sylva_world *w, const double a[2], const double b[2],
+                            double r) {
+  cover_reach c = {.a = {a[0], a[1]}, .d = {b[0] - a[0], b[1] - a[1]}, .r = r};
+  c.len2 = c.d[0] * c.d[0] + c.d[1] * c.d[1];
+  for (int k = 0; k < 2; k++) {
+    c.lo[k] = col_of(w, k, fmin(a[k], b[k]) - r);
+    c.hi[k] = col_of(w, k, fmax(a[k], b[k]) + r);
+  }
+  return c;
+}
+
+static bool within(const cover_reach *c, double cx, double cy) {
+  double t = c->len2 > 0.0 ? ((cx - c->a[0]) * c->d[0] + (cy - c->a[1]) * c->d[1]) / c->len2 : 0.0;
+  t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+  double px = c->a[0] + t * c->d[0] - cx, py = c->a[1] + t * c->d[1] - cy;
+  return px * px + py * py <= c->r * c->r;
+}
+
+/* a leaf reaches about its length from its internode (docs/model.md, "Foliage"); half
+ * a cell's diagonal more, so that the cell holding a leaf-bearing node counts */
+static double leaf_reach(const sylva_world *w, int stem) {
+  return w->species[w->stems[stem].species].def.leaf_size + w->col_edge * 0.7071067811865476;
+}
+
+/* Node n's internode: from its parent's x, y (a root: its own point) to its own. */
+static void internode_xy(const sylva__skeleton *s, int32_t n, double a[2], double b[2]) {
+  int32_t p = s->parent[n];
+  b[0] = s->x[n];
+  b[1] = s->y[n];
+  a[0] = p >= 0 ? s->x[p] : b[0];
+  a[1] = p >= 0 ? s->y[p] : b[1];
+}
+
 /* Counts the cells within r of the segment a-b (x, y) not yet stamped by this stem's
  * pass (stamp); the first stamp of the whole pass is first. */
 static void cover_segment(sylva_world *w, const double a[2], const double b[2], double r,
                           uint32_t stamp, uint32_t first, int64_t *area, int64_t *cover) {
   const double e = w->col_edge;
-  int lo[2], hi[2];
-  for (int k = 0; k < 2; k++) {
-    lo[k] = col_of(w, k, fmin(a[k], b[k]) - r);
-    hi[k] = col_of(w, k, fmax(a[k], b[k]) + r);
-  }
-  double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
-  for (int y = lo[1]; y <= hi[1]; y++) {
+  cover_reach reach = reach_of(w, a, b, r);
+  for (int y = reach.lo[1]; y <= reach.hi[1]; y++) {
     double cy = w->def.min[1] + (y + 0.5) * e;
     size_t row = (size_t)y * (size_t)w->col_n[0];
-    for (int x = lo[0]; x <= hi[0]; x++) {
+    for (int x = reach.lo[0]; x <= reach.hi[0]; x++) {
       size_t c = row + (size_t)x;
       if (w->cols[c] == stamp) continue; /* counted already: most cells of a crown */
-      double cx = w->def.min[0] + (x + 0.5) * e;
-      double t = len2 > 0.0 ? ((cx - a[0]) * dx + (cy - a[1]) * dy) / len2 : 0.0;
-      t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
-      double px = a[0] + t * dx - cx, py = a[1] + t * dy - cy;
-      if (px * px + py * py > r * r) continue;
+      if (!within(&reach, w->def.min[0] + (x + 0.5) * e, cy)) continue;
       if (w->cols[c] < first && !(w->foot[c >> 3] & (1u << (c & 7)))) (*cover)++;
       w->cols[c] = stamp;
       (*area)++;
@@ -359,21 +391,87 @@ void sylva__canopy(sylva_world *w) {
   uint32_t pass = w->col_stamp + 1;
   int64_t cover = 0;
   for (int k = 0; k < w->stem_count; k++) {
-    sylva__stem *st = &w->stems[k];
-    /* a leaf reaches about its length from its internode (docs/model.md, "Foliage");
-     * half a cell's diagonal more, so that the cell holding a leaf-bearing node counts */
-    double r = w->species[st->species].def.leaf_size + w->col_edge * 0.7071067811865476;
+    double r = leaf_reach(w, k);
     uint32_t stamp = ++w->col_stamp;
     int64_t area = 0;
     for (int32_t j = k ? first[k - 1] : 0; j < first[k]; j++) {
-      int32_t n = w->canopy[j], p = s->parent[n];
-      double b[2] = {s->x[n], s->y[n]};
-      double a[2] = {p >= 0 ? s->x[p] : b[0], p >= 0 ? s->y[p] : b[1]};
+      double a[2], b[2];
+      internode_xy(s, w->canopy[j], a, b);
       cover_segment(w, a, b, r, stamp, pass, &area, &cover);
     }
-    st->stats.crown_area = (double)area * w->col_edge * w->col_edge;
+    w->stems[k].stats.crown_area = (double)area * w->col_edge * w->col_edge;
   }
   w->canopy_cover = w->open_cols > 0 ? (double)cover / (double)w->open_cols : 0.0;
+}
+
+double sylva_world_cell_edge(const sylva_world *w) { return w->col_edge; }
+
+int64_t sylva_world_crown_cells(const sylva_world *w, int stem, int32_t **cells) {
+  *cells = NULL;
+  if (stem < 0 || stem >= w->stem_count) return SYLVA_EINVAL;
+  const sylva__skeleton *s = &w->nodes;
+  const double e = w->col_edge, r = leaf_reach(w, stem);
+  /* the stem's leaf-bearing internodes, and the cells they can reach: one bit each */
+  size_t nreach = 0, cap = 0;
+  cover_reach *reach = NULL;
+  int lo[2] = {INT32_MAX, INT32_MAX}, hi[2] = {-1, -1};
+  for (size_t i = 0; i < s->count; i++) {
+    if (s->stem[i] != stem || !(s->flags[i] & SYLVA__NODE_ALIVE) || sylva__node_leaves(w, i) <= 0)
+      continue;
+    if (nreach == cap) {
+      cap = cap ? 2 * cap : 64;
+      cover_reach *p = realloc(reach, cap * sizeof *p);
+      if (!p) {
+        free(reach);
+        return SYLVA_ENOMEM;
+      }
+      reach = p;
+    }
+    double a[2], b[2];
+    internode_xy(s, (int32_t)i, a, b);
+    cover_reach *c = &reach[nreach++];
+    *c = reach_of(w, a, b, r);
+    for (int k = 0; k < 2; k++) {
+      if (c->lo[k] < lo[k]) lo[k] = c->lo[k];
+      if (c->hi[k] > hi[k]) hi[k] = c->hi[k];
+    }
+  }
+  if (!nreach) return 0; /* no leaves */
+  size_t nx = (size_t)(hi[0] - lo[0] + 1), ny = (size_t)(hi[1] - lo[1] + 1);
+  uint8_t *bits = calloc((nx * ny + 7) / 8, 1);
+  if (!bits) {
+    free(reach);
+    return SYLVA_ENOMEM;
+  }
+  int64_t count = 0;
+  for (size_t j = 0; j < nreach; j++) {
+    const cover_reach *c = &reach[j];
+    for (int y = c->lo[1]; y <= c->hi[1]; y++)
+      for (int x = c->lo[0]; x <= c->hi[0]; x++) {
+        size_t bit = (size_t)(y - lo[1]) * nx + (size_t)(x - lo[0]);
+        if (bits[bit >> 3] & (1u << (bit & 7))) continue;
+        if (!within(c, w->def.min[0] + (x + 0.5) * e, w->def.min[1] + (y + 0.5) * e)) continue;
+        bits[bit >> 3] |= (uint8_t)(1u << (bit & 7));
+        count++;
+      }
+  }
+  free(reach);
+  int32_t *out = malloc((size_t)count * 2 * sizeof *out);
+  if (!out) {
+    free(bits);
+    return SYLVA_ENOMEM;
+  }
+  size_t k = 0;
+  for (size_t y = 0; y < ny; y++)
+    for (size_t x = 0; x < nx; x++) {
+      size_t bit = y * nx + x;
+      if (!(bits[bit >> 3] & (1u << (bit & 7)))) continue;
+      out[k++] = lo[0] + (int32_t)x;
+      out[k++] = lo[1] + (int32_t)y;
+    }
+  free(bits);
+  *cells = out;
+  return count;
 }
 
 double sylva_world_canopy_cover(const sylva_world *w) { return w->canopy_cover; }

@@ -11,12 +11,16 @@ prism's rings (counter-clockwise outline, clockwise holes, not closed) and area
 against GDAL's; that `sylva validate` takes the scenario; the same bytes from the
 site given as GeoJSON, GeoPackage, Shapefile, FlatGeobuf and CSV; a species map; a
 DBH in inches; a bbox; and bad input: exit 2, a message naming the file, the layer
-and the field, and no file written.
+and the field, and no file written. Then the results back to GIS: the site grown 10
+years and exported as GeoJSON and GeoPackage (`sylva export --format geojson|gpkg`),
+each trunk within 1 cm of its tree's place, the figures those of the CSV export, the
+crowns as large as their crown_area, the buildings with their courtyard.
 """
 import csv
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -219,6 +223,8 @@ def main():
         p = sylva("validate", out)
         check(p.returncode == 0, "validate: " + p.stderr)
 
+        results_to_gis(tmp, out, trees)
+
         # the same site in other formats: the same bytes
         with open(out, "rb") as f:
             reference = f.read()
@@ -286,6 +292,127 @@ def main():
                   all(isinstance(v, int) for v in w["min"] + w["max"]), "bbox world: %s" % w)
 
         bad_cases(tmp)
+
+
+def ogr_csv(path, layer, *sql):
+    """A layer (or an SQL query's result) of a GIS file as CSV rows, through ogr2ogr."""
+    args = ["ogr2ogr", "-f", "CSV", "/vsistdout/", path]
+    args += ["-dialect", "SQLite", "-sql", sql[0]] if sql else [layer, "-lco", "GEOMETRY=AS_XY"]
+    p = run(*args)
+    check(p.returncode == 0, "ogr2ogr %s %s: %s" % (path, layer, p.stderr))
+    return list(csv.DictReader(p.stdout.splitlines()))
+
+
+def metres_apart(lon1, lat1, lon2, lat2):
+    """The distance of two near places on WGS 84, m (its radii of curvature there)."""
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    phi = math.radians((lat1 + lat2) / 2)
+    w = math.sqrt(1 - e2 * math.sin(phi) ** 2)
+    m, n = a * (1 - e2) / w ** 3, a / w
+    return math.hypot(math.radians(lon2 - lon1) * n * math.cos(phi), math.radians(lat2 - lat1) * m)
+
+
+def results_to_gis(tmp, site_json, trees):
+    """The site grown 10 years, then exported as GeoJSON and GeoPackage: every trunk
+    within 1 cm of its tree's place, the figures those of the CSV export, each
+    crown's polygon as large as its crown_area, the buildings and the zone."""
+    db = os.path.join(tmp, "grown.db")
+    p = sylva("run", site_json, "--db", db, "--name", "site")
+    check(p.returncode == 0, "run the site: " + p.stderr)
+    gj, gp = os.path.join(tmp, "site.geojson"), os.path.join(tmp, "site.gpkg")
+    for fmt, path in (("geojson", gj), ("gpkg", gp)):
+        p = sylva("export", "--db", db, "--name", "site", "--format", fmt, "--years", "5,10",
+                  "-o", path)
+        check(p.returncode == 0 and os.path.exists(path) and not os.path.exists(path + ".tmp"),
+              "export %s: %s" % (fmt, p.stderr))
+        q = run("ogrinfo", "-ro", "-so", "-al", path)
+        check(q.returncode == 0, "ogrinfo opens the %s: %s" % (fmt, q.stderr))
+    if failures:
+        return
+    with open(gj) as f:
+        doc = json.load(f)
+    check("crs" not in doc, "GeoJSON: RFC 7946, no crs member")
+    feats = doc["features"]
+    by = {}
+    for ft in feats:
+        by.setdefault(ft["properties"]["layer"], []).append(ft)
+    check({k: len(v) for k, v in by.items()} == {"trunks": 10, "crowns": 10, "buildings": 4,
+                                                  "zones": 1},
+          "GeoJSON features: %s" % {k: len(v) for k, v in by.items()})
+    # trunks: within 1 cm of the inventory's lon/lat, in both files
+    for ft in by.get("trunks", []):
+        pr = ft["properties"]
+        lon, lat = ft["geometry"]["coordinates"]
+        t = trees[pr["plant"]]["geometry"]["coordinates"]
+        d = metres_apart(lon, lat, t[0], t[1])
+        check(d <= 0.01, "GeoJSON: %s at year %d is %.4f m from its tree" % (pr["plant"], pr["year"], d))
+    gtrunks = ogr_csv(gp, "trunks")
+    check(len(gtrunks) == 10, "GeoPackage trunks: %d" % len(gtrunks))
+    ids = sorted({r["plant"] for r in gtrunks})
+    utm = dict(zip(ids, cs2cs_utm([trees[i]["geometry"]["coordinates"] for i in ids])))
+    for r in gtrunks:
+        e, n = utm[r["plant"]]
+        d = math.hypot(float(r["X"]) - e, float(r["Y"]) - n)
+        check(d <= 0.01, "GeoPackage: %s at year %s is %.4f m from cs2cs's place" % (r["plant"], r["year"], d))
+    # the figures: those of the CSV export at that iteration
+    p = sylva("export", "--db", db, "--name", "site", "--format", "csv", "-o", "-")
+    stats = {(r["plant"], int(r["iteration"])): r for r in csv.DictReader(p.stdout.splitlines())}
+    for ft in by.get("trunks", []) + by.get("crowns", []):
+        pr = ft["properties"]
+        row = stats[(pr["plant"], pr["iteration"])]
+        check(pr["year"] == 2027 + pr["iteration"] and pr["age"] == int(row["age"]) and
+              pr["species"] == site_species(site_json)[pr["plant"]],
+              "%s %d: year, age, species %s" % (pr["plant"], pr["iteration"], pr))
+        for k in ("height", "dbh", "crown_diameter", "crown_height", "leaf_area", "crown_area",
+                  "carbon"):
+            check(abs(pr[k] - float(row[k])) < 1e-9, "%s %d: %s %s, the CSV's %s" %
+                  (pr["plant"], pr["iteration"], k, pr[k], row[k]))
+        zones = json.loads(row["zones"] or "{}")
+        want = zones["zone-1"]["first"] if "zone-1" in zones else None
+        check(pr["conflict_zone-1"] == want, "%s %d: conflict_zone-1 %s, the CSV's %s" %
+              (pr["plant"], pr["iteration"], pr["conflict_zone-1"], want))
+    check(any(ft["properties"]["conflict_zone-1"] for ft in by.get("trunks", [])),
+          "a stem met the zone")
+    # crowns: the union of the cells under the leaves, as large as crown_area
+    for r in ogr_csv(gp, "crowns", "SELECT plant, iteration, crown_area, ST_Area(geom) AS a "
+                                   "FROM crowns"):
+        check(abs(float(r["a"]) - float(r["crown_area"])) <= 1e-4,
+              "crown %s %s: %s m2, crown_area %s" % (r["plant"], r["iteration"], r["a"], r["crown_area"]))
+    # buildings and the zone: B2 keeps its courtyard, the heights their z
+    rows = ogr_csv(gp, "buildings", "SELECT id, z_top, AsText(geom) AS wkt, ST_Area(geom) AS a "
+                                    "FROM buildings")
+    # a MULTIPOLYGON (((outline), (hole), ...)) of one part: its holes are its rings less one
+    got = {r["id"]: (float(r["z_top"]), len(re.findall(r"\)\s*,\s*\(", r["wkt"])) -
+                     len(re.findall(r"\)\)\s*,\s*\(\(", r["wkt"]))) for r in rows}
+    check(got == {"B1": (15.5, 0), "B2": (12.0, 1), "B3": (9.0, 0), "B3/2": (9.0, 0)},
+          "GeoPackage buildings: %s" % got)
+    areas = gdal_areas(fixture("buildings.geojson"))
+    mine = {r["id"]: float(r["a"]) for r in rows}
+    check(abs(mine.get("B2", 0) / areas["B2"] - 1) < 1e-6, "B2's area %s, GDAL's %s" %
+          (mine.get("B2"), areas["B2"]))
+    zones = ogr_csv(gp, "zones", "SELECT id, z_top FROM zones")
+    check([(r["id"], float(r["z_top"])) for r in zones] == [("zone-1", 4.5)], "zones: %s" % zones)
+    # what it refuses: exit 2, no file
+    plain = os.path.join(tmp, "plain.db")
+    p = sylva("run", os.path.join(ROOT, "scenarios", "shrub.json"), "--db", plain, "--name", "s",
+              "--iterations", "2")
+    for args, want in ((["--db", plain, "--name", "s", "--format", "gpkg"], "has no site"),
+                       (["--db", db, "--name", "site", "--format", "gpkg", "--years", "11"],
+                        "stored years 1 to 10, not 11"),
+                       (["--db", db, "--name", "site", "--format", "geojson", "--iteration", "3"],
+                        "take --years")):
+        bad = os.path.join(tmp, "bad.gpkg")
+        q = sylva("export", *args, "-o", bad)
+        check(q.returncode == 2 and want in q.stderr and not os.path.exists(bad) and
+              not os.path.exists(bad + ".tmp"), "export %s: %d %s" % (args, q.returncode, q.stderr))
+    q = sylva("export", "--db", db, "--name", "site", "--format", "gpkg", "-o", "-")
+    check(q.returncode == 2 and "stdout" in q.stderr, "gpkg to stdout: " + q.stderr)
+
+
+def site_species(path):
+    with open(path) as f:
+        return {pl["id"]: pl["species"] for pl in json.load(f)["plants"]}
 
 
 def write_trees(path, change):

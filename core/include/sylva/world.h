@@ -316,6 +316,14 @@ int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out
  *  solid obstacles that stand on it) under any stem's leaves, as after the last step,
  *  plant or prune (docs/model.md, "Canopy cover"); 0 when there is no open ground. */
 double sylva_world_canopy_cover(const sylva_world *w);
+/** The edge of the floor's cells, m (docs/model.md, "Canopy cover"). */
+double sylva_world_cell_edge(const sylva_world *w);
+/** The floor's cells under a stem's leaves, those its crown_area counts (docs/model.md,
+ *  "Canopy cover"): cell k is (*cells)[2k] along x and (*cells)[2k + 1] along y, the
+ *  square from def.min + (i, j) e to def.min + (i + 1, j + 1) e, e the cell edge; in
+ *  order of j, then i. *cells is malloc()ed (NULL when there are none). Returns how
+ *  many, or SYLVA_EINVAL (no such stem), SYLVA_ENOMEM. */
+int64_t sylva_world_crown_cells(const sylva_world *w, int stem, int32_t **cells);
 /** Does the world report conflicts (stems' pruned counts, zones and clearances)?
  *  Once it has held a clearance zone, a pruning schedule or pruned a node; a world
  *  without any reports as worlds did before zones existed. */
