@@ -217,8 +217,10 @@ int sylva__conflicts_update(sylva_world *w, int first_stem) {
 
 /* ---- pruning ------------------------------------------------------------------- */
 
-size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool announced_only,
-                    int32_t *roots, size_t *root_count) {
+/* Removes every node hit() picks and its subtree (roots stay), as sylva__prune. */
+static size_t cut(sylva_world *w, bool (*hit)(const sylva_world *w, size_t i, const void *ctx),
+                  const void *ctx, int T, bool announced_only, int32_t *roots,
+                  size_t *root_count) {
   sylva__skeleton *s = &w->nodes;
   size_t doomed = 0;
   for (size_t i = 0; i < s->count; i++) {
@@ -230,7 +232,7 @@ size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool anno
       doomed++;
       continue;
     }
-    if (!inside(box, s->x[i], s->y[i], s->z[i])) continue;
+    if (!hit(w, i, ctx)) continue;
     s->flags[i] |= SYLVA__NODE_DOOMED;
     doomed++;
     /* a cut: a lateral leaves a scar on its parent, whose bud does not sprout again;
@@ -252,6 +254,35 @@ size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool anno
     (void)rc;
   }
   return doomed;
+}
+
+static bool in_box(const sylva_world *w, size_t i, const void *ctx) {
+  return inside(ctx, w->nodes.x[i], w->nodes.y[i], w->nodes.z[i]);
+}
+
+size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool announced_only,
+                    int32_t *roots, size_t *root_count) {
+  return cut(w, in_box, box, T, announced_only, roots, root_count);
+}
+
+typedef struct voxel_list {
+  int (*v)[3];
+  size_t n;
+} voxel_list;
+
+static bool in_voxels(const sylva_world *w, size_t i, const void *ctx) {
+  const voxel_list *l = ctx;
+  int v[3];
+  sylva__node_voxel(w, (int32_t)i, v);
+  for (size_t k = 0; k < l->n; k++)
+    if (l->v[k][0] == v[0] && l->v[k][1] == v[1] && l->v[k][2] == v[2]) return true;
+  return false;
+}
+
+size_t sylva__cut_voxels(sylva_world *w, int (*voxels)[3], size_t n, int T, int32_t *roots,
+                         size_t *root_count) {
+  voxel_list l = {voxels, n};
+  return cut(w, in_voxels, &l, T, false, roots, root_count);
 }
 
 bool sylva__prune_due(const sylva_prune_def *d, int T) {

@@ -25,6 +25,10 @@ int sylva__entered_add(sylva_world *w, int32_t stem, int32_t zone, int32_t first
  *  Returns the nodes removed; their slots stay dead until compaction. Never fails. */
 size_t sylva__prune(sylva_world *w, const sylva__obstacle *box, int T, bool announced_only,
                     int32_t *roots, size_t *root_count);
+/** Removes every node (not a root) whose voxel is one of voxels[0..n) and its subtree,
+ *  as sylva__prune does. */
+size_t sylva__cut_voxels(sylva_world *w, int (*voxels)[3], size_t n, int T, int32_t *roots,
+                         size_t *root_count);
 /** Does a schedule prune at iteration T? */
 bool sylva__prune_due(const sylva_prune_def *d, int T);
 #endif

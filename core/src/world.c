@@ -389,8 +389,27 @@ static void take_back(sylva_world *w) {
   w->iteration = m->iteration;
 }
 
+/* Whether another stem's nodes in voxel v are branches a new trunk may cut: none of
+ * them is that stem's root or one of the initial trunk nodes above it. */
+static bool branches_only(const sylva_world *w, const int v[3], int32_t stem) {
+  const sylva__skeleton *s = &w->nodes;
+  const sylva__stem *st = &w->stems[stem];
+  int32_t n = st->root_slot;
+  for (int k = 0; k <= w->species[st->species].def.initial_nodes && n >= 0; k++) {
+    int u[3];
+    sylva__node_voxel(w, n, u);
+    if (u[0] == v[0] && u[1] == v[1] && u[2] == v[2]) return false;
+    n = s->axis_child[n];
+  }
+  return true;
+}
+
+/* Checks a new trunk's voxels: inside, free of obstacles, of the plant's other trunks
+ * (taken) and of other stems, but for their branches, which go to cuts[*ncuts]
+ * (docs/model.md, "Species in years", nursery). */
 static int check_trunk(const sylva_world *w, const sylva_species_def *sp, const double root[3],
-                       int (*taken)[3], int ntaken, int *nout, int (*out)[3]) {
+                       int (*taken)[3], int ntaken, int *nout, int (*out)[3], int (*cuts)[3],
+                       int *ncuts) {
   int count = 0;
   for (int k = 0; k <= sp->initial_nodes; k++) {
     double p[3] = {root[0], root[1], root[2] + sp->rho * k};
@@ -398,13 +417,35 @@ static int check_trunk(const sylva_world *w, const sylva_species_def *sp, const 
     float f[3];
     if (!sylva__voxel_of(w, p, f, v)) return SYLVA_EOUTSIDE;
     if (sylva__grid_blocked(&w->grid, v)) return SYLVA_EBLOCKED;
-    if (sylva__grid_occupant(&w->grid, v) >= 0) return SYLVA_EOCCUPIED;
+    int32_t occupant = sylva__grid_occupant(&w->grid, v);
+    if (occupant >= 0) {
+      if (!branches_only(w, v, occupant)) return SYLVA_EOCCUPIED;
+      memcpy(cuts[(*ncuts)++], v, sizeof v);
+    }
     for (int i = 0; i < ntaken; i++)
       if (taken[i][0] == v[0] && taken[i][1] == v[1] && taken[i][2] == v[2]) return SYLVA_EOCCUPIED;
     memcpy(out[count++], v, sizeof v);
   }
   *nout = count;
   return SYLVA_OK;
+}
+
+static void compact_nodes(sylva_world *w);
+
+/* Cuts the branches of other stems in a new trunk's voxels, each with what it carries,
+ * as a prune would (docs/model.md, "Species in years", nursery); room was reserved (pruned_ids,
+ * scratch). Never fails. */
+static void clear_trunks(sylva_world *w, int (*cuts)[3], int ncuts) {
+  int T = w->iteration;
+  w->pruned_ids.len = 0;
+  size_t n = sylva__cut_voxels(w, cuts, (size_t)ncuts, T, w->pruned_ids.data, &w->pruned_ids.len);
+  if (!n) return;
+  sylva__light_collect(w, T + 1, NULL); /* as after a prune */
+  if (T == 0)
+    for (int k = 0; k < w->stem_count; k++) sylva__stats_planted(w, k);
+  else
+    sylva__stats(w, T);
+  compact_nodes(w);
 }
 
 /* ---- the nursery --------------------------------------------------------------- */
@@ -665,12 +706,13 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   /* Check every trunk before changing anything: the voxels of earlier roots of the
    * same plant count as taken by another stem. */
   size_t per = (size_t)sp->initial_nodes + 1;
-  int(*taken)[3] = sylva__malloc((size_t)def->root_count * per * sizeof *taken);
+  int(*taken)[3] = sylva__malloc(2 * (size_t)def->root_count * per * sizeof *taken);
   if (!taken) return SYLVA_ENOMEM;
-  int ntaken = 0;
+  int(*cuts)[3] = taken + (size_t)def->root_count * per;
+  int ntaken = 0, ncuts = 0;
   for (int r = 0; r < def->root_count; r++) {
     int n = 0;
-    int rc = check_trunk(w, sp, def->roots[r], taken, ntaken, &n, taken + ntaken);
+    int rc = check_trunk(w, sp, def->roots[r], taken, ntaken, &n, taken + ntaken, cuts, &ncuts);
     if (rc) {
       sylva__free(taken);
       if (bad_root) *bad_root = r;
@@ -678,20 +720,22 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
     }
     ntaken += n;
   }
-  sylva__free(taken);
   /* Room for everything first; then only placing the trunks can fail (a voxel chunk
    * for their occupancy or shade), and that is taken back. */
-  if (reserve_plant_room(w, def->root_count)) return SYLVA_ENOMEM;
-  if (sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per) ||
+  int rc = SYLVA_OK;
+  if (reserve_plant_room(w, def->root_count) ||
+      sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per) ||
       reserve_plant_index(w, (size_t)w->plant_count + 1) ||
-      SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + def->root_count) + 1))
-    return SYLVA_ENOMEM;
+      SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + def->root_count) + 1) ||
+      (ncuts && SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count)) ||
+      (ncuts && reserve_scratch(w)))
+    rc = SYLVA_ENOMEM;
   int pid = w->plant_count;
   sylva_world *nursery = NULL;
-  if (seasons > 0) {
-    int rc = grow_in_nursery(w, def, seasons, &nursery);
-    if (rc) return rc;
-  }
+  if (!rc && seasons > 0) rc = grow_in_nursery(w, def, seasons, &nursery);
+  if (!rc && ncuts) clear_trunks(w, cuts, ncuts);
+  sylva__free(taken);
+  if (rc) return rc;
   set_mark(w);
   for (int r = 0; r < def->root_count && nursery; r++) {
     sylva__stem *st = &w->stems[w->stem_count++];

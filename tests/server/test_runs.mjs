@@ -12,7 +12,7 @@ import { connect as netConnect } from 'node:net';
 import { join } from 'node:path';
 import WebSocket from 'ws';
 import { startDaemon, stopDaemon, connect, scenario, Model, exportSkeleton, plantsJSON,
-  cleanup, tempDir, SYLVA, SLOW } from './harness.mjs';
+  cleanup, tempDir, SYLVA, ROOT, SLOW } from './harness.mjs';
 
 // ---- helpers ------------------------------------------------------------------
 
@@ -658,6 +658,43 @@ test('edit: a prism and a prism zone over the wire, kept by the log through kill
     assert.deepEqual(exported.obstacles, [L_HOUSE, LANE], "the export's obstacles");
     c.close();
     cc.close();
+    await stopClean(d);
+  } finally {
+    await stopDaemon(d);
+    cleanup(dir);
+    cleanup(d.dir);
+  }
+});
+
+// What `sylva site` writes from GIS layers (the fixtures of tests/gis/data: three
+// buildings at 30 degrees, one with a courtyard, a zone, trees in lon/lat) is taken
+// like any scenario: its prisms and site given back, grown as the CLI grows it.
+test('create: a scenario `sylva site` wrote from GIS layers, grown as the CLI grows it', async () => {
+  const dir = tempDir();
+  const d = await startDaemon();
+  try {
+    const data = join(ROOT, 'tests', 'gis', 'data');
+    const file = join(dir, 'site.json');
+    const r = spawnSync(SYLVA, ['site', '--buildings', join(data, 'buildings.geojson'), '--height-field', 'height',
+      '--levels-field', 'levels', '--building-id-field', 'id', '--trees', join(data, 'trees.geojson'),
+      '--species-field', 'species', '--dbh-field', 'dbh', '--id-field', 'id', '--keep', 'status=alive',
+      '--zones', join(data, 'zones.geojson'), '--zone-field', 'clearance', '--start-year', '2027', '-o', file],
+    { encoding: 'utf8' });
+    assert.equal(r.status, 0, r.stderr);
+    const site = { ...JSON.parse(readFileSync(file, 'utf8')), iterations: 3 };
+    assert.ok(site.obstacles.some((o) => o.kind === 'prism' && o.holes) && site.site.crs === 'EPSG:32618',
+      'the scenario has a prism with a courtyard and a site');
+    const c = await connect(d.url);
+    c.send({ type: 'create', name: 'site', start: false, scenario: site, id: 'c' });
+    const created = await c.next((m) => m.ref === 'c');
+    assert.equal(created.type, 'created', JSON.stringify(created));
+    c.send({ type: 'subscribe', run: created.run });
+    const snap = await c.next((m) => m.type === 'snapshot' && m.run === created.run);
+    assert.deepEqual(snap.obstacles, site.obstacles, 'the prisms and the zone as written');
+    assert.deepEqual(snap.plants.map((p) => p.id), site.plants.map((p) => p.id));
+    const model = await stepAndFollow(c, created.run, 3, new Model(snap));
+    samePlants(model.plantsJSON(), plantsJSON(referenceRun(site, 3, dir)), 'the daemon grows it as sylva run');
+    c.close();
     await stopClean(d);
   } finally {
     await stopDaemon(d);

@@ -18,7 +18,10 @@
  *   pruned counts);
  * - images keep the old layout without zones, set the CONFLICTS flag with them,
  *   and a corrupted conflicts section is refused;
- * - schedules: bad ones refused, the iterations they name, a removed zone's. */
+ * - schedules: bad ones refused, the iterations they name, a removed zone's;
+ * - a plant whose trunk meets another stem's branches cuts exactly the nodes in its
+ *   trunk's voxels and what they carry (counted as pruned; the grid as rebuilt); a
+ *   root on another's root is refused with the world unchanged. */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -1188,13 +1191,86 @@ static void test_prune_dates_every_zone(void) {
   sylva_world_destroy(w);
 }
 
+/* A plant whose trunk meets another stem's branches cuts them with what they carry
+ * (docs/model.md, "Species in years", nursery); another's root or trunk refuses it,
+ * changing nothing. */
+static void test_planting_cuts_branches(void) {
+  sylva_world *w = make_world(21, WITH_SOLIDS);
+  CHECK(w != NULL);
+  if (!w) return;
+  for (int T = 0; T < 12; T++) CHECK_INT(sylva_world_step(w, NULL), 0);
+  const sylva_species_def *sp = sylva_world_species(w, 0);
+  const double e = sylva_world_get_def(w)->voxel;
+  const sylva__skeleton *s = &w->nodes;
+  int b = sylva_world_stem_index(w, 1, 0); /* tree b, its root at (0, -2, 0) */
+  /* a branch node of b well away from its trunk, its column free of obstacles */
+  long pick = -1;
+  for (size_t i = 0; i < s->count && pick < 0; i++)
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->stem[i] == b && s->parent[i] >= 0 &&
+        hypot(s->x[i], s->y[i] + 2) > 4 * e && s->z[i] + sp->rho * sp->initial_nodes < 3.5 &&
+        s->y[i] > -3.4 && s->y[i] < 0.9)
+      pick = (long)i;
+  CHECK(pick >= 0);
+  if (pick < 0) {
+    sylva_world_destroy(w);
+    return;
+  }
+  double at[3] = {s->x[pick], s->y[pick], s->z[pick]};
+  int column[16][3];
+  for (int k = 0; k <= sp->initial_nodes && k < 16; k++) {
+    double p[3] = {at[0], at[1], at[2] + sp->rho * k};
+    float f[3];
+    CHECK(sylva__voxel_of(w, p, f, column[k]));
+  }
+  /* the nodes to go: those in the new trunk's voxels, and what they carry (parents
+   * come before their children in slot order) */
+  size_t n0 = sylva_world_node_count(w), expected = 0;
+  char *doomed = calloc(s->count + 1, 1);
+  int32_t *ids = malloc((s->count + 1) * sizeof *ids);
+  size_t nids = 0;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->parent[i] < 0) continue;
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    doomed[i] = doomed[s->parent[i]];
+    for (int k = 0; k <= sp->initial_nodes && k < 16; k++)
+      if (v[0] == column[k][0] && v[1] == column[k][1] && v[2] == column[k][2]) doomed[i] = 1;
+    if (doomed[i]) {
+      expected++;
+      ids[nids++] = s->id[i];
+    }
+  }
+  CHECK(expected >= 1);
+  static double root[1][3];
+  memcpy(root[0], at, sizeof at);
+  sylva_plant_def e_def = {0, "e", (const double(*)[3])root, 1, 0, NULL, 0};
+  CHECK(sylva_world_add_plant(w, &e_def, NULL) >= 0);
+  CHECK_INT((long)sylva_world_node_count(w), (long)(n0 - expected + (size_t)sp->initial_nodes + 1));
+  sylva_stem_stats st;
+  CHECK_INT(sylva_world_stem_stats(w, b, &st), 0);
+  CHECK_INT(st.pruned, (long)expected);
+  for (size_t k = 0; k < nids; k++) CHECK(sylva_world_node_index(w, ids[k]) < 0);
+  check_grid_restamped(w);
+  /* a root on b's root: refused, nothing changed */
+  uint64_t h = sylva_world_hash(w);
+  static const double on_b[1][3] = {{0, -2, 0}};
+  sylva_plant_def f_def = {0, "f", on_b, 1, 0, NULL, 0};
+  CHECK_INT(sylva_world_add_plant(w, &f_def, NULL), SYLVA_EOCCUPIED);
+  CHECK(sylva_world_hash(w) == h);
+  for (int T = 0; T < 3; T++) CHECK_INT(sylva_world_step(w, NULL), 0);
+  free(doomed);
+  free(ids);
+  sylva_world_destroy(w);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(zones_change_nothing), CHECK_TEST(conflicts_brute_force),
       CHECK_TEST(schedule_prunes),      CHECK_TEST(prune_now),
       CHECK_TEST(prune_now_clearances), CHECK_TEST(prune_to_root),
       CHECK_TEST(resume),               CHECK_TEST(snapshot_format),
-      CHECK_TEST(schedule_rules),       CHECK_TEST(prune_dates_every_zone)};
+      CHECK_TEST(schedule_rules),       CHECK_TEST(prune_dates_every_zone),
+      CHECK_TEST(planting_cuts_branches)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("conflicts");
 }
