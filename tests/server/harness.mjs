@@ -329,3 +329,18 @@ export function askOnly(port, path, { leave = false } = {}) {
 }
 
 export function cleanup(dir) { rmSync(dir, { recursive: true, force: true }); }
+
+// The scenario `sylva site` writes from the GIS fixtures of tests/gis/data (three
+// buildings at 30 degrees, one with a courtyard, a road zone, trees in lon/lat), as
+// tests/gis/test_site_cli.py makes it: written into dir, returned parsed.
+export function gisSite(dir) {
+  const data = join(ROOT, 'tests', 'gis', 'data');
+  const file = join(dir, 'site.json');
+  const r = spawnSync(SYLVA, ['site', '--buildings', join(data, 'buildings.geojson'), '--height-field', 'height',
+    '--levels-field', 'levels', '--building-id-field', 'id', '--trees', join(data, 'trees.geojson'),
+    '--species-field', 'species', '--dbh-field', 'dbh', '--id-field', 'id', '--keep', 'status=alive',
+    '--zones', join(data, 'zones.geojson'), '--zone-field', 'clearance', '--start-year', '2027', '-o', file],
+  { encoding: 'utf8' });
+  if (r.status !== 0) throw new Error(`sylva site failed (${r.status}): ${r.stderr}`);
+  return JSON.parse(readFileSync(file, 'utf8'));
+}

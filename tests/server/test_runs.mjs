@@ -12,7 +12,7 @@ import { connect as netConnect } from 'node:net';
 import { join } from 'node:path';
 import WebSocket from 'ws';
 import { startDaemon, stopDaemon, connect, scenario, Model, exportSkeleton, plantsJSON,
-  cleanup, tempDir, SYLVA, ROOT, SLOW } from './harness.mjs';
+  cleanup, tempDir, gisSite, SYLVA, SLOW } from './harness.mjs';
 
 // ---- helpers ------------------------------------------------------------------
 
@@ -673,15 +673,7 @@ test('create: a scenario `sylva site` wrote from GIS layers, grown as the CLI gr
   const dir = tempDir();
   const d = await startDaemon();
   try {
-    const data = join(ROOT, 'tests', 'gis', 'data');
-    const file = join(dir, 'site.json');
-    const r = spawnSync(SYLVA, ['site', '--buildings', join(data, 'buildings.geojson'), '--height-field', 'height',
-      '--levels-field', 'levels', '--building-id-field', 'id', '--trees', join(data, 'trees.geojson'),
-      '--species-field', 'species', '--dbh-field', 'dbh', '--id-field', 'id', '--keep', 'status=alive',
-      '--zones', join(data, 'zones.geojson'), '--zone-field', 'clearance', '--start-year', '2027', '-o', file],
-    { encoding: 'utf8' });
-    assert.equal(r.status, 0, r.stderr);
-    const site = { ...JSON.parse(readFileSync(file, 'utf8')), iterations: 3 };
+    const site = { ...gisSite(dir), iterations: 3 };
     assert.ok(site.obstacles.some((o) => o.kind === 'prism' && o.holes) && site.site.crs === 'EPSG:32618',
       'the scenario has a prism with a courtyard and a site');
     const c = await connect(d.url);

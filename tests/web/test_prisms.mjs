@@ -6,7 +6,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { ROOT, SLOW, startDaemon, stopDaemon, serverSnapshot, cleanup } from '../server/harness.mjs';
+import { ROOT, SLOW, startDaemon, stopDaemon, serverSnapshot, cleanup, tempDir, gisSite } from '../server/harness.mjs';
 import { launch, openViewer, until, createAndWatch } from './browser.mjs';
 import { insideFootprint } from '../../web/zones.mjs';
 
@@ -185,5 +185,36 @@ test('the compass points to +y and turns with the camera', async () => {
   } finally {
     await stopDaemon(d);
     cleanup(d.dir);
+  }
+});
+
+// What `sylva site` writes from the GIS fixtures of tests/gis/data opens as it is: its
+// buildings drawn as prisms, its zone, its five trees at their roots, the compass.
+test('a scenario sylva site wrote from GIS layers: its buildings, zone and trees drawn, the compass', async () => {
+  const dir = tempDir();
+  const d = await startDaemon({ args: WEB });
+  try {
+    const site = gisSite(dir);
+    const { page, errors } = await openViewer(browser, d.http);
+    const run = await createAndWatch(d, page, site, 'gis-site');
+    const s = await until(page, (x) => x.run === run && x.drawnObstacles.length === 4, 'the buildings drawn');
+    assert.deepEqual(s.drawnObstacles.sort(), ['B1', 'B2', 'B3', 'B3/2']);
+    assert.deepEqual(s.zones, ['zone-1']);
+    assert.deepEqual(s.plants, site.plants.map((p) => p.id));
+    assert.equal(s.year, 2027);
+    // each tree stands at its root: its first node where the scenario puts it
+    const nodes = await page.evaluate(() => window.sylva.skeleton().plants.map((p) =>
+      [p.id, p.stems[0].nodes.find((n) => n[1] === -1)]));
+    assert.equal(nodes.length, 5);
+    for (const [id, n] of nodes) {
+      const want = site.plants.find((p) => p.id === id).roots[0];
+      assert.ok(Math.hypot(n[2] - want[0], n[3] - want[1]) < 1e-3, `${id}: ${n} against ${want}`);
+    }
+    assert.ok(await page.isVisible('#view svg.compass'));
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+    cleanup(dir);
   }
 });
