@@ -370,10 +370,16 @@ test('long messages are read 64 at a time: the next waits unread, in turn, and i
     holders.push(h);
   }
   await until(() => inputGauges(d), (g) => g.reading === 64);
-  // two more, each a whole message of 200 kB, longer than one read: they wait in turn
+  // two more, each a whole message of 40 kB: longer than one read (4 KiB), so they
+  // wait in turn; shorter than DAEMON_PARSE_INLINE, so each is answered in the turn
+  // it is complete (a larger one is parsed off the loop, its answer in any order)
   const late = [await connect(d.url), await connect(d.url)];
-  late.forEach((c, i) => c.send({ type: 'list', id: `late${i}`, pad: 'y'.repeat(200000) }));
-  let g = await until(() => inputGauges(d), (x) => x.waiting === 2);
+  // (the second sent once the first waits: the line is in the order the daemon reads)
+  let g;
+  for (const [i, c] of late.entries()) {
+    c.send({ type: 'list', id: `late${i}`, pad: 'y'.repeat(40000) });
+    g = await until(() => inputGauges(d), (x) => x.waiting === i + 1);
+  }
   assert.equal(g.reading, 64);
   await new Promise((r) => setTimeout(r, 300));
   assert.deepEqual(late.map((c) => c.messages.filter((m) => m.ref).length), [0, 0], 'no answer while they wait');
