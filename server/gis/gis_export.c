@@ -69,13 +69,8 @@ typedef struct writer {
   size_t errlen;
 } writer;
 
-static const char *gdal_said(const char *fallback) {
-  const char *m = CPLGetLastErrorMsg();
-  return m && m[0] ? m : fallback;
-}
-
 static int write_failed(writer *g, const char *what) {
-  snprintf(g->err, g->errlen, "%s: %s: %s", g->spec->path, what, gdal_said("GDAL failed"));
+  snprintf(g->err, g->errlen, "%s: %s: %s", g->spec->path, what, gis_gdal_reason("GDAL failed"));
   return SERVER_EWRITE;
 }
 
@@ -379,7 +374,7 @@ static int put_stems(writer *g, const sylva_world *w, int iteration) {
       OGRGeometryH crown = crown_outline(g, w, cells, n);
       if (!crown) {
         snprintf(g->err, g->errlen, "GEOS could not join the cells of a crown: %s",
-                 gdal_said("no reason given"));
+                 gis_gdal_reason("no reason given"));
         rc = SERVER_EFAIL;
       } else {
         rc = put_feature(g, K_CROWNS, crown, fill_stem, &c);
@@ -399,7 +394,7 @@ static int put_obstacles(writer *g, const sylva_world *w) {
     OGRGeometryH geom = footprint(g, &o);
     if (!geom) {
       snprintf(g->err, g->errlen, "GEOS could not make the footprint of obstacle \"%s\": %s",
-               o.label ? o.label : "", gdal_said("no reason given"));
+               o.label ? o.label : "", gis_gdal_reason("no reason given"));
       return SERVER_EFAIL;
     }
     rc = put_feature(g, o.kind == SYLVA_OBSTACLE_ZONE ? K_ZONES : K_BUILDINGS, geom, fill_obstacle,
@@ -435,7 +430,7 @@ static int read_site(writer *g) {
       rc = SERVER_ENOMEM;
     } else if (OSRSetFromUserInput(g->srs, crs->valuestring) != OGRERR_NONE) {
       snprintf(g->err, g->errlen, "run \"%s\": site.crs '%s': GDAL cannot read it (%s)",
-               spec->name, crs->valuestring, gdal_said("unknown reason"));
+               spec->name, crs->valuestring, gis_gdal_reason("unknown reason"));
       rc = SERVER_EINPUT;
     } else {
       OSRSetAxisMappingStrategy(g->srs, OAMS_TRADITIONAL_GIS_ORDER);

@@ -42,8 +42,7 @@ static char *dup_text(const char *s) {
   return d;
 }
 
-/* GDAL's last message, or `fallback` when it said nothing. */
-static const char *gdal_reason(const char *fallback) {
+const char *gis_gdal_reason(const char *fallback) {
   const char *m = CPLGetLastErrorMsg();
   return m && m[0] ? m : fallback;
 }
@@ -57,7 +56,7 @@ static int open_dataset(const char *path, const char *shown, const char *prefer,
                                drivers, NULL, NULL);
   if (!ds)
     return server_fail(err, errlen, SERVER_EINPUT, "%s: GDAL cannot open it as a vector layer: %s",
-                       shown, gdal_reason("no driver reads it"));
+                       shown, gis_gdal_reason("no driver reads it"));
   int n = GDALDatasetGetLayerCount(ds);
   OGRLayerH layer = NULL;
   for (int i = 0; i < n && prefer && !layer; i++) {
@@ -165,7 +164,7 @@ bool gis_layer_next(gis_layer *l, bool *failed, char *err, size_t errlen) {
     if (CPLGetLastErrorType() >= CE_Failure) {
       *failed = true;
       server_fail(err, errlen, SERVER_EINPUT, "%s: layer %s: after row %ld: %s", l->path, l->name,
-                  l->row, gdal_reason("read error"));
+                  l->row, gis_gdal_reason("read error"));
     }
     return false;
   }
@@ -288,7 +287,7 @@ int gis_feature_polygons(const gis_layer *l, gis_polygons *out, char *err, size_
   }
   CPLErrorReset();
   if (!OGR_G_IsValid(g))
-    snprintf(out->invalid, sizeof out->invalid, "%s", gdal_reason("GEOS finds it invalid"));
+    snprintf(out->invalid, sizeof out->invalid, "%s", gis_gdal_reason("GEOS finds it invalid"));
   OGRGeometryH c = OGR_G_CreateGeometry(wkbPoint);
   if (!c || OGR_G_Centroid(g, c) != OGRERR_NONE || (rc = polygons_of(g, out))) {
     rc = server_fail(err, errlen, SERVER_ENOMEM, "out of memory");

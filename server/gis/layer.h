@@ -22,6 +22,9 @@ typedef struct gis_layer gis_layer;
  *  every failure is reported through err). Call before any other function. */
 void gis_init(void);
 
+/** GDAL's last message (CPLGetLastErrorMsg), or `fallback` when it said nothing. */
+const char *gis_gdal_reason(const char *fallback);
+
 /** Opens the layer of path that is named `prefer` (case-insensitive) when the file
  *  has one, else its first layer; drivers (NULL: any) restricts the formats tried
  *  ({"CSV", NULL}). crs, when not NULL, replaces the layer's own CRS (any text PROJ
