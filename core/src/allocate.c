@@ -34,8 +34,7 @@ static int push_sprout(sylva_world *w, int32_t slot, int32_t stem, int32_t n, do
  * in the crown, f = 1 + (lateral_reach - 1) min(1, (top - z) / crown height), top the
  * stem's height at the season's start, and no more than the full reach's cap (the
  * rounded caps are not monotone in f; docs/model.md, "Species in years"). */
-static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int local,
-                          int32_t full) {
+static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int32_t full) {
   const sylva__stem *st = &w->stems[stem];
   const sylva__species *sp = &w->species[st->species];
   double reach = sp->def.lateral_reach;
@@ -45,7 +44,7 @@ static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int loc
   double below = st->root[2] + h - w->nodes.z[n];
   double share = depth > 0.0 ? below / depth : 1.0;
   share = share < 0.0 ? 0.0 : share > 1.0 ? 1.0 : share;
-  int32_t c = sylva__scaled_cap(sp, local, 1.0 + (reach - 1.0) * share);
+  int32_t c = sylva__clock_cap(sp, st->clock, w->clock_next.data[stem], 1.0 + (reach - 1.0) * share);
   return c < full ? c : full;
 }
 
@@ -127,7 +126,7 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
       w->work_r.data[w->work_r.len++] = r_i;
     } else if (apex || !(s->flags[n] & SYLVA__NODE_SCAR)) {
       double y = floor(r_i / d->node_cost);
-      int32_t c = trunk ? cap : graded_cap(w, stem, n, local, cap);
+      int32_t c = trunk ? cap : graded_cap(w, stem, n, cap);
       int32_t grow = y < (double)c ? (int32_t)y : c;
       if (grow >= 1) {
         int rc = push_sprout(w, n, stem, grow, r_i, apex);
@@ -160,6 +159,49 @@ static int cmp_sprout(const void *a, const void *b) {
   return (x->slot > y->slot) - (x->slot < y->slot);
 }
 
+/* The leader's answer to light (docs/model.md, "Stands"): the share of a season its
+ * clock advances at light l in the voxel of its highest node, l (1 + K) / (l + K),
+ * 1 in full light (a site's sky gives open ground 1 to within rounding) and for
+ * K = 0. */
+static double light_response(double l, double K) {
+  if (!(K > 0.0) || l >= 1.0 - 1e-9) return 1.0;
+  if (!(l > 0.0)) return 0.0;
+  return l * (1.0 + K) / (l + K);
+}
+
+/* Every stem's clock after this season into clock_next: its vigour times its
+ * leader's answer to the light at its highest node. A dead stem's clock stands.
+ * Committed by the step once it can no longer fail. */
+static int season_clocks(sylva_world *w) {
+  sylva__skeleton *s = &w->nodes;
+  if (SYLVA__VEC_RESERVE(w->clock_next, (size_t)w->stem_count) ||
+      SYLVA__VEC_RESERVE(w->stem_high, (size_t)w->stem_count))
+    return SYLVA_ENOMEM;
+  int32_t *high = w->stem_high.data;
+  bool any = false;
+  for (int k = 0; k < w->stem_count; k++) {
+    high[k] = -1;
+    any = any || w->species[w->stems[k].species].def.height_light > 0.0;
+  }
+  for (size_t i = 0; any && i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    int32_t k = s->stem[i];
+    if (high[k] < 0 || s->z[i] > s->z[high[k]]) high[k] = (int32_t)i;
+  }
+  for (int k = 0; k < w->stem_count; k++) {
+    const sylva__stem *st = &w->stems[k];
+    double f = 1.0;
+    if (high[k] >= 0) {
+      int v[3];
+      sylva__node_voxel(w, high[k], v);
+      f = light_response(sylva__grid_light(&w->grid, v),
+                         w->species[st->species].def.height_light);
+    }
+    w->clock_next.data[k] = sylva__stem_dead(st) ? st->clock : st->clock + st->rate * f;
+  }
+  return SYLVA_OK;
+}
+
 int sylva__allocate(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   w->sprouts.len = 0;
@@ -170,12 +212,15 @@ int sylva__allocate(sylva_world *w, int iteration) {
     return SYLVA_ENOMEM;
   int32_t *caps = w->caps.data, *lateral = caps + w->stem_count;
   bool any_none = false;
+  int rc = season_clocks(w);
+  if (rc) return rc;
   for (int k = 0; k < w->stem_count; k++) {
     const sylva__stem *st = &w->stems[k];
-    int local = sylva__stem_local(st, iteration);
     const sylva__species *sp = &w->species[st->species];
-    caps[k] = st->finished ? 0 : sylva__species_cap(sp, local);
-    lateral[k] = st->finished ? 0 : sylva__scaled_cap(sp, local, sp->def.lateral_reach);
+    double t0 = st->clock, t1 = w->clock_next.data[k];
+    bool grows = !st->finished && !sylva__stem_dead(st);
+    caps[k] = grows ? sylva__clock_cap(sp, t0, t1, 1.0) : 0;
+    lateral[k] = grows ? sylva__clock_cap(sp, t0, t1, sp->def.lateral_reach) : 0;
   }
   /* stems that stop at this iteration (phase 2) grow nothing */
   for (size_t i = 0; i < w->finishing.len; i++) {
@@ -190,7 +235,7 @@ int sylva__allocate(sylva_world *w, int iteration) {
     if ((caps[k] <= 0 && lateral[k] <= 0) ||
         w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM)
       continue;
-    int rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k], lateral[k]);
+    rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k], lateral[k]);
     if (rc) return rc;
   }
   if (any_none) {

@@ -30,6 +30,8 @@ static void check_node(const sylva_world *w, size_t i) {
   int v[3];
   SYLVA_ASSERT(sylva__grid_voxel(&w->grid, s->x[i], s->y[i], s->z[i], v));
   SYLVA_ASSERT(sylva__grid_occupant(&w->grid, v) == s->stem[i]);
+  /* a dead stem's nodes are bare, and only theirs */
+  SYLVA_ASSERT(((s->flags[i] & SYLVA__NODE_BARE) != 0) == (st->stats.died >= 0));
   if (parent < 0) {
     SYLVA_ASSERT(st->root_slot == slot && s->depth[i] == 0 && !(s->flags[i] & SYLVA__NODE_LATERAL));
   } else {
@@ -83,7 +85,12 @@ static void check_stems(const sylva_world *w) {
       SYLVA_ASSERT(st->born <= w->iteration &&
                    (st->born >= 0 || (w->species[st->species].def.years &&
                                       st->born >= w->iteration - SYLVA_MAX_AGE - 200)));
-      SYLVA_ASSERT(st->root_slot >= 0 && (size_t)st->root_slot < w->nodes.count);
+      /* a stem has its root until its snag falls; a dead stem's nodes are bare */
+      SYLVA_ASSERT((st->root_slot < 0) == (st->stats.fallen >= 0));
+      SYLVA_ASSERT(st->stats.alive == (st->stats.died < 0) && st->stats.fallen <= w->iteration &&
+                   (st->stats.fallen < 0 || st->stats.fallen >= st->stats.died));
+      if (st->root_slot < 0) continue;
+      SYLVA_ASSERT((size_t)st->root_slot < w->nodes.count);
       SYLVA_ASSERT(w->nodes.stem[st->root_slot] == first + k);
     }
     first += pl->stem_count;

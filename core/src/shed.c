@@ -73,7 +73,7 @@ static int64_t lift_crowns(sylva_world *w, int iteration) {
   for (int k = 0; k < w->stem_count; k++) {
     double lift = w->species[w->stems[k].species].def.lift;
     int32_t root = w->stems[k].root_slot, tk = top[k];
-    if (!(lift > 0.0) || root < 0) continue;
+    if (!(lift > 0.0) || root < 0 || sylva__stem_dead(&w->stems[k])) continue;
     next[tk] = -1;
     for (int32_t n = tk; n != root; n = s->parent[n]) next[s->parent[n]] = n;
     double below = s->z[root] + lift * (s->z[tk] - s->z[root]);
@@ -85,6 +85,88 @@ static int64_t lift_crowns(sylva_world *w, int iteration) {
       if (doom_branch(w, (size_t)off, iteration)) return SYLVA_ENOMEM;
       doomed++;
     }
+  }
+  return doomed;
+}
+
+/* A uniform draw in [0, 1) for stem k's background death at `iteration`, from the
+ * world's seed, the plant's label and the stem alone (docs/model.md, "Stands"): the
+ * same whatever the order of the stems, and the same in a resumed run. */
+static double death_draw(const sylva_world *w, int k, int iteration) {
+  const sylva__stem *st = &w->stems[k];
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char *c = w->plants[st->plant].label; *c; c++)
+    h = (h ^ (unsigned char)*c) * 0x100000001b3ULL;
+  sylva__rng r;
+  sylva__rng_seed(&r, w->def.seed ^ h ^ ((uint64_t)(uint32_t)st->index << 32) ^
+                          ((uint64_t)(uint32_t)iteration * 0x9e3779b97f4a7c15ULL));
+  return sylva__rng_unit(&r);
+}
+
+/* Whole stems (docs/model.md, "Stands"), judged on their vigour (the mean light E of
+ * their leaves, in stats.vigour) and the background rate: a stem that dies loses its
+ * leaves at once, and with them its leaf-bearing twigs (n[i] > 0 for a node that bears
+ * leaves next season), which are doomed with their shade; its other nodes go bare. A
+ * dead stem whose snag has stood snag_years falls: every node, its root too. Returns
+ * the nodes doomed, or SYLVA_ENOMEM. */
+static int64_t stem_deaths(sylva_world *w, int iteration, const int32_t *n) {
+  sylva__skeleton *s = &w->nodes;
+  int64_t doomed = 0;
+  bool any = false;
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva__stem *st = &w->stems[k];
+    const sylva_species_def *d = &w->species[st->species].def;
+    if (sylva__stem_dead(st)) {
+      if (st->stats.fallen < 0 && iteration - st->stats.died >= d->snag_years) any = true;
+      continue;
+    }
+    bool dies = false;
+    if (d->mortality_light > 0.0) {
+      st->low = st->stats.vigour < d->mortality_light ? st->low + 1 : 0;
+      dies = st->low >= d->mortality_years;
+    }
+    if (!dies && d->mortality > 0.0) dies = death_draw(w, k, iteration) < d->mortality;
+    if (!dies) continue;
+    st->stats.alive = false;
+    st->stats.died = iteration;
+    st->stats.light = 0.0;
+    any = true;
+  }
+  if (!any) return 0;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+    sylva__stem *st = &w->stems[s->stem[i]];
+    if (!sylva__stem_dead(st) || st->stats.fallen >= 0) continue;
+    const sylva_species_def *d = &w->species[st->species].def;
+    int32_t p = s->parent[i];
+    bool falls = iteration - st->stats.died >= d->snag_years;
+    if (p >= 0 && (s->flags[p] & SYLVA__NODE_DOOMED)) {
+      s->flags[i] |= SYLVA__NODE_DOOMED;
+      doomed++;
+    } else if (falls && p < 0) { /* the root: the whole stem goes */
+      if (s->birth[i] != iteration) {
+        if (SYLVA__VEC_RESERVE(w->shed, w->shed.len + 1)) return SYLVA_ENOMEM;
+        w->shed.data[w->shed.len++] = s->id[i];
+      }
+      s->flags[i] |= SYLVA__NODE_DOOMED;
+      doomed++;
+    } else if (p >= 0 && st->stats.died == iteration && n[i] > 0 &&
+               sylva__leaf_age(s, d, i, iteration + 1) >= 0) {
+      /* a twig that bore leaves the season it died (n[i] > 0: its subtree has
+       * leaves, so it is not yet bare) */
+      if (doom_branch(w, i, iteration)) return SYLVA_ENOMEM;
+      doomed++;
+      continue;
+    }
+    if (!(s->flags[i] & SYLVA__NODE_DOOMED)) s->flags[i] |= SYLVA__NODE_BARE;
+  }
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva__stem *st = &w->stems[k];
+    if (!sylva__stem_dead(st) || st->stats.fallen >= 0 ||
+        iteration - st->stats.died < w->species[st->species].def.snag_years)
+      continue;
+    st->stats.fallen = iteration;
+    st->root_slot = -1; /* removed with the other doomed nodes below */
   }
   return doomed;
 }
@@ -114,22 +196,24 @@ int sylva__shed(sylva_world *w, int iteration) {
     sylva__stem *st = &w->stems[k];
     const sylva_species_def *sd = &w->species[st->species].def;
     st->shed_below = sd->r_s;
-    if (sd->acclimation > 0.0) {
-      int32_t root = st->root_slot;
-      double mean = n[root] > 0 ? w->q[root] / (sd->alpha * (double)n[root]) : 0.0;
-      if (mean < 1.0) st->shed_below = sd->r_s * pow(mean, sd->acclimation);
-    }
+    int32_t root = st->root_slot;
+    if (sylva__stem_dead(st) || root < 0) continue;
+    double mean = n[root] > 0 ? w->q[root] / (sd->alpha * (double)n[root]) : 0.0;
+    st->stats.vigour = mean; /* the stem's vigour (docs/model.md, "Stands") */
+    if (sd->acclimation > 0.0 && mean < 1.0) st->shed_below = sd->r_s * pow(mean, sd->acclimation);
   }
+  int64_t died = stem_deaths(w, iteration, n);
+  if (died < 0) return (int)died;
   int64_t lifted = lift_crowns(w, iteration);
   if (lifted < 0) return (int)lifted;
-  size_t doomed = (size_t)lifted;
+  size_t doomed = (size_t)lifted + (size_t)died;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE) || (s->flags[i] & SYLVA__NODE_DOOMED)) continue;
     int32_t p = s->parent[i];
     if (p >= 0 && (s->flags[p] & SYLVA__NODE_DOOMED)) {
       s->flags[i] |= SYLVA__NODE_DOOMED;
       doomed++;
-    } else if (s->flags[i] & SYLVA__NODE_LATERAL) {
+    } else if ((s->flags[i] & SYLVA__NODE_LATERAL) && !sylva__stem_dead(&w->stems[s->stem[i]])) {
       const sylva_species_def *d = &w->species[w->stems[s->stem[i]].species].def;
       /* mean relative light per leaf-bearing node; a branch without leaves is dead */
       double e = n[i] > 0 ? w->q[i] / (d->alpha * (double)n[i]) : 0.0;

@@ -8,7 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Every bit of a slot's flags byte. ALIVE, LATERAL and SCAR are the node's state and
+/* Every bit of a slot's flags byte. ALIVE, LATERAL, SCAR and BARE are the node's state and
  * are stored in snapshots; DOOMED exists only inside the shedding phase, which sets
  * it on the nodes it removes and clears the whole byte when it removes them, so no
  * node carries it between phases. */
@@ -17,8 +17,9 @@ enum {
   SYLVA__NODE_LATERAL = 2, /* first node of a lateral axis (its parent's lateral child) */
   SYLVA__NODE_SCAR = 4,    /* its lateral branch was shed: the bud does not sprout again */
   SYLVA__NODE_DOOMED = 8,  /* shedding: removed at the end of this phase */
+  SYLVA__NODE_BARE = 16,   /* its stem is dead: it bears no leaves (docs/model.md, "Stands") */
   /* the bits a live node carries between phases (and in a snapshot) */
-  SYLVA__NODE_STATE = SYLVA__NODE_ALIVE | SYLVA__NODE_LATERAL | SYLVA__NODE_SCAR
+  SYLVA__NODE_STATE = SYLVA__NODE_ALIVE | SYLVA__NODE_LATERAL | SYLVA__NODE_SCAR | SYLVA__NODE_BARE
 };
 
 typedef struct sylva__skeleton {

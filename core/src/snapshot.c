@@ -10,7 +10,11 @@
  * crown limit, FOLIAGE with foliage not the default, WOOD with heartwood, REACH
  * with a lateral reach, CARBON with a wood density or a biomass allometry (sylva/species_fields.h),
  * PRISMS when an obstacle is a prism: each obstacle then carries its footprint's
- * ring count (0 for a box), ring sizes and points. The voxel grid is not stored: shade
+ * ring count (0 for a box), ring sizes and points; STAND (which implies CARBON) when a
+ * species has a stand's keys, the world a stand_area or a stem a clock of its own or
+ * a death: the species records then have places 58 to 64, and after the conflicts
+ * come the stand_area and each stem's clock, vigour and death, and a dead stem's
+ * measures that its nodes no longer give (docs/model.md, "Stands"). The voxel grid is not stored: shade
  * is an exact integer sum, so re-stamping the live nodes rebuilds it bit for bit. */
 #include <math.h>
 #include <stddef.h>
@@ -26,7 +30,7 @@ static const char magic[8] = {'S', 'Y', 'L', 'V', 'A', 'S', 'N', 'P'};
 enum { HEADER = 32 };
 /* the header's flags */
 enum { SKY = 1, CONFLICTS = 2, SCALED = 4, CROWN = 8, FOLIAGE = 16, WOOD = 32, REACH = 64,
-       CARBON = 128, PRISMS = 256 };
+       CARBON = 128, PRISMS = 256, STAND = 512 };
 /* Places of the species record that every image has; those up to 42 only with SCALED,
  * 43 and 44 only with CROWN (which implies SCALED), 45 to 47 only with FOLIAGE (which
  * implies both), 48 only with WOOD (which implies all three), 49 only with REACH
@@ -37,11 +41,13 @@ enum {
   PLACES_BEFORE_FOLIAGE = 45,
   PLACES_BEFORE_WOOD = 48,
   PLACES_BEFORE_REACH = 49,
-  PLACES_BEFORE_CARBON = 50
+  PLACES_BEFORE_CARBON = 50,
+  PLACES_BEFORE_STAND = 58
 };
 
 static int species_places(uint32_t flags) {
-  return (flags & CARBON)    ? SYLVA_SPECIES_SNAPSHOT_FIELDS
+  return (flags & STAND)     ? SYLVA_SPECIES_SNAPSHOT_FIELDS
+         : (flags & CARBON)  ? PLACES_BEFORE_STAND
          : (flags & REACH)   ? PLACES_BEFORE_CARBON
          : (flags & WOOD)    ? PLACES_BEFORE_REACH
          : (flags & FOLIAGE) ? PLACES_BEFORE_WOOD
@@ -181,11 +187,26 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   writer o = {0};
   bool conflicts = has_conflicts(w);
   bool scaled = false, crown = false, foliage = false, wood = false, reach = false,
-       carbon = false;
+       carbon = false, stand = false;
   const sylva_species_def plain = sylva_default_species_def();
   for (int i = 0; i < w->species_count; i++) {
     const sylva_species_def *d = &w->species[i].given;
-    carbon = carbon || d->wood_density != 0.0 || d->biomass_form != 0 ||
+    stand = stand || d->stock_spread != plain.stock_spread ||
+            d->vigour_spread != plain.vigour_spread || d->height_light != plain.height_light ||
+            d->mortality_light != plain.mortality_light ||
+            d->mortality_years != plain.mortality_years || d->mortality != plain.mortality ||
+            d->snag_years != plain.snag_years;
+  }
+  stand = stand || w->def.stand_area != 0.0;
+  for (int k = 0; k < w->stem_count && !stand; k++) {
+    const sylva__stem *st = &w->stems[k];
+    double local = (double)(w->iteration - st->born);
+    stand = st->rate != 1.0 || st->clock != local || st->clock_prev != local - 1.0 ||
+            sylva__stem_dead(st) || st->low != 0;
+  }
+  for (int i = 0; i < w->species_count; i++) {
+    const sylva_species_def *d = &w->species[i].given;
+    carbon = carbon || stand || d->wood_density != 0.0 || d->biomass_form != 0 ||
              d->biomass_a != 0.0 || d->biomass_b != 0.0 || d->biomass_c != 0.0 ||
              d->biomass_p != 0.0 || d->biomass_q != 0.0 || d->biomass_factor != 1.0;
     reach = reach || carbon || d->lateral_reach != 1.0;
@@ -199,7 +220,7 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
   uint32_t flags =
       (w->def.sky_count ? SKY : 0) | (conflicts ? CONFLICTS : 0) | (scaled ? SCALED : 0) |
       (crown ? CROWN : 0) | (foliage ? FOLIAGE : 0) | (wood ? WOOD : 0) | (reach ? REACH : 0) |
-      (carbon ? CARBON : 0);
+      (carbon ? CARBON : 0) | (stand ? STAND : 0);
   bool prisms = false;
   for (int s = 0; s < w->grid.obstacle_slots; s++)
     prisms = prisms || (w->grid.obstacles[s].live && w->grid.obstacles[s].fp);
@@ -301,6 +322,25 @@ int sylva_snapshot_save(const sylva_world *w, uint8_t **data, size_t *size) {
       put_i32(&o, w->prunes.data[i].zone);
       put_i32(&o, w->prunes.data[i].every);
       put_i32(&o, w->prunes.data[i].from);
+    }
+  }
+  if (stand) {
+    put_f64(&o, w->def.stand_area);
+    for (int k = 0; k < w->stem_count; k++) {
+      const sylva__stem *st = &w->stems[k];
+      const sylva_stem_stats *m = &st->stats;
+      put_f64(&o, st->clock);
+      put_f64(&o, st->clock_prev);
+      put_f64(&o, st->rate);
+      put_i32(&o, st->low);
+      put_f64(&o, m->vigour);
+      put_i32(&o, m->died);
+      put_i32(&o, m->fallen);
+      if (!sylva__stem_dead(st)) continue;
+      /* what its nodes no longer give: the measures of its last season alive */
+      const double kept[] = {m->leaf_area, m->crown_area, m->wood_volume, m->biomass,
+                             m->biomass_model, m->carbon, m->co2};
+      for (size_t i = 0; i < sizeof kept / sizeof *kept; i++) put_f64(&o, kept[i]);
     }
   }
   if (o.failed) {
@@ -627,6 +667,42 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
     }
     w->reports = true;
   }
+  for (int k = 0; k < w->stem_count; k++) { /* as every stem stood before stands */
+    sylva__stem *st = &w->stems[k];
+    st->clock = (double)(iteration - st->born);
+    st->clock_prev = st->clock - 1.0;
+    st->rate = 1.0;
+    st->stats.alive = true;
+    st->stats.died = st->stats.fallen = -1;
+    st->stats.vigour = NAN;
+  }
+  if (flags & STAND) {
+    w->def.stand_area = get_f64(r);
+    if (!(w->def.stand_area >= 0.0) || !isfinite(w->def.stand_area)) r->bad = true;
+    for (int k = 0; k < w->stem_count && !r->bad; k++) {
+      sylva__stem *st = &w->stems[k];
+      sylva_stem_stats *m = &st->stats;
+      st->clock = get_f64(r);
+      st->clock_prev = get_f64(r);
+      st->rate = get_f64(r);
+      st->low = get_i32(r);
+      m->vigour = get_f64(r);
+      m->died = get_i32(r);
+      m->fallen = get_i32(r);
+      m->alive = m->died < 0;
+      if (r->bad) break;
+      if (!isfinite(st->clock) || !isfinite(st->clock_prev) || !(st->clock >= st->clock_prev) ||
+          !(st->rate > 0.0) || !isfinite(st->rate) || st->low < 0 || m->died < -1 ||
+          m->died > iteration || m->fallen < -1 || m->fallen > iteration ||
+          (m->fallen >= 0 && m->fallen < m->died) || (m->died < 0 && m->fallen >= 0))
+        SYLVA__FAIL(SYLVA_EBADIMAGE);
+      if (m->died < 0) continue;
+      double *kept[] = {&m->leaf_area, &m->crown_area, &m->wood_volume, &m->biomass,
+                        &m->biomass_model, &m->carbon, &m->co2};
+      for (size_t i = 0; i < sizeof kept / sizeof *kept; i++) *kept[i] = get_f64(r);
+    }
+    if (r->bad) SYLVA__FAIL(SYLVA_ETRUNCATED);
+  }
   if (r->pos != r->len) SYLVA__FAIL(SYLVA_EBADIMAGE);
   s->next_id = next_id;
   /* links that point forward must be answered by the child's parent */
@@ -638,8 +714,11 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
                                      !(s->flags[s->lateral_child[i]] & SYLVA__NODE_LATERAL)))
       SYLVA__FAIL(SYLVA_EBADIMAGE);
   }
-  for (int k = 0; k < w->stem_count; k++)
-    if (w->stems[k].root_slot < 0) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  for (int k = 0; k < w->stem_count; k++) /* a root until its snag fell, nodes bare once dead */
+    if ((w->stems[k].root_slot < 0) != (w->stems[k].stats.fallen >= 0)) SYLVA__FAIL(SYLVA_EBADIMAGE);
+  for (size_t i = 0; i < s->count; i++)
+    if (((s->flags[i] & SYLVA__NODE_BARE) != 0) != sylva__stem_dead(&w->stems[s->stem[i]]))
+      SYLVA__FAIL(SYLVA_EBADIMAGE);
   /* rebuild occupancy and shade from the live nodes */
   for (size_t i = 0; i < s->count; i++) {
     int v[3];
@@ -680,8 +759,10 @@ int sylva_snapshot_load(const uint8_t *data, size_t size, sylva_world **out) {
   for (int i = 0; i < 8; i++) payload |= (uint64_t)data[16 + i] << (8 * i);
   for (int i = 0; i < 8; i++) sum |= (uint64_t)data[24 + i] << (8 * i);
   if (version != SYLVA_SNAPSHOT_VERSION) return SYLVA_EVERSION;
-  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH | CARBON | PRISMS))
+  if (reserved & ~(uint32_t)(SKY | CONFLICTS | SCALED | CROWN | FOLIAGE | WOOD | REACH | CARBON |
+                             PRISMS | STAND))
     return SYLVA_EBADIMAGE;
+  if ((reserved & STAND) && !(reserved & CARBON)) return SYLVA_EBADIMAGE;
   if ((reserved & CROWN) && !(reserved & SCALED)) return SYLVA_EBADIMAGE;
   if ((reserved & FOLIAGE) && !(reserved & CROWN)) return SYLVA_EBADIMAGE;
   if ((reserved & WOOD) && !(reserved & FOLIAGE)) return SYLVA_EBADIMAGE;

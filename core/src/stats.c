@@ -116,11 +116,14 @@ void sylva__stats(sylva_world *w, int iteration) {
   /* first[k]: where stem k's leaf heights start in the scratch w->pipe */
   int32_t *first = w->stem_top.data;
   for (int k = 0; k <= w->stem_count; k++) first[k] = 0;
-  for (int k = 0; k < w->stem_count; k++) stats_reset(&w->stems[k]);
+  /* a dead stem keeps the measures of its last season alive (docs/model.md, "Stands") */
+  for (int k = 0; k < w->stem_count; k++)
+    if (!sylva__stem_dead(&w->stems[k])) stats_reset(&w->stems[k]);
   const sylva_species_def *d = NULL;
   for (size_t i = 0, stem = SIZE_MAX; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     sylva__stem *st = &w->stems[s->stem[i]];
+    if (sylva__stem_dead(st)) continue;
     if ((size_t)s->stem[i] != stem) { /* looked up again only when the stem changes */
       stem = (size_t)s->stem[i];
       d = &w->species[st->species].def;
@@ -143,18 +146,22 @@ void sylva__stats(sylva_world *w, int iteration) {
   /* each first[k] now ends stem k's heights: they start at first[k - 1] */
   for (int k = 0; k < w->stem_count; k++) {
     sylva__stem *st = &w->stems[k];
-    stats_shape(w, st);
     size_t from = k ? (size_t)first[k - 1] : 0, to = (size_t)first[k];
+    if (sylva__stem_dead(st)) {
+      st->stats.co2_sequestered = isnan(st->stats.co2) ? NAN : 0.0;
+      continue;
+    }
+    stats_shape(w, st);
     set_crown_base(st, crown_base_of(z + from, to - from, s->z[st->root_slot], st->ext[4],
                                      w->crown_bins.data));
     st->stats.age = stem_age(w, st, iteration);
     st->stats.leaf_area = (double)(to - from) * sylva__node_leaf_area(&w->species[st->species].def);
     st->stats.light = w->q[st->root_slot];
-    int local = sylva__stem_local(st, iteration);
-    st->stats.cap = local >= 1 ? sylva__species_cap(&w->species[st->species], local) : 0;
+    st->stats.cap = sylva__clock_cap(&w->species[st->species], st->clock_prev, st->clock, 1.0);
     sylva__stats_carbon(w, k, st->stats.co2); /* the co2 before this pass */
   }
   sylva__canopy(w);
+  sylva__stand(w);
 }
 
 void sylva__stats_planted(sylva_world *w, int stem) {
@@ -195,7 +202,9 @@ void sylva__stats_planted(sylva_world *w, int stem) {
 void sylva__stats_leaf_area(sylva_world *w) {
   const sylva__skeleton *s = &w->nodes;
   /* counted first, then multiplied, as sylva__stats does: the same bits */
-  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.leaf_area = 0.0;
+  /* a dead stem keeps its last measures (the image holds them) */
+  for (int k = 0; k < w->stem_count; k++)
+    if (!sylva__stem_dead(&w->stems[k])) w->stems[k].stats.leaf_area = 0.0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     sylva__stem *st = &w->stems[s->stem[i]];
@@ -204,7 +213,8 @@ void sylva__stats_leaf_area(sylva_world *w) {
     w->nodes.leaves[i] = (uint16_t)sylva__node_leaves(w, i);
   }
   for (int k = 0; k < w->stem_count; k++)
-    w->stems[k].stats.leaf_area *= sylva__node_leaf_area(&w->species[w->stems[k].species].def);
+    if (!sylva__stem_dead(&w->stems[k]))
+      w->stems[k].stats.leaf_area *= sylva__node_leaf_area(&w->species[w->stems[k].species].def);
 }
 
 /* ---- wood and carbon (docs/model.md, "Wood and carbon") ---------------------------- */
@@ -240,16 +250,20 @@ void sylva__stats_carbon(sylva_world *w, int stem, double prev_co2) {
 
 void sylva__stats_loaded(sylva_world *w) {
   const sylva__skeleton *s = &w->nodes;
-  for (int k = 0; k < w->stem_count; k++) w->stems[k].stats.wood_volume = 0.0;
+  for (int k = 0; k < w->stem_count; k++)
+    if (!sylva__stem_dead(&w->stems[k])) w->stems[k].stats.wood_volume = 0.0;
   for (size_t i = 0; i < s->count; i++)
-    if (s->flags[i] & SYLVA__NODE_ALIVE) add_wood(&w->stems[s->stem[i]], s, i);
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && !sylva__stem_dead(&w->stems[s->stem[i]]))
+      add_wood(&w->stems[s->stem[i]], s, i);
   for (int k = 0; k < w->stem_count; k++) {
     sylva_stem_stats *o = &w->stems[k].stats;
+    if (sylva__stem_dead(&w->stems[k])) continue; /* as the image holds them */
     double sequestered = o->co2_sequestered; /* as the image holds it */
     sylva__stats_carbon(w, k, NAN);
     o->co2_sequestered = isnan(o->co2) ? NAN : sequestered;
   }
   sylva__canopy(w);
+  sylva__stand(w);
 }
 
 /* ---- canopy (docs/model.md, "Canopy cover") ----------------------------------------- */
@@ -399,7 +413,9 @@ void sylva__canopy(sylva_world *w) {
       internode_xy(s, w->canopy[j], a, b);
       cover_segment(w, a, b, r, stamp, pass, &area, &cover);
     }
-    w->stems[k].stats.crown_area = (double)area * w->col_edge * w->col_edge;
+    /* a dead stem has no leaves to cover the ground; it keeps its last measures */
+    if (!sylva__stem_dead(&w->stems[k]))
+      w->stems[k].stats.crown_area = (double)area * w->col_edge * w->col_edge;
   }
   w->canopy_cover = w->open_cols > 0 ? (double)cover / (double)w->open_cols : 0.0;
 }

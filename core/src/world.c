@@ -34,6 +34,7 @@ int sylva_world_def_check(const sylva_world_def *def) {
   /* a sky: 1 to SYLVA_MAX_SKY finite directions pointing up, of weights >= 0 */
   if (def->sky_count < 0 || def->sky_count > SYLVA_MAX_SKY || (def->sky_count && !def->sky))
     return SYLVA_EINVAL;
+  if (!(def->stand_area >= 0.0) || !isfinite(def->stand_area)) return SYLVA_EINVAL;
   for (int i = 0; i < def->sky_count; i++) {
     const sylva_sky_dir *s = &def->sky[i];
     double len = sqrt(s->d[0] * s->d[0] + s->d[1] * s->d[1] + s->d[2] * s->d[2]);
@@ -51,6 +52,7 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
   sylva_world *w = sylva__calloc(1, sizeof *w);
   if (!w) return SYLVA_ENOMEM;
   w->def = *def;
+  w->stand_stems = -1;
   rc = sylva__grid_init(&w->grid, def->min, def->max, def->voxel);
   if (rc) {
     sylva__free(w);
@@ -177,6 +179,21 @@ int sylva__scaled_cap(const sylva__species *sp, int local, double f) {
    * would lose or gain up to half an internode a year */
   double a = floor(f * sylva_equation_value(&sp->def.growth, (double)local) + 0.5);
   double b = floor(f * sylva_equation_value(&sp->def.growth, (double)(local - 1)) + 0.5);
+  return a > b ? (int)(a - b) : 0;
+}
+
+int sylva__clock_cap(const sylva__species *sp, double t0, double t1, double f) {
+  double whole = floor(t1);
+  if (t1 == whole && t0 == whole - 1.0 && whole >= -1e9 && whole <= 1e9)
+    return sylva__scaled_cap(sp, (int)whole, f); /* a whole season: as before clocks */
+  if (!(t1 > t0)) return 0;
+  if (!(sp->def.ref_rho > 0.0)) {
+    /* the rate at the season's start over the part of a season the clock ran */
+    double r = f * (t1 - t0) * sylva_equation_rate(&sp->def.growth, t0);
+    return !(r > 0.0) ? 0 : r > 1e6 ? 1000000 : (int)floor(r + 0.5);
+  }
+  double a = floor(f * sylva_equation_value(&sp->def.growth, t1) + 0.5);
+  double b = floor(f * sylva_equation_value(&sp->def.growth, t0) + 0.5);
   return a > b ? (int)(a - b) : 0;
 }
 
@@ -448,6 +465,60 @@ static void clear_trunks(sylva_world *w, int (*cuts)[3], int ncuts) {
   compact_nodes(w);
 }
 
+/* ---- stems --------------------------------------------------------------------- */
+
+/* A standard normal drawn from r (Box-Muller), held within 3 standard deviations so
+ * that no plant is drawn absurdly vigorous or weak. */
+static double normal_draw(sylva__rng *r) {
+  double u1 = sylva__rng_unit(r), u2 = sylva__rng_unit(r);
+  double z = sqrt(-2.0 * log(1.0 - u1)) * cos(6.283185307179586 * u2);
+  return z < -3.0 ? -3.0 : z > 3.0 ? 3.0 : z;
+}
+
+/* A plant's draws (docs/model.md, "Stands"), from the world's seed and its label
+ * alone, so that neither the order of planting nor the world's generator changes
+ * them: its vigour (the clock's advance per season in full light, lognormal with
+ * vigour_spread) and the rate its stock grew at in the nursery, chosen so that the
+ * planted height's spread is stock_spread (the height's elasticity in the clock at
+ * the planting's `seasons` turns the one into the other). 1 and 1 without spreads. */
+static void plant_draws(const sylva_world *w, const sylva__species *sp, const char *label,
+                        int seasons, double *stock, double *vigour) {
+  const sylva_species_def *d = &sp->def;
+  *stock = *vigour = 1.0;
+  if (!(d->vigour_spread > 0.0) && !(d->stock_spread > 0.0)) return;
+  sylva__rng r;
+  sylva__rng_seed(&r, w->def.seed ^ (uint64_t)label_hash(label) ^ 0x7669676f7572ULL);
+  double zv = normal_draw(&r), zs = normal_draw(&r);
+  *vigour = exp(d->vigour_spread * zv);
+  if (d->stock_spread > 0.0 && seasons > 0) {
+    double t = (double)seasons, x = sylva_equation_value(&d->growth, t);
+    double e = x > 0.0 ? t * sylva_equation_rate(&d->growth, t) / x : 1.0;
+    if (!(e > 0.05)) e = 0.05;
+    *stock = exp(d->stock_spread * zs / e);
+  }
+}
+
+/* Starts stem `index` of plant pid, alive, planted at world iteration `born` with its
+ * clock at `clock` seasons, advancing `rate` a season in full light. */
+static sylva__stem *new_stem(sylva_world *w, int pid, int index, int species, int32_t born,
+                             const double root[3], double clock, double rate) {
+  sylva__stem *st = &w->stems[w->stem_count++];
+  memset(st, 0, sizeof *st);
+  st->plant = pid;
+  st->index = index;
+  st->species = species;
+  st->born = born;
+  st->root_slot = -1;
+  memcpy(st->root, root, sizeof st->root);
+  st->clock = clock;
+  st->clock_prev = clock - 1.0;
+  st->rate = rate;
+  st->stats.alive = true;
+  st->stats.died = st->stats.fallen = -1;
+  st->stats.vigour = NAN;
+  return st;
+}
+
 /* ---- the nursery --------------------------------------------------------------- */
 
 /* Grows the plant alone under the open sky for `seasons` iterations, in a world of its
@@ -455,7 +526,7 @@ static void clear_trunks(sylva_world *w, int (*cuts)[3], int ncuts) {
  * Its generator is seeded from the world's seed and the plant's label, so the
  * nursery draws nothing from w's generator and a plant's stock depends only on them. */
 static int grow_in_nursery(const sylva_world *w, const sylva_plant_def *def, int seasons,
-                           sylva_world **out) {
+                           double stock_rate, sylva_world **out) {
   const sylva__species *sp = &w->species[def->species];
   sylva_world_def nd = sylva_default_world_def();
   double reach = sylva_equation_limit(&sp->def.growth) * sp->def.rho;
@@ -479,11 +550,15 @@ static int grow_in_nursery(const sylva_world *w, const sylva_plant_def *def, int
   if (rc) return rc;
   sylva_species_def stock = sp->given;
   stock.nursery = 0; /* the nursery's own plant starts as a seedling */
+  /* the nursery's tree neither dies nor draws: the outer world drew its stock's rate */
+  stock.mortality = stock.mortality_light = 0.0;
+  stock.stock_spread = stock.vigour_spread = 0.0;
   int sp_id = sylva_world_add_species(n, &stock, sp->label);
   sylva_plant_def pd = *def;
   pd.species = sp_id;
   pd.age = 0;
   rc = sp_id < 0 ? sp_id : sylva_world_add_plant(n, &pd, NULL);
+  for (int k = 0; rc >= 0 && k < n->stem_count; k++) n->stems[k].rate = stock_rate;
   for (int t = 0; rc >= 0 && t < seasons; t++) {
     const sylva_journal *j;
     rc = sylva_world_step(n, &j);
@@ -512,7 +587,12 @@ static int transplant(sylva_world *w, const sylva_world *n, int first_stem, int 
   int rc = SYLVA_OK;
   int32_t shift = (int32_t)(w->iteration - seasons);
   /* planted `seasons` ago: each node's shade follows its local birth iteration */
-  for (int k = 0; k < n->stem_count; k++) w->stems[first_stem + k].born = shift;
+  for (int k = 0; k < n->stem_count; k++) {
+    sylva__stem *st = &w->stems[first_stem + k];
+    st->born = shift;
+    st->clock = n->stems[k].clock; /* the stock's clock goes on where it stood */
+    st->clock_prev = n->stems[k].clock_prev;
+  }
   for (size_t i = 0; i < ns->count && !rc; i++) {
     map[i] = -1;
     if (!(ns->flags[i] & SYLVA__NODE_ALIVE)) continue;
@@ -580,6 +660,7 @@ static int finish_plant(sylva_world *w, const sylva_plant_def *def, int stems) {
     w->nodes.leaves[i] = (uint16_t)sylva__node_leaves(w, i);
   for (int r = 0; r < stems; r++) sylva__stats_planted(w, pl->first_stem + r);
   sylva__canopy(w);
+  sylva__stand(w);
   sylva__conflicts(w, w->iteration);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   return pid;
@@ -656,18 +737,14 @@ static int add_measured(sylva_world *w, const sylva_plant_def *def, int *bad) {
   set_mark(w);
   /* its stems count the seasons it has grown: a years species' cap goes on from there */
   int32_t born = (int32_t)w->iteration - (sp->years ? sp->nursery + def->age : 0);
+  double stock, vigour;
+  plant_draws(w, &w->species[def->species], def->label, 0, &stock, &vigour);
   for (int i = 0; i < def->node_count && !rc; i++) {
     const sylva_plant_node *d = &def->nodes[i];
     int stem = d->parent < 0 ? w->stem_count : w->nodes.stem[map[d->parent]];
-    if (d->parent < 0) {
-      sylva__stem *st = &w->stems[w->stem_count++];
-      memset(st, 0, sizeof *st);
-      st->plant = pid;
-      st->index = stem - w->mark.stem_count;
-      st->species = def->species;
-      st->born = born;
-      memcpy(st->root, d->p, sizeof st->root);
-    }
+    if (d->parent < 0)
+      new_stem(w, pid, stem - w->mark.stem_count, def->species, born, d->p,
+               (double)(w->iteration - born), vigour);
     int32_t slot = sylva__add_node(w, d->parent < 0 ? -1 : map[d->parent], d->lateral != 0, d->p,
                                    stem, w->iteration + d->birth);
     if (slot < 0) { /* memory, or a voxel its own other stem holds */
@@ -731,21 +808,16 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       (ncuts && reserve_scratch(w)))
     rc = SYLVA_ENOMEM;
   int pid = w->plant_count;
+  double stock, vigour;
+  plant_draws(w, &w->species[def->species], def->label, seasons, &stock, &vigour);
   sylva_world *nursery = NULL;
-  if (!rc && seasons > 0) rc = grow_in_nursery(w, def, seasons, &nursery);
+  if (!rc && seasons > 0) rc = grow_in_nursery(w, def, seasons, stock, &nursery);
   if (!rc && ncuts) clear_trunks(w, cuts, ncuts);
   sylva__free(taken);
   if (rc) return rc;
   set_mark(w);
-  for (int r = 0; r < def->root_count && nursery; r++) {
-    sylva__stem *st = &w->stems[w->stem_count++];
-    memset(st, 0, sizeof *st);
-    st->plant = pid;
-    st->index = r;
-    st->species = def->species;
-    st->root_slot = -1;
-    memcpy(st->root, def->roots[r], sizeof st->root);
-  }
+  for (int r = 0; r < def->root_count && nursery; r++)
+    new_stem(w, pid, r, def->species, w->iteration, def->roots[r], 0.0, vigour);
   if (nursery) {
     int rc = transplant(w, nursery, w->mark.stem_count, seasons);
     sylva_world_destroy(nursery);
@@ -755,14 +827,8 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
     }
   }
   for (int r = 0; r < def->root_count && seasons == 0; r++) {
-    int s = w->stem_count++;
-    sylva__stem *st = &w->stems[s];
-    memset(st, 0, sizeof *st);
-    st->plant = pid;
-    st->index = r;
-    st->species = def->species;
-    st->born = w->iteration;
-    memcpy(st->root, def->roots[r], sizeof st->root);
+    int s = w->stem_count;
+    sylva__stem *st = new_stem(w, pid, r, def->species, w->iteration, def->roots[r], 0.0, vigour);
     int32_t prev = -1;
     for (int k = 0; k <= sp->initial_nodes; k++) {
       double p[3] = {st->root[0], st->root[1], st->root[2] + sp->rho * k};
@@ -837,7 +903,8 @@ int sylva_world_prune_at(const sylva_world *w, int i, sylva_prune_def *out) {
 static void compact_nodes(sylva_world *w) {
   if (w->nodes.count == w->nodes.live) return;
   sylva__skeleton_compact(&w->nodes, w->remap);
-  for (int s = 0; s < w->stem_count; s++) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
+  for (int s = 0; s < w->stem_count; s++) /* a fallen stem has no root */
+    if (w->stems[s].root_slot >= 0) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
 }
 
 int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[3],
@@ -870,6 +937,7 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
     if (T == 0) {
       for (int k = 0; k < w->stem_count; k++) sylva__stats_planted(w, k);
       sylva__canopy(w);
+      sylva__stand(w);
     } else
       sylva__stats(w, T);
   }
@@ -982,7 +1050,7 @@ static void stop_phase(sylva_world *w, int T) {
   w->finishing.len = 0;
   for (int s = 0; s < w->stem_count; s++) {
     const sylva__stem *st = &w->stems[s];
-    if (!st->finished &&
+    if (!st->finished && !sylva__stem_dead(st) &&
         sylva__species_stops(&w->species[st->species], sylva__stem_local(st, T)))
       w->finishing.data[w->finishing.len++] = s;
   }
@@ -991,6 +1059,10 @@ static void stop_phase(sylva_world *w, int T) {
 /* The phases after the shoots, which cannot fail once reserve_rest has succeeded. */
 static int finish_step(sylva_world *w, int T) {
   sylva_journal *j = &w->journal;
+  for (int k = 0; k < w->stem_count; k++) { /* the season's clocks (allocation) */
+    w->stems[k].clock_prev = w->stems[k].clock;
+    w->stems[k].clock = w->clock_next.data[k];
+  }
   for (size_t k = 0; k < w->finishing.len; k++) w->stems[w->finishing.data[k]].finished = true;
   double t3 = now(w);
   int rc = sylva__radii(w, T);
@@ -1029,6 +1101,7 @@ static int finish_step(sylva_world *w, int T) {
   sylva__conflicts(w, T);
   for (int s = 0; s < w->stem_count; s++) w->stats.data[s] = w->stems[s].stats;
   j->canopy_cover = w->canopy_cover;
+  j->stand = w->stand;
   /* Keep the skeleton dense after every step: slots are node order, so queries
    * index live nodes directly. */
   compact_nodes(w);
@@ -1101,7 +1174,7 @@ int sylva_world_iteration(const sylva_world *w) { return w->iteration; }
 
 bool sylva_world_finished(const sylva_world *w) {
   for (int s = 0; s < w->stem_count; s++)
-    if (!w->stems[s].finished) return false;
+    if (!w->stems[s].finished && !sylva__stem_dead(&w->stems[s])) return false;
   return true;
 }
 
@@ -1269,8 +1342,19 @@ uint64_t sylva_world_hash(const sylva_world *w) {
     h = fnv(h, &s->flags[i], 1);
   }
   for (int i = 0; i < w->stem_count; i++) {
-    h = fnv(h, &w->stems[i].finished, sizeof(bool));
-    h = fnv(h, &w->stems[i].stats.light, sizeof(double));
+    const sylva__stem *st = &w->stems[i];
+    h = fnv(h, &st->finished, sizeof(bool));
+    h = fnv(h, &st->stats.light, sizeof(double));
+    /* a stem's clock, vigour and death where they are its own (docs/model.md, "Stands");
+     * a stem that grows a season each season and lives hashes as before stands */
+    double local = (double)(w->iteration - st->born);
+    if (st->rate != 1.0 || st->clock != local || st->low || sylva__stem_dead(st)) {
+      h = fnv(h, &st->clock, sizeof st->clock);
+      h = fnv(h, &st->rate, sizeof st->rate);
+      h = fnv(h, &st->low, sizeof st->low);
+      h = fnv(h, &st->stats.died, sizeof st->stats.died);
+      h = fnv(h, &st->stats.fallen, sizeof st->stats.fallen);
+    }
   }
   for (int s = 0; s < w->grid.obstacle_slots; s++) {
     const sylva__obstacle *o = &w->grid.obstacles[s];

@@ -40,6 +40,12 @@ typedef struct sylva__stem {
   sylva_stem_stats stats;
   double ext[5]; /* scratch of the stats pass: min x, max x, min y, max y, max z */
   double shed_below; /* scratch of shedding: the stem's threshold of E this iteration */
+  /* Stands (docs/model.md, "Stands"), kept in snapshots with the STAND flag */
+  double clock;      /* its time on its growth equation (its local iteration while
+                        every season counts one) */
+  double clock_prev; /* the clock before the last season grown */
+  double rate;       /* its vigour: the clock's advance per season in full light */
+  int32_t low;       /* seasons in a row its vigour was below mortality_light */
 } sylva__stem;
 
 /** A node that sprouts this iteration. */
@@ -145,6 +151,9 @@ struct sylva_world {
                             scratch_cap) the same in slot order (2 x scratch_cap) */
   size_t scratch_cap;
   /* by stem */
+  SYLVA__VEC(double) clock_next;  /* allocation: each stem's clock after this season,
+                                     committed once the step cannot fail */
+  SYLVA__VEC(int32_t) stem_high;  /* allocation: each stem's highest node (-1: none) */
   SYLVA__VEC(int32_t) finishing;  /* stop: the stems whose equation stops at this step;
                                      they grow nothing and are marked finished once the
                                      step can no longer fail */
@@ -195,7 +204,14 @@ struct sylva_world {
   int64_t open_cols;
   bool foot_dirty;
   double canopy_cover;
+  sylva_stand_stats stand; /* the stand's figures (stand.c), as after the last change */
+  double stand_area;       /* stand.c: the area of the stand_stems first stems' roots */
+  int stand_stems;         /* stems when stand_area was found, -1 before */
 };
+
+/** The stand's figures into w->stand, from the stems' measures (docs/model.md,
+ *  "Stands"). */
+void sylva__stand(sylva_world *w);
 
 /** Most cells of the canopy's floor grid. */
 #define SYLVA__CANOPY_MAX_COLS (1 << 22)
@@ -227,6 +243,12 @@ int sylva__species_cap(const sylva__species *sp, int local);
 /* The cap of f times the leader's path: a shoot off the trunk with the reach f
  *  (allocate.c); f = 1 is c(T). */
 int sylva__scaled_cap(const sylva__species *sp, int local, double f);
+/** The cap of f times the leader's path over a season that takes the stem's clock
+ *  from t0 to t1 (docs/model.md, "Stands"); with t1 = t0 + 1 = local, it is
+ *  sylva__scaled_cap(sp, local, f). */
+int sylva__clock_cap(const sylva__species *sp, double t0, double t1, double f);
+/** Is the stem dead (docs/model.md, "Stands")? */
+static inline bool sylva__stem_dead(const sylva__stem *st) { return st->stats.died >= 0; }
 /** Does a stem of this species stop growing at local iteration T ("Stop")? */
 bool sylva__species_stops(const sylva__species *sp, int local);
 /** Height bins of the crown base's measure for a world of this height (stats.c). */
@@ -242,6 +264,7 @@ static inline bool sylva__has_bud(const sylva__species *sp, int32_t depth) {
  *  does (docs/model.md, "Species in years"). */
 static inline int sylva__leaf_age(const sylva__skeleton *s, const sylva_species_def *d, size_t i,
                                   int T) {
+  if (s->flags[i] & SYLVA__NODE_BARE) return -1; /* a dead stem's */
   int age = T - s->birth[i];
   if (age <= d->leaf_age) return age;
   return d->years && s->axis_child[i] < 0 ? 1 : -1;

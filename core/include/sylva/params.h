@@ -86,6 +86,19 @@ typedef struct sylva_species_def {
   double biomass_q;
   double biomass_factor;   /**< (0, 1]: times the allometry (0.8 for a rural equation on
                                 an open-grown tree) */
+  /* Stands (docs/model.md, "Stands"): trees that differ and trees that die. All zero
+   * (mortality_years and snag_years aside) for species that grow as before. */
+  double stock_spread;     /**< 0..1: the spread of planted stock, as the coefficient of
+                                variation of its height (nursery) */
+  double vigour_spread;    /**< 0..2: the standard deviation of the log of a plant's
+                                vigour, its growth time per season */
+  double height_light;     /**< >= 0: K of the leader's light response l (1 + K) / (l + K)
+                                (0: height growth does not answer light) */
+  double mortality_light;  /**< 0..1: a stem whose leaves' mean relative light stays below
+                                this for mortality_years seasons dies (0: never) */
+  int mortality_years;     /**< seasons of low light before a stem dies */
+  double mortality;        /**< 0..1: background probability of death per season */
+  int snag_years;          /**< seasons a dead stem stands as a snag before it falls */
   int years;               /**< 1: one iteration is one growing season; stems report ages */
   int nursery;             /**< years a plant of age 0 has grown in the nursery, in open
                                 light, before it is planted (years species only) */

@@ -34,7 +34,8 @@
  * the FOLIAGE flag (a species whose foliage is not the default), place 48 (heartwood)
  * only in images with the WOOD flag, place 49 (lateral_reach) only in images with the
  * REACH flag, places 50 to 57 (wood_density and the biomass allometry) only in images
- * with the CARBON flag, so images of worlds without such species keep their bytes. The foliage
+ * with the CARBON flag, places 58 to 64 (the stand's: stock_spread to snag_years) only
+ * in images with the STAND flag, so images of worlds without such species keep their bytes. The foliage
  * changes no growth: it is what the leaf-bearing nodes carry (leaf_area, pictures,
  * glTF).
  *
@@ -101,6 +102,13 @@
   X(biomass_p,     double, 0,     -100, 100,    SYLVA_FIELD_CLOSED,        species, 55)          \
   X(biomass_q,     double, 0,     -100, 100,    SYLVA_FIELD_CLOSED,        species, 56)          \
   X(biomass_factor, double, 1,    0,    1,      SYLVA_FIELD_MIN_EXCLUSIVE, species, 57)          \
+  X(stock_spread,  double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 58)          \
+  X(vigour_spread, double, 0,     0,    2,      SYLVA_FIELD_CLOSED,        species, 59)          \
+  X(height_light,  double, 0,     0,    1000,   SYLVA_FIELD_CLOSED,        species, 60)          \
+  X(mortality_light, double, 0,   0,    1,      SYLVA_FIELD_CLOSED,        species, 61)          \
+  X(mortality_years, int,  5,     1,    1000,   SYLVA_FIELD_CLOSED,        species, 62)          \
+  X(mortality,     double, 0,     0,    1,      SYLVA_FIELD_CLOSED,        species, 63)          \
+  X(snag_years,    int,    5,     0,    1000,   SYLVA_FIELD_CLOSED,        species, 64)          \
   X(m0,            int,    20,    0,    1000,   SYLVA_FIELD_CLOSED,        markers, 32)          \
   X(m_min,         int,    4,     0,    1000,   SYLVA_FIELD_CLOSED,        markers, 33)          \
   X(cone_angle,    double, 60.0,  0,    180,    SYLVA_FIELD_MIN_EXCLUSIVE, markers, 24)          \
@@ -109,6 +117,6 @@
 
 /** Places in a snapshot's species record: the list's fields and the hand-written
  *  growth.p[3] and tropism[3]. */
-#define SYLVA_SPECIES_SNAPSHOT_FIELDS 58
+#define SYLVA_SPECIES_SNAPSHOT_FIELDS 65
 
 #endif

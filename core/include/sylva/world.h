@@ -60,6 +60,9 @@ typedef struct sylva_world_def {
    *  that reach it past the obstacles) times 1 - S. */
   const sylva_sky_dir *sky;
   int sky_count;
+  /** The stand's area, m^2, for its per-hectare figures (docs/model.md, "Stands");
+   *  0: the convex hull of the roots widened by half their mean spacing. */
+  double stand_area;
   /** Optional clock (seconds) used only to time phases; never affects results. */
   double (*clock)(void *ctx);
   void *clock_ctx;
@@ -180,7 +183,31 @@ typedef struct sylva_stem_stats {
   int64_t pruned; /**< nodes pruned at this iteration (by schedule or edit) */
   int cap;
   bool finished;
+  /* Stands (docs/model.md, "Stands") */
+  bool alive;      /**< false once it died; a dead stem keeps the measures of its last
+                        season alive */
+  int32_t died;    /**< the iteration it died, -1 while alive */
+  int32_t fallen;  /**< the iteration its snag fell (its nodes gone), -1 while standing */
+  double vigour;   /**< its leaves' mean relative light, Q / (alpha N) over its
+                        leaf-bearing nodes, as shedding judged it (NaN: none judged) */
 } sylva_stem_stats;
+
+/** The stand's figures after a step (docs/model.md, "Stands"): over the stems alive,
+ *  per hectare of the stand's area; NaN where a figure is null. */
+typedef struct sylva_stand_stats {
+  double area;            /**< m^2: the world def's stand_area, or the convex hull of the
+                               roots widened by half their mean spacing (NaN: fewer than
+                               two roots and no stand_area) */
+  int32_t alive;          /**< stems alive */
+  int32_t died;           /**< stems that died in this step */
+  double stems_per_ha;    /**< alive stems per hectare */
+  double basal_area;      /**< m^2/ha: the alive stems' cross-sections at breast height */
+  double qmd;             /**< cm: quadratic mean diameter of the stems with a dbh */
+  double dominant_height; /**< m: mean height of the 100 thickest stems per hectare (of
+                               all the alive stems where there are fewer) */
+  double sdi;             /**< Reineke's stand density index: stems_per_ha (qmd / 25)^1.605 */
+  double cv_height, cv_dbh; /**< coefficients of variation (population) */
+} sylva_stand_stats;
 
 /** A stem in a zone: the nodes inside now, and the iteration a node of the stem was
  *  first seen inside (pruned or not since). One per stem and zone it ever entered. */
@@ -228,6 +255,7 @@ typedef struct sylva_journal {
   const int32_t *order;                           /**< stem order of phase 4 (global stem indices) */
   sylva_conflicts conflicts;                      /**< zones and clearances after the step */
   double canopy_cover;                            /**< sylva_world_canopy_cover() after the step */
+  sylva_stand_stats stand;                        /**< sylva_world_stand() after the step */
   double phase_seconds[SYLVA_PHASE_COUNT];        /**< only with def.clock */
 } sylva_journal;
 
@@ -316,6 +344,9 @@ int sylva_world_stem_stats(const sylva_world *w, int stem, sylva_stem_stats *out
  *  solid obstacles that stand on it) under any stem's leaves, as after the last step,
  *  plant or prune (docs/model.md, "Canopy cover"); 0 when there is no open ground. */
 double sylva_world_canopy_cover(const sylva_world *w);
+/** The stand's figures as after the last step, plant or prune (docs/model.md,
+ *  "Stands"). */
+void sylva_world_stand(const sylva_world *w, sylva_stand_stats *out);
 /** The edge of the floor's cells, m (docs/model.md, "Canopy cover"). */
 double sylva_world_cell_edge(const sylva_world *w);
 /** The floor's cells under a stem's leaves, those its crown_area counts (docs/model.md,
