@@ -113,8 +113,40 @@ bool sylva_encode_years(const sylva_world *w) {
   return false;
 }
 
+bool sylva_encode_stand(const sylva_world *w) {
+  for (int i = 0; i < sylva_world_species_count(w); i++) {
+    const sylva_species_def *d = sylva_world_species(w, i);
+    if (d->years || d->mortality > 0.0 || d->mortality_light > 0.0) return true;
+  }
+  return false;
+}
+
 sylva__stats_form sylva__stats_form_of(const sylva_world *w, int start_year) {
-  return (sylva__stats_form){sylva_world_reports_conflicts(w), sylva_encode_years(w), start_year};
+  return (sylva__stats_form){sylva_world_reports_conflicts(w), sylva_encode_years(w), start_year,
+                             sylva_encode_stand(w)};
+}
+
+void sylva__put_stand(sylva__strbuf *b, const sylva_stand_stats *s, bool compact) {
+  sylva__strbuf_putc(b, '{');
+  put_key(b, true, "area", compact);
+  sylva__strbuf_fixed(b, s->area, 1);
+  put_key(b, false, "alive", compact);
+  sylva__strbuf_printf(b, "%" PRId32, s->alive);
+  put_key(b, false, "died", compact);
+  sylva__strbuf_printf(b, "%" PRId32, s->died);
+  const struct {
+    const char *key;
+    double v;
+    int decimals;
+  } f[] = {{"stems_per_ha", s->stems_per_ha, 1}, {"basal_area", s->basal_area, 3},
+           {"qmd", s->qmd, 2},   {"dominant_height", s->dominant_height, 3},
+           {"sdi", s->sdi, 1},   {"cv_height", s->cv_height, 4},
+           {"cv_dbh", s->cv_dbh, 4}};
+  for (size_t i = 0; i < sizeof f / sizeof *f; i++) {
+    put_key(b, false, f[i].key, compact);
+    sylva__strbuf_fixed(b, f[i].v, f[i].decimals);
+  }
+  sylva__strbuf_putc(b, '}');
 }
 
 void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_stem_stats *s,
@@ -180,6 +212,17 @@ void sylva__put_stem_stats(sylva__strbuf *b, const sylva_world *w, const sylva_s
   sylva__strbuf_printf(b, "%d", s->cap);
   put_key(b, false, "finished", compact);
   sylva__strbuf_puts(b, s->finished ? "true" : "false");
+  if (form->stand) { /* docs/model.md, "Stands" */
+    put_key(b, false, "alive", compact);
+    sylva__strbuf_puts(b, s->alive ? "true" : "false");
+    put_key(b, false, "died", compact); /* a calendar year in a run with a start year */
+    if (s->died >= 0)
+      sylva__strbuf_printf(b, "%" PRId32, s->died + form->start_year);
+    else
+      sylva__strbuf_puts(b, "null");
+    put_key(b, false, "vigour", compact);
+    sylva__strbuf_fixed(b, s->vigour, 4);
+  }
   if (form->conflicts) {
     sylva_conflicts c = sylva_world_stem_conflicts(w, sylva_world_stem_index(w, s->plant, s->stem));
     put_key(b, false, "zones", compact);
@@ -205,6 +248,10 @@ char *sylva_encode_stats_line(const sylva_world *w, const sylva_journal *j, doub
   }
   sylva__strbuf_puts(&b, "], \"canopy_cover\": "); /* docs/model.md, "Canopy cover" */
   sylva__strbuf_fixed(&b, j->canopy_cover, 4);
+  if (form.stand) {
+    sylva__strbuf_puts(&b, ", \"stand\": ");
+    sylva__put_stand(&b, &j->stand, false);
+  }
   sylva__strbuf_putc(&b, '}');
   return sylva__strbuf_finish(&b);
 }

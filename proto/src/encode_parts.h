@@ -30,7 +30,12 @@ typedef struct sylva__stats_form {
   bool conflicts; /**< pruned, zones, clearance (sylva_world_reports_conflicts) */
   bool years;     /**< age, crown_diameter, crown_height (sylva_encode_years) */
   int start_year; /**< 0, or the calendar year of iteration 0: zones' "first" in years */
+  bool stand;     /**< alive, died, vigour and the stand's figures (sylva_encode_stand) */
 } sylva__stats_form;
+
+/** The stand's figures as a JSON object {"area": ..., "alive": ..., ...}
+ *  (docs/model.md, "Stands"); null figures as null. */
+void sylva__put_stand(sylva__strbuf *b, const sylva_stand_stats *s, bool compact);
 
 /** The form of w's stats. */
 sylva__stats_form sylva__stats_form_of(const sylva_world *w, int start_year);

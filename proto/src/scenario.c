@@ -795,6 +795,7 @@ static sylva_world_def world_def_of(const sylva_scenario *s, double voxel) {
   memcpy(def.max, s->world_max, sizeof def.max);
   def.voxel = voxel;
   def.seed = s->seed;
+  def.stand_area = s->stand_area;
   return def;
 }
 
@@ -898,7 +899,8 @@ static int parse_site(sylva__parser *p, const cJSON *obj, sylva_scenario *s) {
 
 static const char *const top_keys[] = {"format",  "name",   "seed",      "iterations",
                                        "start_year", "world", "species", "plants",
-                                       "obstacles", "management", "light", "site"};
+                                       "obstacles", "management", "light", "site",
+                                       "stand_area"};
 
 static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_scenario *s) {
   int rc = sylva__want_object(p, root);
@@ -946,6 +948,14 @@ static int parse_top(sylva__parser *p, const cJSON *root, unsigned flags, sylva_
   if ((rc = sylva__read_integer(p, root, "start_year", 1, SYLVA_SCENARIO_MAX_YEAR, &given, &v)))
     return rc;
   s->start_year = (int)v;
+  if ((item = member(root, "stand_area"))) { /* m^2 (docs/model.md, "Stands") */
+    old = sylva__ptr_push(p, "stand_area");
+    rc = want_real(p, item, R_POSITIVE, &s->stand_area);
+    if (!rc && s->stand_area > 1e12)
+      rc = sylva__fail(p, "must be at most 1e12 m2, got %g", s->stand_area);
+    sylva__ptr_pop(p, old);
+    if (rc) return rc;
+  }
 
   /* species, before the plants that name them */
   if ((item = member(root, "species"))) {
@@ -1227,6 +1237,11 @@ char *sylva_scenario_json(const sylva_scenario *s) {
                        (unsigned long long)s->seed, s->iterations);
   if (s->start_year) /* given only: scenarios without it stay as they were */
     sylva__strbuf_printf(&b, "\n  \"start_year\": %d,", s->start_year);
+  if (s->stand_area > 0.0) { /* likewise */
+    sylva__strbuf_puts(&b, "\n  \"stand_area\": ");
+    sylva__strbuf_shortest(&b, s->stand_area);
+    sylva__strbuf_putc(&b, ',');
+  }
   sylva__strbuf_puts(&b, "\n  \"world\": {\"min\": ");
   put_vec3(&b, s->world_min);
   sylva__strbuf_puts(&b, ", \"max\": ");

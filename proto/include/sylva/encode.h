@@ -24,6 +24,9 @@ int sylva_fmt_shortest(char *buf, size_t n, double v);
 /** Whether the stats of w carry the measures of real species (cli.md): `age`,
  *  `crown_diameter` and `crown_height`, because some species of w counts in years. */
 bool sylva_encode_years(const sylva_world *w);
+/** Do w's lines give alive, died and vigour per stem and the stand's figures
+ *  (docs/model.md, "Stands")? A world with a species in years or with deaths. */
+bool sylva_encode_stand(const sylva_world *w);
 
 /** One line of `sylva run` (cli.md), without the newline:
  *  {"iteration": 7, "elapsed_ms": 12.5, "stems": [{"plant": "t1", "stem": 0, ...}]}

@@ -131,6 +131,8 @@ typedef struct sylva_scenario {
   int iterations; /**< the iteration limit; default 40 */
   int start_year; /**< the calendar year of iteration 0, 1 to SYLVA_SCENARIO_MAX_YEAR;
                        0 when not given */
+  double stand_area; /**< m^2 the stand's figures are per (docs/model.md, "Stands"); 0:
+                          the roots' widened hull */
   double world_min[3], world_max[3];
   double voxel;   /**< given, or rho/2 of the smallest rho in use */
   sylva_scenario_species *species;
