@@ -1,6 +1,7 @@
 /* The species library built into the binary (sylva/library.h), with the foliage of
  * data/species/foliage.csv added to its species (docs/species.md, "Foliage") and
- * the wood and carbon of data/species/carbon.csv (docs/model.md, "Wood and carbon"). The text is parsed
+ * the wood and carbon of data/species/carbon.csv (docs/model.md, "Wood and carbon") and
+ * the stand keys of data/species/stand.csv (docs/model.md, "Stands"). The text is parsed
  * at each lookup: it is small, and a parse per scenario keeps the library free of
  * shared state between the daemon's threads. */
 #include "sylva/library.h"
@@ -19,6 +20,8 @@ extern const char sylva__foliage_csv[];
 extern const size_t sylva__foliage_csv_len;
 extern const char sylva__carbon_csv[];
 extern const size_t sylva__carbon_csv_len;
+extern const char sylva__stand_csv[];
+extern const size_t sylva__stand_csv_len;
 
 const char *sylva_library_text(size_t *len) {
   if (len) *len = sylva__library_json_len;
@@ -81,21 +84,21 @@ static const char *const carbon_keys[] = {"wood_density", "biomass_form", "bioma
                                           "biomass_q",    "biomass_factor"};
 enum { CARBON_KEYS = sizeof carbon_keys / sizeof *carbon_keys };
 
-/* Adds the carbon table's row for `code` (data/species/carbon.csv, written by
- * scripts/carbon-table) to a library species object as its wood density and
- * biomass allometry, checked as any scenario's keys are (docs/model.md, "Wood and
- * carbon"). A code without a row keeps the defaults: no carbon. No field before the
- * table's last two holds a comma or a quote. 0, or SYLVA_ENOMEM. */
-static int add_carbon(cJSON *species, const char *code) {
-  const char *line = strchr(sylva__carbon_csv, '\n'); /* past the header */
-  size_t code_len = strlen(code);
+/* Sets a library species object's numeric `keys` from the row of `table` (a CSV
+ * text whose first column names the species) that starts with `name`, to be checked
+ * as any scenario's keys are. A name without a row keeps the defaults. No field
+ * before the row's last ones holds a comma or a quote. 0, or SYLVA_ENOMEM. */
+static int add_row(cJSON *species, const char *table, const char *name,
+                   const char *const *keys, int nkeys) {
+  const char *line = strchr(table, '\n'); /* past the header */
+  size_t name_len = strlen(name);
   for (; line; line = strchr(line, '\n')) {
     line++;
-    if (strncmp(line, code, code_len) != 0 || line[code_len] != ',') continue;
-    const char *f = line + code_len + 1;
-    for (int i = 0; i < CARBON_KEYS; i++) {
-      cJSON_DeleteItemFromObjectCaseSensitive(species, carbon_keys[i]);
-      if (!cJSON_AddNumberToObject(species, carbon_keys[i], strtod(f, NULL))) return SYLVA_ENOMEM;
+    if (strncmp(line, name, name_len) != 0 || line[name_len] != ',') continue;
+    const char *f = line + name_len + 1;
+    for (int i = 0; i < nkeys; i++) {
+      cJSON_DeleteItemFromObjectCaseSensitive(species, keys[i]);
+      if (!cJSON_AddNumberToObject(species, keys[i], strtod(f, NULL))) return SYLVA_ENOMEM;
       size_t k = strcspn(f, ",\n");
       if (f[k] != ',') return SYLVA_OK; /* a short row: the test suite catches it */
       f += k + 1;
@@ -103,6 +106,31 @@ static int add_carbon(cJSON *species, const char *code) {
     return SYLVA_OK;
   }
   return SYLVA_OK;
+}
+
+/* The carbon table's row for `code` (data/species/carbon.csv, written by
+ * scripts/carbon-table): the species' wood density and biomass allometry
+ * (docs/model.md, "Wood and carbon"); a code without a row has no carbon. */
+static int add_carbon(cJSON *species, const char *code) {
+  return add_row(species, sylva__carbon_csv, code, carbon_keys, CARBON_KEYS);
+}
+
+const char *sylva_library_stand_text(size_t *len) {
+  if (len) *len = sylva__stand_csv_len;
+  return sylva__stand_csv;
+}
+
+/* The stand table's columns that are species keys, in its order after the name. */
+static const char *const stand_keys[] = {"stock_spread",    "vigour_spread",   "height_light",
+                                         "mortality_light", "mortality_years", "snag_years"};
+
+/* The stand table's row for the species REGION:CODE (data/species/stand.csv, written
+ * by scripts/stand-table): how its plants differ and die (docs/model.md, "Stands"). */
+static int add_stand(cJSON *species, const char *region, const char *code) {
+  char name[64];
+  if (snprintf(name, sizeof name, "%s:%s", region, code) >= (int)sizeof name) return SYLVA_OK;
+  return add_row(species, sylva__stand_csv, name, stand_keys,
+                 (int)(sizeof stand_keys / sizeof *stand_keys));
 }
 
 int sylva_library_find(const char *name, sylva_species_def *out) {
@@ -120,6 +148,9 @@ int sylva_library_find(const char *name, sylva_species_def *out) {
                                                           : SYLVA_OK;
     if (!rc && cJSON_IsString(code) && cJSON_IsObject(species))
       rc = add_carbon(species, code->valuestring);
+    const cJSON *region = cJSON_GetObjectItemCaseSensitive(e, "region");
+    if (!rc && cJSON_IsString(code) && cJSON_IsString(region) && cJSON_IsObject(species))
+      rc = add_stand(species, region->valuestring, code->valuestring);
     if (rc) break;
     sylva_species_def d;
     rc = sylva__species_from_json(species, &d);

@@ -27,6 +27,9 @@ const char *sylva_library_foliage_text(size_t *len);
  *  equation_species,source`, one row per UTDB species code), NUL-terminated; *len (if
  *  given) receives its length. */
 const char *sylva_library_carbon_text(size_t *len);
+/** The stand table built in (data/species/stand.csv: how each library species' plants
+ *  differ and die, docs/model.md "Stands"), its length in *len. */
+const char *sylva_library_stand_text(size_t *len);
 
 /** The species named `name` ("utdb:REGION:CODE"), with the leaf_size, leaf_density
  *  and leaf_colour of its code's row of the foliage table and the wood density and
