@@ -126,6 +126,15 @@ sylva__stats_form sylva__stats_form_of(const sylva_world *w, int start_year) {
                              sylva_encode_stand(w)};
 }
 
+void sylva_stand_figures(const sylva_stand_stats *s, sylva_stand_figure out[SYLVA_STAND_FIGURES]) {
+  const sylva_stand_figure f[SYLVA_STAND_FIGURES] = {
+      {"stems_per_ha", s->stems_per_ha, 1}, {"basal_area", s->basal_area, 3},
+      {"qmd", s->qmd, 2},                   {"dominant_height", s->dominant_height, 3},
+      {"sdi", s->sdi, 1},                   {"cv_height", s->cv_height, 4},
+      {"cv_dbh", s->cv_dbh, 4}};
+  memcpy(out, f, sizeof f);
+}
+
 void sylva__put_stand(sylva__strbuf *b, const sylva_stand_stats *s, bool compact) {
   sylva__strbuf_putc(b, '{');
   put_key(b, true, "area", compact);
@@ -134,17 +143,11 @@ void sylva__put_stand(sylva__strbuf *b, const sylva_stand_stats *s, bool compact
   sylva__strbuf_printf(b, "%" PRId32, s->alive);
   put_key(b, false, "died", compact);
   sylva__strbuf_printf(b, "%" PRId32, s->died);
-  const struct {
-    const char *key;
-    double v;
-    int decimals;
-  } f[] = {{"stems_per_ha", s->stems_per_ha, 1}, {"basal_area", s->basal_area, 3},
-           {"qmd", s->qmd, 2},   {"dominant_height", s->dominant_height, 3},
-           {"sdi", s->sdi, 1},   {"cv_height", s->cv_height, 4},
-           {"cv_dbh", s->cv_dbh, 4}};
-  for (size_t i = 0; i < sizeof f / sizeof *f; i++) {
+  sylva_stand_figure f[SYLVA_STAND_FIGURES];
+  sylva_stand_figures(s, f);
+  for (size_t i = 0; i < SYLVA_STAND_FIGURES; i++) {
     put_key(b, false, f[i].key, compact);
-    sylva__strbuf_fixed(b, f[i].v, f[i].decimals);
+    sylva__strbuf_fixed(b, f[i].value, f[i].decimals);
   }
   sylva__strbuf_putc(b, '}');
 }

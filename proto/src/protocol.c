@@ -611,6 +611,14 @@ static void put_node_leaves(sylva__strbuf *b, const sylva_world *w) {
   sylva__strbuf_putc(b, ']');
 }
 
+/* The stand's figures after canopy_cover where the run's lines give them (docs/model.md,
+ * "Stands"). */
+static void put_stand(sylva__strbuf *b, const sylva__stats_form *form, const sylva_stand_stats *s) {
+  if (!form->stand) return;
+  sylva__strbuf_puts(b, ",\"stand\":");
+  sylva__put_stand(b, s, true);
+}
+
 char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
                          const char *ref) {
   sylva__strbuf b = {0};
@@ -640,6 +648,9 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int sta
   put_node_leaves(&b, w);
   sylva__strbuf_puts(&b, ",\"canopy_cover\":"); /* docs/model.md, "Canopy cover" */
   sylva__strbuf_fixed(&b, sylva_world_canopy_cover(w), 4);
+  sylva_stand_stats stand;
+  sylva_world_stand(w, &stand);
+  put_stand(&b, &form, &stand);
   put_ref_and_close(&b, ref);
   return sylva__strbuf_finish(&b);
 }
@@ -681,6 +692,7 @@ char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylv
   }
   sylva__strbuf_puts(&b, "],\"canopy_cover\":");
   sylva__strbuf_fixed(&b, j->canopy_cover, 4);
+  put_stand(&b, &form, &j->stand);
   sylva__strbuf_putc(&b, '}');
   return sylva__strbuf_finish(&b);
 }

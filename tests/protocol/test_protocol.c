@@ -1513,6 +1513,89 @@ static void test_years_messages(void) {
   sylva_world_destroy(plain);
 }
 
+/* The messages of a stand (docs/model.md, "Stands"): six oaks with a background
+ * mortality. The snapshot and each delta carry "stand" after canopy_cover, the line's
+ * stand object in compact form, and their stats are the line's stems (alive, died and
+ * vigour among them); some stems die. A world without stands carries none. */
+static void test_stand_messages(void) {
+  sylva_species_def sp;
+  sylva_world *w = oak_world(&sp);
+  if (!w) return;
+  sp.mortality = 0.05;
+  CHECK_INT(sylva_world_add_species(w, &sp, "frail"), 1);
+  for (int k = 0; k < 6; k++) {
+    const double root[][3] = {{-2.5 + (k % 3) * 2.5, -1.5 + (k / 3) * 3.0, 0}};
+    char label[8];
+    snprintf(label, sizeof label, "p%d", k);
+    sylva_plant_def p = {1, label, root, 1, 0, NULL, 0};
+    CHECK_INT(sylva_world_add_plant(w, &p, NULL), k);
+  }
+  CHECK(sylva_encode_stand(w));
+  char *snap = sylva_msg_snapshot(4, 10, w, 0, "\"s\"");
+  cJSON *sj = VALID_JSON(snap);
+  const cJSON *stand = cJSON_GetObjectItemCaseSensitive(sj, "stand");
+  CHECK(snap && strstr(snap, ",\"stand\":{\"area\":") && strstr(snap, "},\"ref\":\"s\"}"));
+  CHECK(snap && strstr(snap, ",\"canopy_cover\":") < strstr(snap, ",\"stand\":"));
+  CHECK_INT(num_of(stand, "alive"), 6);
+  CHECK_INT(num_of(stand, "died"), 0);
+  CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(
+      cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(sj, "stats"), 0), "alive")));
+  cJSON_Delete(sj);
+  free(snap);
+  int died = 0;
+  for (int it = 1; it <= 10; it++) {
+    const sylva_journal *j = NULL;
+    CHECK_INT(sylva_world_step(w, &j), 0);
+    if (!j) break;
+    char *delta = sylva_msg_delta(4, 10 + it, w, j, 0);
+    char *line = sylva_encode_stats_line(w, j, 0, 0);
+    cJSON *dj = VALID_JSON(delta), *lj = line ? cJSON_Parse(line) : NULL;
+    CHECK(delta && strstr(delta, "],\"canopy_cover\":") < strstr(delta, ",\"stand\":{\"area\":") &&
+          strcmp(delta + strlen(delta) - 2, "}}") == 0);
+    CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"),
+                              cJSON_GetObjectItemCaseSensitive(dj, "stats"), true));
+    CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stand"),
+                              cJSON_GetObjectItemCaseSensitive(dj, "stand"), true));
+    died += (int)num_of(cJSON_GetObjectItemCaseSensitive(dj, "stand"), "died");
+    cJSON_Delete(dj);
+    cJSON_Delete(lj);
+    free(delta);
+    free(line);
+  }
+  printf("stand: %d of 6 stems died in 10 iterations\n", died);
+  CHECK(died > 0);
+  /* a later snapshot: the stand as the world gives it, the dead stems' died */
+  snap = sylva_msg_snapshot(4, 30, w, 2030, NULL);
+  sj = VALID_JSON(snap);
+  stand = cJSON_GetObjectItemCaseSensitive(sj, "stand");
+  sylva_stand_stats st;
+  sylva_world_stand(w, &st);
+  CHECK_INT(num_of(stand, "alive"), st.alive);
+  CHECK_INT(num_of(stand, "alive"), 6 - died);
+  const cJSON *e;
+  int dead = 0;
+  cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(sj, "stats")) {
+    const cJSON *d = cJSON_GetObjectItemCaseSensitive(e, "died");
+    if (!cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(e, "alive"))) {
+      dead++;
+      CHECK(cJSON_IsNumber(d) && d->valueint > 2030 && d->valueint <= 2040);
+    } else {
+      CHECK(cJSON_IsNull(d));
+    }
+  }
+  CHECK_INT(dead, died);
+  cJSON_Delete(sj);
+  free(snap);
+  sylva_world_destroy(w);
+  /* a world without stands carries none of it */
+  sylva_world *plain = snapshot_world();
+  CHECK(plain && !sylva_encode_stand(plain));
+  snap = plain ? sylva_msg_snapshot(4, 10, plain, 0, NULL) : NULL;
+  CHECK(snap && !strstr(snap, "\"stand\"") && !strstr(snap, "\"alive\""));
+  free(snap);
+  sylva_world_destroy(plain);
+}
+
 /* A snapshot after 15 iterations holds the skeleton too. */
 static void test_later_snapshot(void) {
   sylva_world *w = snapshot_world();
@@ -1751,6 +1834,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(encode_runs), CHECK_TEST(encode_sweep_runs),
       CHECK_TEST(encode_scenarios), CHECK_TEST(snapshot),
       CHECK_TEST(deltas), CHECK_TEST(leaves_after_edit), CHECK_TEST(later_snapshot), CHECK_TEST(years_messages),
+      CHECK_TEST(stand_messages),
       CHECK_TEST(light_slice_board),
       CHECK_TEST(light_slice_top), CHECK_TEST(light_slice_layers), CHECK_TEST(light_slice_padding)};
   CHECK_RUN(argc, argv, 1, tests);

@@ -28,6 +28,19 @@ bool sylva_encode_years(const sylva_world *w);
  *  (docs/model.md, "Stands")? A world with a species in years or with deaths. */
 bool sylva_encode_stand(const sylva_world *w);
 
+/** One of the stand's figures as the lines give it (docs/model.md, "Stands"): its key
+ *  in the stand object, its value (NaN: null) and its decimals. */
+typedef struct sylva_stand_figure {
+  const char *key;
+  double value;
+  int decimals;
+} sylva_stand_figure;
+/** How many figures sylva_stand_figures gives. */
+#define SYLVA_STAND_FIGURES 7
+/** The stand's figures after its area, alive and died, in the lines' order:
+ *  stems_per_ha, basal_area, qmd, dominant_height, sdi, cv_height, cv_dbh. */
+void sylva_stand_figures(const sylva_stand_stats *s, sylva_stand_figure out[SYLVA_STAND_FIGURES]);
+
 /** One line of `sylva run` (cli.md), without the newline:
  *  {"iteration": 7, "elapsed_ms": 12.5, "stems": [{"plant": "t1", "stem": 0, ...}]}
  *  Stems in global stem order (j->stats); NaN measures print null; lengths with 4
