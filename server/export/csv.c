@@ -31,6 +31,7 @@ typedef struct csv_run {
   FILE *f;
   int start_year; /* 0: none */
   bool years;     /* a species counts in years */
+  bool stand;     /* the rows carry the stand's (store_run_stand) */
 } csv_run;
 
 static int csv_row(const store_stats_row *r, void *ctx) {
@@ -80,19 +81,42 @@ static int csv_row(const store_stats_row *r, void *ctx) {
     fputc(',', f);
     csv_number(f, give[i].v, give[i].decimals);
   }
+  /* stands (docs/model.md, "Stands"): as the lines give them, empty in rows stored
+   * before schema 7; died a calendar year in a run with a start year, as on the lines */
+  if (c->stand) {
+    fputs(r->alive < 0 ? "," : r->alive ? ",true" : ",false", f);
+    fputc(',', f);
+    if (r->died >= 0) fprintf(f, "%d", r->died + c->start_year);
+    fputc(',', f);
+    csv_number(f, r->vigour, 4);
+    sylva_stand_figure fig[SYLVA_STAND_FIGURES];
+    sylva_stand_figures(&r->stand, fig);
+    for (size_t i = 0; i < SYLVA_STAND_FIGURES; i++) {
+      fputc(',', f);
+      csv_number(f, fig[i].value, fig[i].decimals);
+    }
+    fputc(',', f);
+    if (r->stand.died >= 0) fprintf(f, "%d", r->stand.died);
+  }
   fputc('\n', f);
   return ferror(f) ? SERVER_EWRITE : SERVER_OK;
 }
 
 int csv_write_stats(FILE *f, store *st, int64_t run, int to) {
-  csv_run c = {f, 0, false};
-  if (store_run_calendar(st, run, &c.start_year, &c.years)) return SERVER_EFAIL;
+  csv_run c = {f, 0, false, false};
+  if (store_run_calendar(st, run, &c.start_year, &c.years) || store_run_stand(st, run, &c.stand))
+    return SERVER_EFAIL;
   fputs("iteration,plant,stem,height,dbh,crown_width,crown_base,nodes,shed,light,cap,finished,"
         "pruned,zones,clearance,leaf_area",
         f);
   /* only in runs with years or a start year: the others keep the columns they had */
   fputs(c.years || c.start_year ? ",age,year,crown_diameter,crown_height" : "", f);
-  fputs(",crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover\n",
+  fputs(",crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover",
+        f);
+  /* only in runs with stands: the others keep their bytes */
+  fputs(c.stand ? ",alive,died,vigour,stems_per_ha,basal_area,qmd,dominant_height,sdi,cv_height,"
+                  "cv_dbh,stand_died\n"
+                : "\n",
         f);
   if (ferror(f)) return SERVER_EWRITE;
   return store_each_stats(st, run, to, csv_row, &c);

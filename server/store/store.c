@@ -157,6 +157,21 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "ALTER TABLE stats ADD COLUMN co2 REAL;"
     "ALTER TABLE stats ADD COLUMN co2_sequestered REAL;"
     "ALTER TABLE iterations ADD COLUMN canopy_cover REAL;",
+    /* 6 -> 7: stands (docs/store.md): each stem's alive, died and vigour, each
+     * iteration's stand figures; NULL in older rows and in runs without stands */
+    "ALTER TABLE stats ADD COLUMN alive INTEGER;"
+    "ALTER TABLE stats ADD COLUMN died INTEGER;"
+    "ALTER TABLE stats ADD COLUMN vigour REAL;"
+    "ALTER TABLE iterations ADD COLUMN stand_area REAL;"
+    "ALTER TABLE iterations ADD COLUMN stand_alive INTEGER;"
+    "ALTER TABLE iterations ADD COLUMN stand_died INTEGER;"
+    "ALTER TABLE iterations ADD COLUMN stems_per_ha REAL;"
+    "ALTER TABLE iterations ADD COLUMN basal_area REAL;"
+    "ALTER TABLE iterations ADD COLUMN qmd REAL;"
+    "ALTER TABLE iterations ADD COLUMN dominant_height REAL;"
+    "ALTER TABLE iterations ADD COLUMN sdi REAL;"
+    "ALTER TABLE iterations ADD COLUMN cv_height REAL;"
+    "ALTER TABLE iterations ADD COLUMN cv_dbh REAL;",
 };
 
 static int migrate(store *st) {
@@ -250,6 +265,21 @@ void store_close(store *st) {
 
 /* ---- runs ---------------------------------------------------------------------- */
 
+static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
+  if (isnan(v))
+    sqlite3_bind_null(q, col);
+  else
+    sqlite3_bind_double(q, col, v);
+}
+
+/* An integer, or NULL where it is negative (a null count or iteration). */
+static void bind_int_or_null(sqlite3_stmt *q, int col, int64_t v) {
+  if (v < 0)
+    sqlite3_bind_null(q, col);
+  else
+    sqlite3_bind_int64(q, col, v);
+}
+
 /* Inserts an iteration record (and its snapshot) inside the caller's transaction. */
 static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool snapshot) {
   uint8_t *img = NULL;
@@ -262,7 +292,9 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO iterations (run, iteration, hash, nodes, snapshot,"
-                         " canopy_cover) VALUES (?, ?, ?, ?, ?, ?)",
+                         " canopy_cover, stand_area, stand_alive, stand_died, stems_per_ha,"
+                         " basal_area, qmd, dominant_height, sdi, cv_height, cv_dbh)"
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     free(img);
     return store__fail(st, "storing iteration %d", it);
@@ -277,6 +309,17 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   else
     sqlite3_bind_null(q, 5);
   sqlite3_bind_double(q, 6, sylva_world_canopy_cover(w));
+  /* the stand's figures where the lines give them (docs/model.md, "Stands"), else NULL */
+  if (sylva_encode_stand(w)) {
+    sylva_stand_stats s;
+    sylva_world_stand(w, &s);
+    const double fig[] = {s.stems_per_ha, s.basal_area,      s.qmd,      s.dominant_height,
+                          s.sdi,          s.cv_height,       s.cv_dbh};
+    bind_real_or_null(q, 7, s.area);
+    sqlite3_bind_int(q, 8, s.alive);
+    sqlite3_bind_int(q, 9, s.died);
+    for (int i = 0; i < 7; i++) bind_real_or_null(q, 10 + i, fig[i]);
+  }
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
   free(img);
@@ -351,6 +394,10 @@ static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
   "CASE WHEN json_valid(r.scenario) THEN EXISTS (SELECT 1 FROM json_each(r.scenario,"       \
   " '$.species') sp WHERE json_extract(sp.value, '$.years') = 1) ELSE 0 END"
 
+/* Whether run r stored an iteration with the stand's figures (store_run_stand). */
+#define RUN_STAND                                                                           \
+  "EXISTS (SELECT 1 FROM iterations i WHERE i.run = r.id AND i.stand_alive IS NOT NULL)"
+
 #define RUN_COLUMNS                                                                         \
   "SELECT r.id, r.name, r.scenario, r.seed, r.iterations, r.snapshot_every, r.status,"      \
   " r.reason, r.created, r.updated,"                                                        \
@@ -365,7 +412,7 @@ static void copy_column(sqlite3_stmt *q, int col, char *out, size_t n) {
   "   WHERE t.run = r.id)),"                                                                \
   " (SELECT count(*) FROM stats s, json_each(s.zones) z WHERE s.run = r.id AND"             \
   "   s.iteration = (SELECT max(iteration) FROM stats t WHERE t.run = r.id)),"              \
-  " r.start_year, " SCENARIO_YEARS                                                          \
+  " r.start_year, " SCENARIO_YEARS ", " RUN_STAND                                         \
   " FROM runs r"
 
 static int read_run(sqlite3_stmt *q, store_run *r) {
@@ -391,6 +438,7 @@ static int read_run(sqlite3_stmt *q, store_run *r) {
   r->zone_pairs = sqlite3_column_int64(q, 15);
   r->start_year = sqlite3_column_int(q, 16);
   r->years = sqlite3_column_int(q, 17) != 0;
+  r->stand = sqlite3_column_int(q, 18) != 0;
   return r->name && r->scenario ? 0 : SERVER_EFAIL;
 }
 
@@ -465,13 +513,6 @@ static int list_runs_unlocked(store *st, store_run **out, size_t *count) {
 
 /* ---- iterations ---------------------------------------------------------------- */
 
-static void bind_real_or_null(sqlite3_stmt *q, int col, double v) {
-  if (isnan(v))
-    sqlite3_bind_null(q, col);
-  else
-    sqlite3_bind_double(q, col, v);
-}
-
 static int run_calendar_unlocked(store *st, int64_t run, int *start_year, bool *years) {
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
@@ -486,6 +527,18 @@ static int run_calendar_unlocked(store *st, int64_t run, int *start_year, bool *
   }
   sqlite3_finalize(q);
   return rc == SQLITE_ROW ? SERVER_OK : store__fail(st, "reading a run's start year");
+}
+
+static int run_stand_unlocked(store *st, int64_t run, bool *stand) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, "SELECT " RUN_STAND " FROM runs r WHERE r.id = ?", -1, &q,
+                         NULL) != SQLITE_OK)
+    return store__fail(st, "reading whether a run has stands");
+  sqlite3_bind_int64(q, 1, run);
+  int rc = sqlite3_step(q);
+  if (rc == SQLITE_ROW) *stand = sqlite3_column_int(q, 0) != 0;
+  sqlite3_finalize(q);
+  return rc == SQLITE_ROW ? SERVER_OK : store__fail(st, "reading whether a run has stands");
 }
 
 static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
@@ -508,14 +561,16 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
                          "INSERT INTO stats (run, iteration, stem, plant, plant_stem, height, dbh,"
                          " crown_width, crown_base, nodes, shed, light, cap, finished, pruned,"
                          " zones, clearance, age, crown_height, leaf_area, crown_area,"
-                         " wood_volume, biomass, biomass_model, carbon, co2, co2_sequestered)"
+                         " wood_volume, biomass, biomass_model, carbon, co2, co2_sequestered,"
+                         " alive, died, vigour)"
                          " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,"
-                         " ?, ?, ?, ?, ?, ?, ?)",
+                         " ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                          -1, &q, NULL) != SQLITE_OK) {
     store__fail(st, "storing iteration %d", it);
     store__rollback(st);
     return SERVER_EFAIL;
   }
+  bool stand = sylva_encode_stand(w);
   for (size_t k = 0; k < j->stem_count; k++) {
     const sylva_stem_stats *s = &j->stats[k];
     sqlite3_reset(q);
@@ -548,6 +603,13 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
     bind_real_or_null(q, 25, s->carbon);
     bind_real_or_null(q, 26, s->co2);
     bind_real_or_null(q, 27, s->co2_sequestered);
+    if (stand) { /* as the lines give them; NULL where they do not (docs/store.md) */
+      sqlite3_bind_int(q, 28, s->alive);
+      bind_int_or_null(q, 29, s->died);
+      bind_real_or_null(q, 30, s->vigour);
+    } else {
+      for (int col = 28; col <= 30; col++) sqlite3_bind_null(q, col);
+    }
     if (sylva_world_reports_conflicts(w)) {
       zones = sylva_encode_stem_conflicts(w, (int)k, false, start_year);
       clearance = sylva_encode_stem_conflicts(w, (int)k, true, start_year);
@@ -822,13 +884,19 @@ static double column_real(sqlite3_stmt *q, int col) {
   return sqlite3_column_type(q, col) == SQLITE_NULL ? NAN : sqlite3_column_double(q, col);
 }
 
+static int column_int_or(sqlite3_stmt *q, int col, int null) {
+  return sqlite3_column_type(q, col) == SQLITE_NULL ? null : sqlite3_column_int(q, col);
+}
+
 static int each_stats_unlocked(store *st, int64_t run, int to,
                                int (*fn)(const store_stats_row *row, void *ctx), void *ctx) {
   sqlite3_stmt *q;
   if (prepare_run(st, "SELECT s.iteration, stem, plant, plant_stem, height, dbh, crown_width,"
                       " crown_base, s.nodes, shed, light, cap, finished, pruned, zones, clearance,"
                       " age, crown_height, leaf_area, crown_area, wood_volume, biomass,"
-                      " biomass_model, carbon, co2, co2_sequestered, i.canopy_cover"
+                      " biomass_model, carbon, co2, co2_sequestered, i.canopy_cover,"
+                      " alive, died, vigour, stand_area, stand_alive, stand_died, stems_per_ha,"
+                      " basal_area, qmd, dominant_height, sdi, cv_height, cv_dbh"
                       " FROM stats s LEFT JOIN iterations i"
                       " ON i.run = s.run AND i.iteration = s.iteration"
                       " WHERE s.run = ? AND s.iteration <= ? ORDER BY s.iteration, stem",
@@ -853,7 +921,7 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
         .pruned = sqlite3_column_type(q, 13) == SQLITE_NULL ? -1 : sqlite3_column_int64(q, 13),
         .zones = (const char *)sqlite3_column_text(q, 14),
         .clearance = (const char *)sqlite3_column_text(q, 15),
-        .age = sqlite3_column_type(q, 16) == SQLITE_NULL ? -1 : sqlite3_column_int(q, 16),
+        .age = column_int_or(q, 16, -1),
         .crown_height = column_real(q, 17),
         .leaf_area = column_real(q, 18),
         .crown_area = column_real(q, 19),
@@ -864,6 +932,19 @@ static int each_stats_unlocked(store *st, int64_t run, int to,
         .co2 = column_real(q, 24),
         .co2_sequestered = column_real(q, 25),
         .canopy_cover = column_real(q, 26),
+        .alive = column_int_or(q, 27, -1),
+        .died = column_int_or(q, 28, -1),
+        .vigour = column_real(q, 29),
+        .stand = {.area = column_real(q, 30),
+                  .alive = column_int_or(q, 31, -1),
+                  .died = column_int_or(q, 32, -1),
+                  .stems_per_ha = column_real(q, 33),
+                  .basal_area = column_real(q, 34),
+                  .qmd = column_real(q, 35),
+                  .dominant_height = column_real(q, 36),
+                  .sdi = column_real(q, 37),
+                  .cv_height = column_real(q, 38),
+                  .cv_dbh = column_real(q, 39)},
     };
     if (!r.plant) r.plant = "";
     if (fn(&r, ctx)) {
@@ -977,6 +1058,10 @@ int store_run_scenario(store *st, int64_t run, char **json) {
 
 int store_run_calendar(store *st, int64_t run, int *start_year, bool *years) {
   LOCKED(st, run_calendar_unlocked(st, run, start_year, years));
+}
+
+int store_run_stand(store *st, int64_t run, bool *stand) {
+  LOCKED(st, run_stand_unlocked(st, run, stand));
 }
 
 int store_each_age(store *st, int (*fn)(int64_t run, const char *plant, int age, void *ctx),

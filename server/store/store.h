@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 6
+#define STORE_SCHEMA_VERSION 7
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 
@@ -56,6 +56,7 @@ typedef struct store_run {
   int64_t zone_nodes, zone_pairs;
   int start_year;     /**< the scenario's start_year; 0 when it gives none */
   bool years;         /**< a species of the scenario counts in years (stats carry ages) */
+  bool stand;         /**< its stats carry the stand's (store_run_stand) */
 } store_run;
 
 /** Opens (create: also creates) a store file and brings its schema up to date
@@ -122,6 +123,11 @@ int store_run_scenario(store *st, int64_t run, char **json);
  *  counts in years (store_run's start_year and years). */
 int store_run_calendar(store *st, int64_t run, int *start_year, bool *years);
 
+/** Whether a run's stats carry each stem's alive, died and vigour and each iteration's
+ *  stand (docs/model.md, "Stands"): an iteration of it was stored with the stand's
+ *  figures, as a world does whose lines give them (sylva_encode_stand). */
+int store_run_stand(store *st, int64_t run, bool *stand);
+
 /** One stored stats row. */
 typedef struct store_stats_row {
   int iteration, stem, plant_stem, cap;
@@ -142,6 +148,12 @@ typedef struct store_stats_row {
   double biomass, biomass_model;           /**< kg */
   double carbon, co2, co2_sequestered;     /**< kg C, kg CO2, kg CO2 */
   double canopy_cover;                     /**< the iteration's, 0..1 */
+  /* docs/model.md, "Stands": where the run's lines give them (sylva_encode_stand);
+   * -1 or NaN where null (rows stored before schema 7, and runs without stands) */
+  int alive;                     /**< 1 alive, 0 dead, -1 where null */
+  int died;                      /**< the iteration it died, -1 while alive or null */
+  double vigour;                 /**< NaN where null or none judged */
+  sylva_stand_stats stand;       /**< the iteration's; alive and died -1 where null */
 } store_stats_row;
 
 /** Calls fn for every stats row of a run up to iteration `to`, in iteration then

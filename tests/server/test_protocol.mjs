@@ -366,6 +366,24 @@ function nodesInside(model, box) {
   return n;
 }
 
+// The stand's CSV columns (docs/cli.md, "export"), after canopy_cover in a run with stands.
+const STAND_COLUMNS = 'alive,died,vigour,stems_per_ha,basal_area,qmd,dominant_height,sdi,' +
+  'cv_height,cv_dbh,stand_died';
+
+// A stats.csv row's stand cells equal a delta's stem stats and stand (startYear: 0, or
+// the year the lines' died counts from, as the CSV's does).
+function checkStandCells(row, st, stand, startYear) {
+  const cells = row.split(',').slice(-11);
+  const num = (v) => (v === '' ? null : Number(v));
+  assert.equal(cells[0], String(st.alive), row);
+  assert.equal(num(cells[1]), st.died, row);
+  assert.equal(num(cells[2]), st.vigour, row);
+  const keys = STAND_COLUMNS.split(',').slice(3, 10);
+  assert.deepEqual(cells.slice(3, 10).map(num), keys.map((key) => stand[key]), row);
+  assert.equal(num(cells[10]), stand.died, row);
+  assert.ok(startYear === 0 || st.died === null || st.died > startYear, row);
+}
+
 test('zones and pruning: stats carry pruned, zones and clearance as stored; prune now by edit', async () => {
   const d = await startDaemon();
   try {
@@ -398,11 +416,14 @@ test('zones and pruning: stats carry pruned, zones and clearance as stored; prun
     const csv = (await (await fetch(`${d.http}/api/runs/${encodeURIComponent('street "a"')}/stats.csv`)).text())
       .trim().split('\n');
     // the leaf area follows the conflicts, and street.json's planes grow in years:
-    // their four columns come next, then the eight of what the trees give
+    // their four columns come next, then the eight of what the trees give, then (a
+    // species in years: a stand) the eleven of the stand
     const years = /,age,year,crown_diameter,crown_height,crown_area,/.test(csv[0]);
-    assert.match(csv[0], years ? /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/
+    const stand = csv[0].endsWith(`,canopy_cover,${STAND_COLUMNS}`);
+    assert.equal(stand, years, 'a run in years has the stand columns');
+    assert.match(csv[0], years ? /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover,/
       : /,pruned,zones,clearance,leaf_area,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/);
-    const tail = new RegExp(`,([^,]*)(,[^,]*){${years ? 12 : 8}}$`);
+    const tail = new RegExp(`,([^,]*)(,[^,]*){${(years ? 12 : 8) + (stand ? 11 : 0)}}$`);
     const lastRows = csv.slice(1).filter((r) => r.startsWith('9,'));
     assert.equal(lastRows.length, last.length);
     assert.ok(last.every((st) => st.leaf_area > 0), 'every stem has leaves');
@@ -414,6 +435,7 @@ test('zones and pruning: stats carry pruned, zones and clearance as stored; prun
       assert.equal(Number(m[1]), last[k].pruned);
       assert.deepEqual(JSON.parse(m[2].replaceAll('""', '"')), last[k].zones);
       assert.deepEqual(JSON.parse(m[3].replaceAll('""', '"')), last[k].clearance);
+      if (stand) checkStandCells(lastRows[k], last[k], deltas.at(-1).stand, 0);
     }
     const metrics = await (await fetch(`${d.http}/metrics`)).text();
     const pruned = deltas.reduce((a, x) => a + x.stats.reduce((b, st) => b + st.pruned, 0), 0);
@@ -515,6 +537,10 @@ test('years: start year, ages and crown measures in snapshots, deltas, status, s
   const { run, snap, status, deltas } = await growYears(c, 8);
   assert.equal(snap.start_year, 2027);
   assert.deepEqual(snap.stats.map((st) => [st.plant, st.age]), [['young', 0], ['old', 3], ['igm', null]]);
+  // a species in years makes a stand: its figures after canopy_cover, each stem's alive
+  assert.deepEqual([snap.stand.alive, snap.stand.died], [3, 0]);
+  assert.ok(snap.stats.every((st) => st.alive === true && st.died === null), JSON.stringify(snap.stats));
+  for (const x of deltas) assert.equal(x.stand.alive + x.stats.filter((st) => !st.alive).length, 3);
   for (const st of snap.stats) assert.equal(st.crown_diameter, st.crown_width);
   assert.equal(status.start_year, 2027);
   // the stats are the CLI's lines', iteration by iteration: ages, crowns, zones in years
@@ -532,7 +558,11 @@ test('years: start year, ages and crown measures in snapshots, deltas, status, s
   assert.ok(lane && lane.first > 2027 && lane.first <= 2035, `the old tree entered the lane: ${JSON.stringify(last[1].zones)}`);
   // stats.csv: the CLI's stored run exports the same bytes
   const csv = await (await fetch(`${d.http}/api/runs/years/stats.csv`)).text();
-  assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area,age,year,crown_diameter,crown_height,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/);
+  assert.equal(csv.split('\n')[0].endsWith(',pruned,zones,clearance,leaf_area,age,year,crown_diameter,' +
+    `crown_height,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover,${STAND_COLUMNS}`), true);
+  const lastRows = csv.trim().split('\n').filter((r) => r.startsWith(`${deltas.at(-1).iteration},`));
+  assert.equal(lastRows.length, last.length);
+  for (let k = 0; k < last.length; k++) checkStandCells(lastRows[k], last[k], deltas.at(-1).stand, 2027);
   assert.equal(csv, exportBytes(join(d.dir, 'cli.db'), 'Trees in years', 'csv').toString());
   // /metrics: the run's year and each aged plant's age
   let metrics = await (await fetch(`${d.http}/metrics`)).text();
@@ -616,7 +646,8 @@ test('years: a run without a start year or years carries none of their fields', 
     const status = await c.next((m) => m.type === 'status' && m.ref === 's');
     assert.equal('start_year' in status, false);
     const delta = await c.type('delta', 60000);
-    for (const key of ['age', 'crown_diameter', 'crown_height']) assert.equal(key in delta.stats[0], false, key);
+    for (const key of ['age', 'crown_diameter', 'crown_height', 'alive', 'died', 'vigour']) assert.equal(key in delta.stats[0], false, key);
+    assert.equal('stand' in snap || 'stand' in delta, false);
     await c.type('delta', 60000);
     const csv = await (await fetch(`${d.http}/api/runs/plain/stats.csv`)).text();
     assert.match(csv.split('\n')[0], /,pruned,zones,clearance,leaf_area,crown_area,wood_volume,biomass,biomass_model,carbon,co2,co2_sequestered,canopy_cover$/);

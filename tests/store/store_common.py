@@ -4,6 +4,7 @@ Every test is started by meson as `python3 test_x.py SYLVA_EXE SCENARIOS_DIR` an
 drives the real binary. A check that fails is printed at once; the last line is
 "N passed, N failed" and the exit status is 1 when anything failed.
 """
+import json
 import os
 import re
 import shutil
@@ -248,3 +249,19 @@ def printed_iterations(stdout):
         if m and line.endswith("}"):
             its.append(int(m.group(1)))
     return its
+
+
+def stand_scenario(env, iterations):
+    """Writes a stand with background mortality and returns its path: six lindens of
+    the library (utdb:NoEast:TICO) 6 m apart, a fifth of them dying a year, from 2030
+    (seed 2: deaths at iterations 2, 3, 5, 7 and 8, one tree left at 10)."""
+    doc = {"format": "sylva.scenario/1", "name": "stand with mortality", "seed": 2,
+           "iterations": iterations, "start_year": 2030,
+           "world": {"min": [0, 0, 0], "max": [30, 30, 20]},
+           "species": {"ti": {"preset": "utdb:NoEast:TICO", "mortality": 0.2}},
+           "plants": [{"id": p, "species": "ti", "roots": [[6 + 6 * (k % 3), 6 + 6 * (k // 3), 0]]}
+                      for k, p in enumerate("abcdef")]}
+    path = env.path("stand.json")
+    with open(path, "w") as f:
+        json.dump(doc, f)
+    return path

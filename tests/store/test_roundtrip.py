@@ -17,6 +17,13 @@
 - a run in years from a start year (tests/scenario/years.json): the same round
   trip, resumed lines and CSV byte for byte; the CSV's age, year, crown_diameter
   and crown_height columns as on the lines; runs.start_year the scenario's;
+- a stand with background mortality (six library trees, a fifth dying a year):
+  the same round trip; the stats table's alive, died (an iteration) and vigour
+  and the iterations table's stand figures as on the lines; the CSV's stand
+  columns equal the lines' (died a calendar year, as they give it); the resumed
+  CSV is the uninterrupted one; a store of schema 6 stopped at 5 is migrated in
+  place (its rows NULL, its CSV without the stand columns until a row has them)
+  and resumed to 10: rows 1..5 empty, rows 6..10 those of the uninterrupted CSV;
 - bad cases: a taken run name, an unknown run, a missing file, a file that is
   not SQLite, an SQLite file of another program, a store of a newer schema:
   exit 2, a message naming the file and the problem, and the file (and its
@@ -34,7 +41,7 @@ import time
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from store_common import (Checks, Env, crash_text, query, read_bytes,  # noqa: E402
-                          strip_elapsed)
+                          stand_scenario, strip_elapsed)
 
 ITERATIONS = 10
 SNAPSHOT_EVERY = 3
@@ -64,6 +71,7 @@ def main():
         street_pruned(env, c)
         street_exports(env, c)
         years(env, c)
+        stand(env, c)
     finally:
         env.cleanup()
     print("time %.1f s" % (time.monotonic() - t0))
@@ -212,6 +220,11 @@ def street_exports(env, c):
 YEARS_COLUMNS = ["age", "year", "crown_diameter", "crown_height"]
 GIVE_COLUMNS = ["crown_area", "wood_volume", "biomass", "biomass_model", "carbon", "co2",
                 "co2_sequestered", "canopy_cover"]
+# in a run with stands (a species in years, or deaths), after the rest
+STAND_COLUMNS = ["alive", "died", "vigour", "stems_per_ha", "basal_area", "qmd",
+                 "dominant_height", "sdi", "cv_height", "cv_dbh", "stand_died"]
+STAND_FIGURES = [("stems_per_ha", 1), ("basal_area", 3), ("qmd", 2), ("dominant_height", 3),
+                 ("sdi", 1), ("cv_height", 4), ("cv_dbh", 4)]
 
 
 def years(env, c):
@@ -235,8 +248,8 @@ def years(env, c):
     if not c.check(rc == 0 and data is not None, "years: export --format csv", err):
         return
     records = list(csv.reader(io.StringIO(data.decode())))
-    c.check(records[0] == HEADER.split(",") + YEARS_COLUMNS + GIVE_COLUMNS, "years: the CSV header",
-            records[0])
+    c.check(records[0] == HEADER.split(",") + YEARS_COLUMNS + GIVE_COLUMNS + STAND_COLUMNS,
+            "years: the CSV header (a species in years: the stand's columns too)", records[0])
     text = lambda v: "" if v is None else str(v)  # noqa: E731
     want = [[text(s["age"]), str(o["year"]), text(s["crown_diameter"]), text(s["crown_height"])]
             for o in objs for s in o["stems"]]
@@ -331,10 +344,15 @@ def check_csv(env, c, db, name, lines, stems):
     text = data.decode()
     c.check(text.endswith("\n") and "\r" not in text, "CSV lines end with \\n")
     rows = text.splitlines()
-    # a run in years (street.json's planes) carries the years columns after the rest
-    in_years = rows[0] == ",".join([HEADER] + YEARS_COLUMNS + GIVE_COLUMNS)
-    width = 16 + (len(YEARS_COLUMNS) if in_years else 0) + len(GIVE_COLUMNS)
-    c.check(rows[0] == ",".join([HEADER] + GIVE_COLUMNS) or in_years, "CSV header", rows[0])
+    # a run in years (street.json's planes) carries the years columns after the rest,
+    # and one with stands (as its lines have a stand) the stand's columns last
+    in_years = rows[0].startswith(",".join([HEADER] + YEARS_COLUMNS))
+    stand = "stand" in json.loads(lines[0])
+    head = ([HEADER] + (YEARS_COLUMNS if in_years else []) + GIVE_COLUMNS +
+            (STAND_COLUMNS if stand else []))
+    width = len(",".join(head).split(","))
+    give = 16 + (len(YEARS_COLUMNS) if in_years else 0)
+    c.check(rows[0] == ",".join(head), "CSV header", rows[0])
     c.check(sum(1 for r in rows if r.startswith("iteration,")) == 1, "exactly one header line")
     records = list(csv.reader(io.StringIO("\n".join(rows[1:]))))
     c.check(len(records) == stems * ITERATIONS,
@@ -343,7 +361,8 @@ def check_csv(env, c, db, name, lines, stems):
     for line in lines[:-1]:
         obj = json.loads(line)
         for s in obj["stems"]:
-            expected.append((obj["iteration"], dict(s, canopy_cover=obj["canopy_cover"])))
+            expected.append((obj["iteration"], dict(s, canopy_cover=obj["canopy_cover"],
+                                                    stand=obj.get("stand"))))
     mismatches = []
     for i, ((it, s), rec) in enumerate(zip(expected, records)):
         if len(rec) != width:
@@ -358,9 +377,12 @@ def check_csv(env, c, db, name, lines, stems):
                 s["crown_base"], s["nodes"], s["shed"], s["light"], s["cap"],
                 "true" if s["finished"] else "false", s.get("pruned"), s.get("zones"),
                 s.get("clearance"), s["leaf_area"])
-        # what the trees give, last: as the line gives it, empty where it leaves it out
-        got += tuple(num(v) for v in rec[-len(GIVE_COLUMNS):])
+        # what the trees give: as the line gives it, empty where it leaves it out
+        got += tuple(num(v) for v in rec[give:give + len(GIVE_COLUMNS)])
         want += tuple(s.get(k) for k in GIVE_COLUMNS)
+        if stand:  # the stem's alive, died and vigour, then the line's stand
+            got += tuple(rec[give + len(GIVE_COLUMNS):])
+            want += stand_cells(s, s["stand"])
         if got != want:
             mismatches.append("row %d: %r != %r" % (i + 1, got, want))
     c.check(len(expected) == len(records) and not mismatches,
@@ -380,6 +402,99 @@ def check_csv(env, c, db, name, lines, stems):
             data.decode().splitlines() == rows[:1 + 4 * stems],
             "CSV --iteration 4: the header and the rows of iterations 1..4",
             "exit %s: %s" % (rc, err))
+
+
+def stand_cells(s, stand):
+    """The CSV's stand cells of a line's stem s and stand, as text."""
+    text = lambda v: "" if v is None else str(v)  # noqa: E731
+    return ((text(s["alive"]).lower(), text(s["died"]), text(s["vigour"])) +
+            tuple(text(stand[k]) for k, _ in STAND_FIGURES) + (text(stand["died"]),))
+
+
+def stand(env, c):
+    """A stand with background mortality: the round trip, resumed lines and CSV byte
+    for byte; the stored alive, died, vigour and stand figures as on the lines; the
+    CSV's stand columns as the lines give them; a store of schema 6 migrated."""
+    scenario = stand_scenario(env, ITERATIONS)
+    db, db_b, final = env.path("stand.db"), env.path("stand-b.db"), env.path("stand-final.json")
+    lines = run_with_store(env, c, scenario, db, final)
+    objs = [json.loads(x) for x in lines[:-1]]
+    died = [s["died"] for s in objs[-1]["stems"]]
+    c.check(any(d is not None and d <= 2035 for d in died) and
+            any(d is not None and d > 2035 for d in died) and None in died,
+            "stand: stems die before and after iteration 5, one lives", died)
+    export_iterations(env, c, scenario, db)
+    check_csv(env, c, db, "rt", lines, 6)
+    stop_at_5(env, c, scenario, db_b, lines)
+    resume_to_10(env, c, db, db_b, final, lines)
+    # the stats table: died as an iteration, vigour the double the line prints
+    stored = [(it, k, alive, d, None if v is None else round(v, 4)) for it, k, alive, d, v in
+              query(db, "SELECT iteration, stem, alive, died, vigour FROM stats"
+                    " ORDER BY iteration, stem")]
+    want = [(o["iteration"], k, int(s["alive"]), None if s["died"] is None else s["died"] - 2030,
+             s["vigour"]) for o in objs for k, s in enumerate(o["stems"])]
+    c.check(stored == want, "stand: the stats table's alive, died (an iteration) and vigour "
+            "equal the lines'", "\n".join("%r != %r" % (g, w) for g, w in zip(stored, want)
+                                          if g != w)[:2000])
+    stored = [(r[0], round(r[1], 1), r[2], r[3]) +
+              tuple(None if v is None else round(v, dec)
+                    for v, (_, dec) in zip(r[4:], STAND_FIGURES))
+              for r in query(db, "SELECT iteration, stand_area, stand_alive, stand_died,"
+                             " stems_per_ha, basal_area, qmd, dominant_height, sdi, cv_height,"
+                             " cv_dbh FROM iterations WHERE iteration > 0 ORDER BY iteration")]
+    want = [(o["iteration"], o["stand"]["area"], o["stand"]["alive"], o["stand"]["died"]) +
+            tuple(o["stand"][k] for k, _ in STAND_FIGURES) for o in objs]
+    c.check(stored == want, "stand: the iterations table's stand figures equal the lines'",
+            "\n".join("%r != %r" % (g, w) for g, w in zip(stored, want) if g != w)[:2000])
+    c.check(query(db, "SELECT count(*) FROM iterations WHERE stand_alive IS NULL") == [(0,)],
+            "stand: every iteration (0 too) has its stand")
+    schema6_migrates(env, c, scenario, db)
+
+
+def schema6_migrates(env, c, scenario, db):
+    """A store of schema 6 (its stand columns dropped) stopped at 5 is migrated in
+    place by the next command: its rows NULL, its CSV the columns it had; resumed to
+    10, the rows 1..5 have their stand cells empty and the rest are the uninterrupted
+    run's CSV."""
+    db6 = env.path("stand-6.db")
+    rc, _, err = env.sylva("run", scenario, "--db", db6, "--name", "rt", "--snapshot-every",
+                           SNAPSHOT_EVERY, "--iterations", 5, "--quiet-progress")
+    c.check(rc == 0, "schema 6: run to 5", err)
+    con = sqlite3.connect(db6)
+    for table, col in [("stats", "alive"), ("stats", "died"), ("stats", "vigour")] + [
+            ("iterations", x) for x in ("stand_area", "stand_alive", "stand_died", "stems_per_ha",
+                                        "basal_area", "qmd", "dominant_height", "sdi",
+                                        "cv_height", "cv_dbh")]:
+        con.execute("ALTER TABLE %s DROP COLUMN %s" % (table, col))
+    con.execute("PRAGMA user_version = 6")
+    con.commit()
+    con.close()
+    rc, data, err = env.export(db6, "rt", fmt="csv")
+    _, full, _ = env.export(db, "rt", fmt="csv")
+    c.check(query(db6, "PRAGMA user_version") == [(7,)] and
+            query(db6, "SELECT count(*) FROM stats WHERE alive IS NOT NULL OR died IS NOT NULL OR"
+                  " vigour IS NOT NULL") == [(0,)] and
+            query(db6, "SELECT count(*) FROM iterations WHERE stand_alive IS NOT NULL") == [(0,)],
+            "schema 6: opened, migrated in place to 7, its rows NULL", err)
+    if not c.check(rc == 0 and data is not None and full is not None,
+                   "schema 6: export --format csv", err):
+        return
+    cut = len(STAND_COLUMNS)
+    short = lambda row: ",".join(row.split(",")[:-cut])  # noqa: E731
+    old = data.decode().splitlines()
+    want = [short(r) for r in full.decode().splitlines()[:1 + 5 * 6]]
+    c.check(old == want, "schema 6: before a row has them, the CSV has no stand columns (the "
+            "uninterrupted CSV without them)", "%r\n%r" % (old[:2], want[:2]))
+    rc, out, err = env.sylva("resume", "--db", db6, "--name", "rt", "--iterations", ITERATIONS,
+                             "--quiet-progress")
+    c.check(rc == 0, "schema 6: resume to 10", err)
+    rc, data, err = env.export(db6, "rt", fmt="csv")
+    rows, full_rows = data.decode().splitlines(), full.decode().splitlines()
+    blank = lambda row: short(row) + "," * cut  # noqa: E731
+    want = full_rows[:1] + [blank(r) for r in full_rows[1:1 + 5 * 6]] + full_rows[1 + 5 * 6:]
+    c.check(rc == 0 and rows == want, "schema 6: resumed, the rows 1..5 have their stand cells "
+            "empty and the rows 6..10 are the uninterrupted CSV's",
+            "\n".join("%r != %r" % (g, w) for g, w in zip(rows, want) if g != w)[:2000])
 
 
 def snapshot_dir(d):

@@ -273,15 +273,27 @@ static int first_row(const store_stats_row *r, void *ctx) {
   return 0;
 }
 
-/* The columns schema 6 added, dropped: a store of schema 5 again. */
+/* The columns schema 7 added, dropped: a store of schema 6 again. */
+#define BACK_TO_SCHEMA_6                                                                  \
+  "ALTER TABLE stats DROP COLUMN alive; ALTER TABLE stats DROP COLUMN died;"              \
+  " ALTER TABLE stats DROP COLUMN vigour; ALTER TABLE iterations DROP COLUMN stand_area;"  \
+  " ALTER TABLE iterations DROP COLUMN stand_alive;"                                      \
+  " ALTER TABLE iterations DROP COLUMN stand_died;"                                       \
+  " ALTER TABLE iterations DROP COLUMN stems_per_ha;"                                     \
+  " ALTER TABLE iterations DROP COLUMN basal_area; ALTER TABLE iterations DROP COLUMN qmd;" \
+  " ALTER TABLE iterations DROP COLUMN dominant_height;"                                  \
+  " ALTER TABLE iterations DROP COLUMN sdi; ALTER TABLE iterations DROP COLUMN cv_height;" \
+  " ALTER TABLE iterations DROP COLUMN cv_dbh; PRAGMA user_version = 6;"
+
+/* The columns schemas 7 and 6 added, dropped: a store of schema 5 again. */
 #define BACK_TO_SCHEMA_5                                                                  \
-  "ALTER TABLE stats DROP COLUMN crown_area; ALTER TABLE stats DROP COLUMN wood_volume;"    \
+  BACK_TO_SCHEMA_6 " ALTER TABLE stats DROP COLUMN crown_area; ALTER TABLE stats DROP COLUMN wood_volume;"    \
   " ALTER TABLE stats DROP COLUMN biomass; ALTER TABLE stats DROP COLUMN biomass_model;"   \
   " ALTER TABLE stats DROP COLUMN carbon; ALTER TABLE stats DROP COLUMN co2;"              \
   " ALTER TABLE stats DROP COLUMN co2_sequestered;"                                       \
   " ALTER TABLE iterations DROP COLUMN canopy_cover; PRAGMA user_version = 5;"
 
-/* The columns schemas 6 and 5 added, dropped: a store of schema 4 again. */
+/* The columns schemas 7 to 5 added, dropped: a store of schema 4 again. */
 #define BACK_TO_SCHEMA_4                                                                  \
   BACK_TO_SCHEMA_5 " ALTER TABLE stats DROP COLUMN leaf_area; PRAGMA user_version = 4;"
 
@@ -432,6 +444,52 @@ static void test_schema5_migrates(void) {
   fixture_close(&f);
 }
 
+/* A stats row's stand figures at iterations 1..8 (stem 0), for test_schema6_migrates. */
+static int stand_row(const store_stats_row *r, void *ctx) {
+  store_stats_row *out = ctx;
+  if (r->stem == 0 && r->iteration >= 1 && r->iteration <= 8) out[r->iteration] = *r;
+  return 0;
+}
+
+/* A store of schema 6 (before stands) holding a run in years (a stand) is migrated in
+ * place: its rows stay and read without alive, died, vigour and the stand (-1, NaN),
+ * the run reads as without stands, and grows on into the new columns, which hold the
+ * world's stem and stand figures. */
+static void test_schema6_migrates(void) {
+  fixture f;
+  fixture_open_as(&f, true);
+  store_close(f.st);
+  f.st = NULL;
+  exec_sql(f.path, BACK_TO_SCHEMA_6);
+  CHECK_INT(user_version(f.path), 6);
+  CHECK_INT(store_open(f.path, false, &f.st), 0);
+  CHECK_INT(user_version(f.path), STORE_SCHEMA_VERSION);
+  bool stand = true;
+  if (f.st) CHECK_INT(store_run_stand(f.st, f.run, &stand), 0);
+  CHECK(!stand);
+  const sylva_journal *j;
+  CHECK_INT(sylva_world_step(f.w, &j), 0);
+  if (f.st) CHECK_INT(store_save_iteration(f.st, f.run, f.w, j, true), 0);
+  if (f.st) CHECK_INT(store_run_stand(f.st, f.run, &stand), 0);
+  CHECK(stand);
+  store_stats_row got[9] = {0};
+  if (f.st) CHECK_INT(store_each_stats(f.st, f.run, 8, stand_row, got), 0);
+  for (int t = 1; t <= 7; t++)
+    CHECK(got[t].iteration == t && got[t].alive == -1 && got[t].died == -1 &&
+          isnan(got[t].vigour) && got[t].stand.alive == -1 && got[t].stand.died == -1 &&
+          isnan(got[t].stand.stems_per_ha) && isnan(got[t].stand.cv_dbh));
+  sylva_stem_stats st;
+  sylva_stand_stats want;
+  CHECK_INT(sylva_world_stem_stats(f.w, 0, &st), 0);
+  sylva_world_stand(f.w, &want);
+  CHECK(got[8].iteration == 8 && got[8].alive == st.alive && got[8].died == st.died &&
+        (isnan(st.vigour) ? isnan(got[8].vigour) : got[8].vigour == st.vigour));
+  CHECK(want.alive == 3 && got[8].stand.alive == want.alive && got[8].stand.died == want.died);
+  CHECK(got[8].stand.stems_per_ha == want.stems_per_ha && got[8].stand.qmd == want.qmd &&
+        got[8].stand.dominant_height == want.dominant_height);
+  fixture_close(&f);
+}
+
 /* The stats of a run in years as stored, for test_years_round_trip. */
 typedef struct years_rows {
   int count, bad;
@@ -515,6 +573,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
       CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused),
       CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(schema4_migrates), CHECK_TEST(schema5_migrates),
+      CHECK_TEST(schema6_migrates),
       CHECK_TEST(years_round_trip)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");
