@@ -395,6 +395,9 @@ typedef struct run_pass {
   stem_slot *slots;
   size_t nslots;
   int status; /* the first failure inside the callback */
+  int died_at;  /* the last iteration whose stand's died is in died */
+  double died;  /* the stand's died summed over iterations 1 to died_at; NAN once one
+                   is not stored */
 } run_pass;
 
 /* The (index, value) pairs of a compact JSON object of a stats row: each zone's
@@ -492,6 +495,11 @@ static int add_row(run_pass *p, const store_stats_row *row, const stem_slot *slo
       .crown_height = row->crown_height, .leaf_area = row->leaf_area, .co2 = row->co2,
       .co2_sequestered = row->co2_sequestered, .canopy_cover = row->canopy_cover,
       .shade_ground = NAN, .pruned = slot->pruned};
+  const double stand[REPORT_STAND_FIGURES] = {
+      [REPORT_STEMS_PER_HA] = row->stand.stems_per_ha, [REPORT_BASAL_AREA] = row->stand.basal_area,
+      [REPORT_QMD] = row->stand.qmd, [REPORT_DOMINANT_HEIGHT] = row->stand.dominant_height,
+      [REPORT_SDI] = row->stand.sdi, [REPORT_CV_DBH] = row->stand.cv_dbh, [REPORT_DIED] = p->died};
+  memcpy(o->stand, stand, sizeof stand);
   (*n)++;
   int rc = parse_pairs(p, row->zones, true, &o->first, &o->nfirst);
   if (!rc) rc = parse_pairs(p, row->clearance, false, &o->clearance, &o->nclearance);
@@ -508,6 +516,10 @@ static int on_stats(const store_stats_row *row, void *ctx) {
   if (row->pruned >= 0) {
     slot->pruned = (slot->pruned < 0 ? 0 : slot->pruned) + row->pruned;
     r->conflicts = true;
+  }
+  if (row->iteration != p->died_at) { /* the stand's, once per iteration */
+    p->died_at = row->iteration;
+    p->died = row->stand.died < 0 ? NAN : p->died + row->stand.died;
   }
   if (!grow((void **)&r->samples, &g->samples_cap, r->nsamples + 1, sizeof *r->samples)) {
     rc = nomem(g->err, g->errlen);
@@ -633,8 +645,10 @@ static int gather_run(gather *g, store *st, const store_run *sr, const char *axe
   report_run *run = &runs[idx];
   *run = (report_run){.id = sr->id, .name = strdup(sr->name), .position = position,
                       .start_year = sr->start_year, .years = sr->years,
-                      .conflicts = sr->reports_conflicts, .last_iteration = sr->last_iteration};
+                      .conflicts = sr->reports_conflicts, .stand = sr->stand,
+                      .last_iteration = sr->last_iteration};
   r->nruns++;
+  if (sr->stand) r->stand = true;
   if (!run->name) return nomem(g->err, g->errlen);
   if (sr->years || sr->start_year) r->calendar = true;
   if (sr->last_iteration > r->max_iteration) r->max_iteration = sr->last_iteration;
@@ -662,7 +676,8 @@ static int gather_run(gather *g, store *st, const store_run *sr, const char *axe
   if (!rc && !scen)
     rc = server_fail(g->err, g->errlen, SERVER_EFAIL, "%s: run \"%s\": its stored scenario is not JSON",
               r->db, sr->name);
-  run_pass p = {.g = g, .run = idx, .plants = cJSON_GetObjectItemCaseSensitive(scen, "plants")};
+  run_pass p = {.g = g, .run = idx, .plants = cJSON_GetObjectItemCaseSensitive(scen, "plants"),
+                .died_at = 0, .died = 0.0};
   p.nplants = cJSON_GetArraySize(p.plants);
   if (!rc && p.nplants) {
     p.plant_info = calloc((size_t)p.nplants, sizeof *p.plant_info);
@@ -729,6 +744,12 @@ static report_stat stat_of(double *v, int n) {
   s.median = n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2.0;
   return s;
 }
+
+const char *const report_stand_columns[REPORT_STAND_FIGURES] = {
+    "stems_per_ha", "basal_area", "qmd", "dominant_height", "sdi", "cv_dbh", "died"};
+const char *const report_stand_heads[REPORT_STAND_FIGURES] = {
+    "stems/ha", "basal area (m²/ha)", "QMD (cm)", "dominant height (m)", "SDI", "CV dbh",
+    "died"};
 
 bool report_measure_per_run(report_measure m) {
   return m == REPORT_CANOPY_COVER || m == REPORT_SHADE_GROUND;
@@ -798,6 +819,14 @@ static int summarise_value(report *r, int a, const char *value, double *buf, siz
           if (!isnan(v)) buf[k++] = v;
         }
         g->measure[m] = stat_of(buf, k);
+      }
+      for (int f = 0; f < REPORT_STAND_FIGURES; f++) { /* one value per run */
+        int k = 0;
+        for (size_t i = 0; i < n; i++) {
+          double v = r->rows[idx[i]].stand[f];
+          if (first_of_run(r, idx, i) && !isnan(v)) buf[k++] = v;
+        }
+        g->stand[f] = stat_of(buf, k);
       }
       for (int z = 0; z < r->nzones; z++) {
         int k = 0;

@@ -8,6 +8,7 @@
  *   summary   per axis value (seeds pooled) and species, at each reported year: the
  *             median and range of height, dbh, crown diameter and crown height, and
  *             of the first conflict year with each clearance zone;
+ *   stand     with the rows, their run's stand at that year (a run with stands);
  *   series    every stored stats row's height and crown diameter, for the plots;
  *   finals    each stem's last stored stats row, for the first-conflict chart.
  *
@@ -54,6 +55,24 @@ bool report_format_from_path(const char *path, report_format *out);
 bool report_parse_years(const char *text, int years[REPORT_MAX_YEARS], int *count, char *err,
                         size_t errlen);
 
+/** The stand's figures a report gives per run and reported year (docs/cli.md, "report";
+ *  docs/model.md, "Stands"), in their order. */
+typedef enum report_stand_figure {
+  REPORT_STEMS_PER_HA,
+  REPORT_BASAL_AREA,      /**< m^2/ha */
+  REPORT_QMD,             /**< cm */
+  REPORT_DOMINANT_HEIGHT, /**< m */
+  REPORT_SDI,
+  REPORT_CV_DBH,
+  REPORT_DIED,            /**< stems that died in iterations 1 to the year */
+  REPORT_STAND_FIGURES
+} report_stand_figure;
+
+/** Their CSV columns ("stems_per_ha", ..., "died"). */
+extern const char *const report_stand_columns[REPORT_STAND_FIGURES];
+/** Their heads in the HTML and PDF stand table ("stems/ha", ...). */
+extern const char *const report_stand_heads[REPORT_STAND_FIGURES];
+
 /** An (index, value) pair of a row: a zone's first conflict year, an obstacle's
  *  clearance or tree shade hours. */
 typedef struct report_kv {
@@ -80,6 +99,7 @@ typedef struct report_run {
   int start_year;     /**< the scenario's start_year; 0 when none */
   bool years;         /**< a species counts in years */
   bool conflicts;     /**< the run reports conflicts (zones, clearance, pruned) */
+  bool stand;         /**< its stats carry the stand's (store_run.stand) */
   int last_iteration; /**< its last stored iteration */
   report_shade *shade; /**< per reported year when report.shade, else NULL */
 } report_run;
@@ -113,6 +133,10 @@ typedef struct report_row {
                             iteration; NAN where not stored */
   double shade_ground; /**< its run's report_shade.ground at this year; NAN in final
                             rows and without a shade day */
+  double stand[REPORT_STAND_FIGURES]; /**< its run's stand at this iteration, the same
+                                           on each of its rows; NAN where not stored
+                                           (a run without stands, rows before
+                                           schema 7) */
   int64_t pruned;     /**< nodes pruned up to this iteration; -1 without conflicts */
   report_kv *first;   /**< zone index and its stored `first` (a calendar year with a
                            start year, else an iteration) */
@@ -162,6 +186,7 @@ typedef struct report_group {
   report_stat measure[REPORT_MEASURES];
   report_stat *first; /**< per zone: the first conflict years of the stems that met
                            it (n of them) */
+  report_stat stand[REPORT_STAND_FIGURES]; /**< one value per run (runs of them) */
 } report_group;
 
 /** A gathered report. Every string and array is owned by it (report_free). */
@@ -175,6 +200,8 @@ typedef struct report {
                               start year), not `iteration` */
   bool multi_stem;       /**< a plant has several stems: the CSV has a `stem` column */
   bool conflicts;        /**< a run reports conflicts */
+  bool stand;            /**< a run has stands: the CSV's stand columns and the stand
+                              table */
   int common_start_year; /**< every run's start year when they share one, else 0 */
   char **axes;           /**< the sweep's axes ("species/KEY", "seed", "variant") */
   int naxes;

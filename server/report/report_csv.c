@@ -61,6 +61,8 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
     put_field(f, "shade_ground", false);
     for (int o = 0; o < r->nshade_obstacles; o++) put_named(f, "shade_", r->shade_obstacles[o]);
   }
+  if (r->stand)
+    for (int k = 0; k < REPORT_STAND_FIGURES; k++) put_field(f, report_stand_columns[k], false);
   for (int z = 0; z < r->nzones; z++) put_named(f, "first_", r->zones[z]);
   for (int o = 0; o < r->nobstacles; o++) put_named(f, "clearance_", r->obstacles[o]);
   if (r->conflicts) put_field(f, "pruned", false);
@@ -90,6 +92,8 @@ int report_write_csv(FILE *f, const report *r, char *err, size_t errlen) {
       for (int o = 0; o < r->nshade_obstacles; o++)
         put_number(f, pair_value(sh->obstacles, sh->nobstacles, o));
     }
+    if (r->stand)
+      for (int k = 0; k < REPORT_STAND_FIGURES; k++) put_number(f, row->stand[k]);
     for (int z = 0; z < r->nzones; z++) put_number(f, pair_value(row->first, row->nfirst, z));
     for (int o = 0; o < r->nobstacles; o++)
       put_number(f, pair_value(row->clearance, row->nclearance, o));

@@ -60,10 +60,29 @@ static const char *const measure_heads[REPORT_MEASURES] = {
     "height (m)", "dbh (m)", "crown diameter (m)", "crown height (m)", "CO2 (kg)",
     "canopy cover", "tree shade, ground (h)"};
 
+/* A group's first cells: its axis, value, species and year. */
+static void put_group_cells(FILE *f, const report *r, const report_group *g) {
+  char cell[64];
+  fputs("<tr><td>", f);
+  put_text(f, report_group_axis(r, g));
+  fputs("</td><td>", f);
+  put_text(f, g->value);
+  fputs("</td><td>", f);
+  put_text(f, r->species[g->species].label);
+  report_format_year(cell, sizeof cell, r, g->year);
+  fprintf(f, "</td><td>%s</td>", cell);
+}
+
+/* The head of a table of the groups, of class cls, up to its year column. */
+static void put_group_head(FILE *f, const char *cls) {
+  fprintf(f, "<table class=\"%s\">\n<thead><tr><th>axis</th><th>value</th><th>species</th>"
+             "<th>years</th>",
+          cls);
+}
+
 static void put_summary(FILE *f, const report *r) {
-  fputs("<table class=\"summary\">\n<thead><tr><th>axis</th><th>value</th><th>species</th>"
-        "<th>years</th><th>stems</th>",
-        f);
+  put_group_head(f, "summary");
+  fputs("<th>stems</th>", f);
   for (int m = 0; m < report_measures_shown(r); m++)
     fprintf(f, "<th>%s</th>", measure_heads[m]);
   for (int z = 0; z < r->nzones; z++) {
@@ -75,14 +94,8 @@ static void put_summary(FILE *f, const report *r) {
   char cell[160];
   for (size_t i = 0; i < r->ngroups; i++) {
     const report_group *g = &r->groups[i];
-    fputs("<tr><td>", f);
-    put_text(f, report_group_axis(r, g));
-    fputs("</td><td>", f);
-    put_text(f, g->value);
-    fputs("</td><td>", f);
-    put_text(f, r->species[g->species].label);
-    report_format_year(cell, sizeof cell, r, g->year);
-    fprintf(f, "</td><td>%s</td><td>%d</td>", cell, g->n);
+    put_group_cells(f, r, g);
+    fprintf(f, "<td>%d</td>", g->n);
     for (int m = 0; m < report_measures_shown(r); m++) {
       report_format_stat(cell, sizeof cell, &g->measure[m],
                          report_measure_per_run((report_measure)m) ? g->runs : g->n);
@@ -90,6 +103,26 @@ static void put_summary(FILE *f, const report *r) {
     }
     for (int z = 0; z < r->nzones; z++) {
       report_format_first(cell, sizeof cell, &g->first[z], g->n);
+      fprintf(f, "<td>%s</td>", cell);
+    }
+    fputs("</tr>\n", f);
+  }
+  fputs("</tbody></table>\n", f);
+}
+
+/* The stand's figures of each group, over its runs (docs/cli.md, "report"). */
+static void put_stand(FILE *f, const report *r) {
+  put_group_head(f, "stand");
+  fputs("<th>runs</th>", f);
+  for (int k = 0; k < REPORT_STAND_FIGURES; k++) fprintf(f, "<th>%s</th>", report_stand_heads[k]);
+  fputs("</tr></thead>\n<tbody>\n", f);
+  char cell[160];
+  for (size_t i = 0; i < r->ngroups; i++) {
+    const report_group *g = &r->groups[i];
+    put_group_cells(f, r, g);
+    fprintf(f, "<td>%d</td>", g->runs);
+    for (int k = 0; k < REPORT_STAND_FIGURES; k++) {
+      report_format_stat(cell, sizeof cell, &g->stand[k], g->runs);
       fprintf(f, "<td>%s</td>", cell);
     }
     fputs("</tr>\n", f);
@@ -178,7 +211,7 @@ int report_write_html(FILE *f, store *st, const report *r, const report_draw_opt
         "table { border-collapse: collapse; margin: 1em 0; }\n"
         "th, td { border: 1px solid #bbb; padding: 0.25em 0.5em; text-align: left; "
         "vertical-align: top; }\n"
-        "table.summary td { white-space: nowrap; font-variant-numeric: tabular-nums; }\n"
+        "table.summary td, table.stand td { white-space: nowrap; font-variant-numeric: tabular-nums; }\n"
         "table.pictures img { max-width: 520px; height: auto; }\n"
         "img { max-width: 100%; height: auto; }\n"
         "p.note { color: #555; max-width: 60em; }\n"
@@ -211,6 +244,14 @@ int report_write_html(FILE *f, store *st, const report *r, const report_draw_opt
   put_summary(f, r);
   if (!r->ngroups)
     fputs("<p>No run has reached any of the reported years.</p>\n", f);
+  if (r->stand && r->ngroups) {
+    fputs("<h2>Stand</h2>\n<p class=\"note\">The stand of each run (all its stems, per "
+          "hectare of its stand area) at that year, over the runs of each summary line, one "
+          "value each: median (minimum–maximum), \"k of n\" where only k of the n runs have a "
+          "value. Died: the stems that died in iterations 1 to that year.</p>\n",
+          f);
+    put_stand(f, r);
+  }
 
   fputs("<h2>Pictures</h2>\n<p class=\"note\">Each species in the first run that grows it, "
         "at each reported year.</p>\n",

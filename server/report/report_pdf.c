@@ -62,6 +62,18 @@ static double page_title(cairo_t *cr, const report *r, const char *what) {
 
 enum { FIXED_COLUMNS = 5 };
 
+/* The text of a group's first columns (c < FIXED_COLUMNS; the fifth is count). */
+static void group_cell(const report *r, const report_group *g, int c, int count, char *buf,
+                       size_t n) {
+  switch (c) {
+  case 0: snprintf(buf, n, "%s", report_group_axis(r, g)); return;
+  case 1: snprintf(buf, n, "%s", g->value); return;
+  case 2: snprintf(buf, n, "%s", r->species[g->species].label); return;
+  case 3: report_format_year(buf, n, r, g->year); return;
+  default: snprintf(buf, n, "%d", count); return;
+  }
+}
+
 /* The text of column c of group g (g NULL: the header). */
 static void summary_cell(const report *r, const report_group *g, int c, char *buf, size_t n) {
   static const char *const heads[FIXED_COLUMNS + REPORT_MEASURES] = {
@@ -74,13 +86,9 @@ static void summary_cell(const report *r, const report_group *g, int c, char *bu
     else snprintf(buf, n, "first: %s", r->zones[c - FIXED_COLUMNS - measures]);
     return;
   }
-  switch (c) {
-  case 0: snprintf(buf, n, "%s", report_group_axis(r, g)); return;
-  case 1: snprintf(buf, n, "%s", g->value); return;
-  case 2: snprintf(buf, n, "%s", r->species[g->species].label); return;
-  case 3: report_format_year(buf, n, r, g->year); return;
-  case 4: snprintf(buf, n, "%d", g->n); return;
-  default: break;
+  if (c < FIXED_COLUMNS) {
+    group_cell(r, g, c, g->n, buf, n);
+    return;
   }
   if (c < FIXED_COLUMNS + measures) {
     report_measure m = (report_measure)(c - FIXED_COLUMNS);
@@ -90,21 +98,70 @@ static void summary_cell(const report *r, const report_group *g, int c, char *bu
   }
 }
 
-static int summary_pages(pdf *p, const report *r) {
+/* The text of column c of group g's stand (g NULL: the header). */
+static void stand_cell(const report *r, const report_group *g, int c, char *buf, size_t n) {
+  static const char *const heads[FIXED_COLUMNS] = {"axis", "value", "species", "years", "runs"};
+  if (!g)
+    snprintf(buf, n, "%s", c < FIXED_COLUMNS ? heads[c] : report_stand_heads[c - FIXED_COLUMNS]);
+  else if (c < FIXED_COLUMNS)
+    group_cell(r, g, c, g->runs, buf, n);
+  else
+    report_format_stat(buf, n, &g->stand[c - FIXED_COLUMNS], g->runs);
+}
+
+/* The notes under the first page's title of a table; returns the y below them. */
+typedef double (*table_notes)(cairo_t *cr, const report *r, double y);
+
+static double summary_notes(cairo_t *cr, const report *r, double y) {
+  char cell[400];
+  font(cr, 9, false);
+  snprintf(cell, sizeof cell, "Store %s, %d run%s. Median (minimum–maximum) over the stems "
+           "(canopy cover: over the runs) of each axis value, seeds pooled; first "
+           "conflict: stored first years.", r->db,
+           r->nruns, r->nruns == 1 ? "" : "s");
+  text_at(cr, MARGIN, y + 4, cell);
+  y += 18;
+  if (r->shade) {
+    snprintf(cell, sizeof cell, "Tree shade, ground: per run, the mean hours of sun its trees "
+             "take from the ground on %02d-%02d, %02d:%02d to %02d:%02d, every %d minutes.",
+             r->shade_day.month, r->shade_day.day, r->shade_day.from / 60,
+             r->shade_day.from % 60, r->shade_day.to / 60, r->shade_day.to % 60,
+             r->shade_day.step);
+    text_at(cr, MARGIN, y + 4, cell);
+    y += 14;
+  }
+  if (!r->ngroups) text_at(cr, MARGIN, y + 12, "No run has reached any of the reported years.");
+  return y;
+}
+
+static double stand_notes(cairo_t *cr, const report *r, double y) {
+  (void)r;
+  font(cr, 9, false);
+  text_at(cr, MARGIN, y + 4, "Each run's stand (all its stems, per hectare of its stand area) "
+          "at that year: median (minimum–maximum) over the runs of each summary line.");
+  text_at(cr, MARGIN, y + 18, "Died: the stems that died in iterations 1 to that year.");
+  return y + 32;
+}
+
+/* Pages of a table of the groups: cols columns whose texts cell gives, the title
+ * `what`, notes on the first page. */
+static int table_pages(pdf *p, const report *r, int cols,
+                       void (*cell_of)(const report *r, const report_group *g, int c, char *buf,
+                                       size_t n),
+                       const char *what, table_notes notes) {
   cairo_t *cr = p->cr;
-  int cols = FIXED_COLUMNS + report_measures_shown(r) + r->nzones;
   double *width = calloc((size_t)cols, sizeof *width);
   if (!width) return SERVER_ENOMEM;
   char cell[400];
   font(cr, TABLE_FONT, true);
   for (int c = 0; c < cols; c++) {
-    summary_cell(r, NULL, c, cell, sizeof cell);
+    cell_of(r, NULL, c, cell, sizeof cell);
     width[c] = text_width(cr, cell);
   }
   font(cr, TABLE_FONT, false);
   for (size_t i = 0; i < r->ngroups; i++)
     for (int c = 0; c < cols; c++) {
-      summary_cell(r, &r->groups[i], c, cell, sizeof cell);
+      cell_of(r, &r->groups[i], c, cell, sizeof cell);
       double w = text_width(cr, cell);
       if (w > width[c]) width[c] = w;
     }
@@ -115,31 +172,13 @@ static int summary_pages(pdf *p, const report *r) {
   double size = TABLE_FONT * scale, row_h = size * 1.8;
   size_t i = 0;
   do {
-    double y = page_title(cr, r, "summary");
-    if (i == 0) {
-      font(cr, 9, false);
-      snprintf(cell, sizeof cell, "Store %s, %d run%s. Median (minimum–maximum) over the stems "
-               "(canopy cover: over the runs) of each axis value, seeds pooled; first "
-               "conflict: stored first years.", r->db,
-               r->nruns, r->nruns == 1 ? "" : "s");
-      text_at(cr, MARGIN, y + 4, cell);
-      y += 18;
-      if (r->shade) {
-        snprintf(cell, sizeof cell, "Tree shade, ground: per run, the mean hours of sun its trees "
-                 "take from the ground on %02d-%02d, %02d:%02d to %02d:%02d, every %d minutes.",
-                 r->shade_day.month, r->shade_day.day, r->shade_day.from / 60,
-                 r->shade_day.from % 60, r->shade_day.to / 60, r->shade_day.to % 60,
-                 r->shade_day.step);
-        text_at(cr, MARGIN, y + 4, cell);
-        y += 14;
-      }
-      if (!r->ngroups) text_at(cr, MARGIN, y + 12, "No run has reached any of the reported years.");
-    }
+    double y = page_title(cr, r, what);
+    if (i == 0) y = notes(cr, r, y);
     if (r->ngroups) {
       double x = MARGIN;
       font(cr, size, true);
       for (int c = 0; c < cols; c++) {
-        summary_cell(r, NULL, c, cell, sizeof cell);
+        cell_of(r, NULL, c, cell, sizeof cell);
         text_at(cr, x, y + size, cell);
         x += (width[c] + 8) * scale;
       }
@@ -152,7 +191,7 @@ static int summary_pages(pdf *p, const report *r) {
       for (; i < r->ngroups && y + row_h < PAGE_H - MARGIN; i++, y += row_h) {
         x = MARGIN;
         for (int c = 0; c < cols; c++) {
-          summary_cell(r, &r->groups[i], c, cell, sizeof cell);
+          cell_of(r, &r->groups[i], c, cell, sizeof cell);
           text_at(cr, x, y + size, cell);
           x += (width[c] + 8) * scale;
         }
@@ -313,7 +352,11 @@ int report_write_pdf(FILE *f, store *st, const report *r, const report_draw_opti
   snprintf(title, sizeof title, "sylva report: %s", r->sweep ? r->sweep : "the runs of the store");
   cairo_pdf_surface_set_metadata(surf, CAIRO_PDF_METADATA_TITLE, title);
   cairo_pdf_surface_set_metadata(surf, CAIRO_PDF_METADATA_CREATOR, "sylva report");
-  int rc = summary_pages(&p, r);
+  int rc = table_pages(&p, r, FIXED_COLUMNS + report_measures_shown(r) + r->nzones, summary_cell,
+                       "summary", summary_notes);
+  if (!rc && r->stand && r->ngroups)
+    rc = table_pages(&p, r, FIXED_COLUMNS + REPORT_STAND_FIGURES, stand_cell, "stand",
+                     stand_notes);
   if (!rc) rc = picture_pages(&p, st, r, o, err, errlen);
   else snprintf(err, errlen, "out of memory");
   if (!rc) rc = figure_page(&p, r, REPORT_HEIGHT, "height");

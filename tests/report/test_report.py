@@ -16,6 +16,11 @@ meson runs `python3 test_report.py SYLVA_EXE SCENARIOS_DIR PART`, PART:
           iterations): co2, co2_sequestered and canopy_cover equal the stats and
           iterations tables, the shade columns `sylva shade`'s tree_shade_hours, empty
           with one warning where the light has no latitude; the HTML's tree shade;
+  stand   a store without sweeps of two stands with background mortality and a run
+          without stands (12 iterations): the stand columns equal the iterations
+          table (died summed here), empty for the run without; the HTML's stand
+          table the medians and ranges over the runs recomputed here; the PDF's
+          stand page; a report of runs without stands has neither;
   errors  bad input (no --db, no such store, no such sweep, several sweeps, bad
           --years, bad -o): exit 2, a message naming it, no file written and an
           existing one untouched; years no run reached: a warning, header only.
@@ -31,7 +36,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "store"))
-from store_common import Checks, Env, crash_text  # noqa: E402
+from store_common import Checks, Env, crash_text, stand_scenario  # noqa: E402
 
 ITERATIONS = 12
 YEARS = [5, 10, 12, 20]  # 20 is never reached
@@ -44,6 +49,13 @@ CSV_MEASURES = [(col, key) for col, key, _ in MEASURES] + [
     ("leaf_area", "leaf_area"), ("co2_sequestered", "co2_sequestered")]
 SUMMARY_HEAD = ["axis", "value", "species", "years", "stems", "height (m)", "dbh (m)",
                 "crown diameter (m)", "crown height (m)", "CO2 (kg)", "canopy cover"]
+# the stand's figures of a run with stands: (CSV column, stored column, stand table head),
+# one value per run; died is the iterations' stand_died summed to the year
+STAND = [("stems_per_ha", "stems_per_ha", "stems/ha"),
+         ("basal_area", "basal_area", "basal area (m²/ha)"), ("qmd", "qmd", "QMD (cm)"),
+         ("dominant_height", "dominant_height", "dominant height (m)"), ("sdi", "sdi", "SDI"),
+         ("cv_dbh", "cv_dbh", "CV dbh"), ("died", None, "died")]
+STAND_MEASURES = [(col, col, True) for col, _, _ in STAND]
 
 
 # ---- what the store holds, read here ----------------------------------------------
@@ -80,6 +92,14 @@ def expected_rows(db, sweep, years):
             for y in years:
                 cover = con.execute("SELECT canopy_cover FROM iterations WHERE run = ? AND"
                                     " iteration = ?", (rid, y)).fetchone()
+                stand = con.execute("SELECT %s FROM iterations WHERE run = ? AND iteration = ?"
+                                    % ", ".join(k for _, k, _ in STAND if k),
+                                    (rid, y)).fetchone() or [None] * (len(STAND) - 1)
+                died, known, its = con.execute(
+                    "SELECT total(stand_died), count(stand_died), count(*) FROM iterations"
+                    " WHERE run = ? AND iteration BETWEEN 1 AND ?", (rid, y)).fetchone()
+                stand = dict(zip([col for col, _, _ in STAND],
+                                 list(stand) + [died if known == its else None]))
                 for (stem, plant, plant_stem, age, height, dbh, cw, ch, la, co2, seq, zones,
                      clearance, pruned) in con.execute(
                         "SELECT stem, plant, plant_stem, age, height, dbh, crown_width,"
@@ -97,7 +117,7 @@ def expected_rows(db, sweep, years):
                                  "dbh": dbh, "crown_width": cw, "crown_height": ch,
                                  "leaf_area": la, "co2": co2, "co2_sequestered": seq,
                                  "canopy_cover": cover[0] if cover else None,
-                                 "rid": rid,
+                                 "rid": rid, **stand,
                                  "zones": json.loads(zones) if zones else None,
                                  "clearance": json.loads(clearance) if clearance else None,
                                  "pruned": total if pruned is not None else None})
@@ -158,6 +178,19 @@ def check_csv(c, path, expect, axes, multi_stem, shade=False):
                 bad.append((i, "clearance_" + o, f["clearance_" + o], want))
         if "pruned" in f and number(f["pruned"]) != e["pruned"]:
             bad.append((i, "pruned", f["pruned"], e["pruned"]))
+    # the stand's columns: in a report of a run with stands, before the zones' columns
+    stand = any(e["stems_per_ha"] is not None for e in expect)
+    cols = [col for col, _, _ in STAND]
+    at = header.index("first_" + zones[0]) if zones else (
+        header.index("pruned") if "pruned" in header else len(header))
+    c.check(header[at - len(cols):at] == cols if stand else not set(cols) & set(header),
+            "the stand's columns only in a report of runs with stands, before the zones'",
+            header)
+    for i, (row, e) in enumerate(zip(rows, expect)):
+        f = dict(zip(header, row))
+        for col in cols if stand else []:
+            if number(f[col]) != e[col]:
+                bad.append((i, col, f[col], e[col]))
     c.check(not bad, "every CSV value equals the stored stats", bad[:10])
     for key in ("leaf_area", "canopy_cover"):
         c.check(all(e[key] is not None for e in expect) and any(e[key] for e in expect),
@@ -262,6 +295,17 @@ def close3(shown, value):
     return abs(float(shown) - value) <= 0.0005 + 1e-9
 
 
+def stat_cell_ok(cell, cnt, med, lo, hi, n):
+    """A summary cell against cnt of n values with that median, minimum and maximum:
+    "–" for none, "median (min–max)" and ", cnt of n" where some lack it."""
+    if cnt == 0:
+        return cell == "–"
+    m = STAT.match(cell)
+    return bool(m and close3(m.group(1), med) and close3(m.group(2), lo)
+                and close3(m.group(3), hi) and (cnt < n) == (m.group(4) is not None)
+                and (not m.group(4) or (int(m.group(4)), int(m.group(5))) == (cnt, n)))
+
+
 def check_summary(c, page, groups, zones, measures=MEASURES, head_fixed=SUMMARY_HEAD):
     p = Tables()
     p.feed(page)
@@ -284,17 +328,8 @@ def check_summary(c, page, groups, zones, measures=MEASURES, head_fixed=SUMMARY_
             continue
         for k, (_, key, _) in enumerate(measures):
             cnt, med, lo, hi, n = meas[key]
-            cell = cells[5 + k]
-            if cnt == 0:
-                if cell != "–":
-                    bad.append((i, key, cell, "–"))
-                continue
-            m = STAT.match(cell)
-            if not m or not (close3(m.group(1), med) and close3(m.group(2), lo)
-                             and close3(m.group(3), hi)) \
-                    or (cnt < n) != (m.group(4) is not None) \
-                    or (m.group(4) and (int(m.group(4)), int(m.group(5))) != (cnt, n)):
-                bad.append((i, key, cell, (med, lo, hi, cnt, n)))
+            if not stat_cell_ok(cells[5 + k], cnt, med, lo, hi, n):
+                bad.append((i, key, cells[5 + k], (med, lo, hi, cnt, n)))
         n = g[4]
         for k, z in enumerate(zones):
             cnt, med, lo, hi = firsts[z]
@@ -311,6 +346,33 @@ def check_summary(c, page, groups, zones, measures=MEASURES, head_fixed=SUMMARY_
     c.check(not bad, "every summary number equals the median, minimum and maximum "
             "recomputed from the stats table", bad[:10])
     return p
+
+
+def check_stand_table(c, p, groups):
+    """The HTML's stand table: a line per summary line, the runs, and each figure's
+    median (minimum–maximum) over them; groups from expected_groups(STAND_MEASURES)."""
+    stand = [rows for cls, rows in p.tables if cls == "stand"]
+    if not c.check(len(stand) == 1, "the HTML has one stand table"):
+        return
+    head, body = stand[0][0], stand[0][1:]
+    c.check(head == ["axis", "value", "species", "years", "runs"] + [h for _, _, h in STAND],
+            "stand table header", head)
+    c.check(len(body) == len(groups), "one stand line per summary line",
+            "%d lines, %d expected" % (len(body), len(groups)))
+    bad = []
+    for i, (cells, g) in enumerate(zip(body, groups)):
+        axis, value, species, year, _, meas, _ = g
+        runs = meas[STAND[0][0]][4]
+        if cells[:3] != [axis, value, species] or int(cells[3].split()[0]) != year \
+                or int(cells[4]) != runs:
+            bad.append((i, "keys", cells[:5], g[:4], runs))
+            continue
+        for k, (col, _, _) in enumerate(STAND):
+            cnt, med, lo, hi, n = meas[col]
+            if not stat_cell_ok(cells[5 + k], cnt, med, lo, hi, n):
+                bad.append((i, col, cells[5 + k], (med, lo, hi, cnt, n)))
+    c.check(not bad, "every stand number equals the median, minimum and maximum over the "
+            "runs recomputed from the iterations table", bad[:10])
 
 
 def check_images(c, p, pictures):
@@ -373,6 +435,14 @@ def make_sweep(env, name, species, seeds, variants, iterations, db):
                            "--jobs", "2")
     if rc != 0:
         raise RuntimeError("sweep failed (%s): %s" % (rc, err))
+
+
+def run_into(env, db, runs):
+    """`sylva run SCENARIO [ARGS] --iterations N --db DB` of each (args, N) of runs."""
+    for args, n in runs:
+        rc, _, err = env.sylva("run", *args, "--iterations", n, "--db", db, "--quiet-progress")
+        if rc != 0:
+            raise RuntimeError("run failed (%s): %s" % (rc, err))
 
 
 def part_sweep(env, c):
@@ -454,11 +524,8 @@ def part_ready(env, c):
 
 def part_plain(env, c):
     db = env.path("plain.db")
-    for scen, n in (("street-pruned.json", 8), ("shrub.json", 4)):
-        rc, _, err = env.sylva("run", env.scenario(scen), "--iterations", n, "--db", db,
-                               "--quiet-progress")
-        if rc != 0:
-            raise RuntimeError("run failed (%s): %s" % (rc, err))
+    run_into(env, db, [([env.scenario("street-pruned.json")], 8),
+                       ([env.scenario("shrub.json")], 4)])
     years = [2, 4, 8]
     expect = expected_rows(db, None, years)
     out = env.path("p.csv")
@@ -646,13 +713,65 @@ def part_benefits(env, c):
             "the page names the shade day")
 
 
+def part_stand(env, c):
+    """Two stands with background mortality (six lindens each, seeds 2 and 4) and a
+    shrub of an IGM species without stands, in a store without sweeps."""
+    db = env.path("stand.db")
+    path = stand_scenario(env, ITERATIONS)
+    run_into(env, db, [([path, "--name", "stand-2"], ITERATIONS),
+                       ([path, "--name", "stand-4", "--seed", 4], ITERATIONS),
+                       ([env.scenario("shrub.json"), "--name", "shrub"], ITERATIONS)])
+    years = [3, 8, 10]
+    expect = expected_rows(db, None, years)
+    out = env.path("s.csv")
+    rc, err = report(env, c, "--db", db, "--years", "3,8,10", "-o", out)
+    c.check(rc == 0, "report of stands exits 0", err)
+    header, rows, zones = check_csv(c, out, expect, [], True)
+    f = [dict(zip(header, r)) for r in rows]
+    c.check(all(x["died"] == "" for x in f if x["run"] == "shrub") and
+            all(x["died"] != "" for x in f if x["run"] != "shrub"),
+            "the stand's columns are empty for the run without stands only")
+    died = {(x["run"], x["year"]): int(x["died"]) for x in f if x["run"] != "shrub"}
+    c.check(all(died[(r, "2038")] > died[(r, "2033")] for r in ("stand-2", "stand-4")) and
+            died[("stand-2", "2040")] == 5,
+            "died sums the stand's deaths to the year (more by 8 than by 3; five of "
+            "stand-2's six by 10)", died)
+    groups = expected_groups(expect, [], zones, years, MEASURES + STAND_MEASURES)
+    page = env.path("s.html")
+    rc, err = report(env, c, "--db", db, "--years", "3,8,10", "-o", page)
+    c.check(rc == 0, "HTML of stands exits 0", err)
+    with open(page, encoding="utf-8") as fh:
+        text = fh.read()
+    p = Tables()
+    p.feed(text)
+    check_stand_table(c, p, groups)
+    pdf = env.path("s.pdf")
+    rc, err = report(env, c, "--db", db, "--years", "3,8,10", "-o", pdf)
+    c.check(rc == 0, "PDF of stands exits 0", err)
+    text = subprocess.run(["pdftotext", "-layout", pdf, "-"], capture_output=True, text=True,
+                          timeout=120).stdout
+    cells = ["%.3f (%.3f–%.3f)" % g[5]["stems_per_ha"][1:4] for g in groups if g[2] == "ti"]
+    c.check("the runs of the store — stand" in text and all(x in text for x in cells),
+            "the PDF has a stand page with the stems per hectare", cells)
+    # runs without stands: neither columns nor table
+    plain = env.path("plain.db")
+    run_into(env, plain, [([env.scenario("shrub.json")], 3)])
+    rc, err = report(env, c, "--db", plain, "--years", "3", "-o", env.path("n.html"))
+    with open(env.path("n.html"), encoding="utf-8") as fh:
+        text = fh.read()
+    rc2, err2 = report(env, c, "--db", plain, "--years", "3", "-o", env.path("n.csv"))
+    header, _ = read_csv(env.path("n.csv"))
+    c.check(rc == 0 and rc2 == 0 and "<h2>Stand</h2>" not in text and "stems_per_ha" not in header,
+            "a report of runs without stands has no stand table or columns", (err, err2, header))
+
+
 def main():
     env = Env(sys.argv[:3])
     part = sys.argv[3] if len(sys.argv) > 3 else "sweep"
     c = Checks()
     try:
         {"sweep": part_sweep, "ready": part_ready, "plain": part_plain,
-         "errors": part_errors, "benefits": part_benefits}[part](env, c)
+         "errors": part_errors, "benefits": part_benefits, "stand": part_stand}[part](env, c)
     finally:
         env.cleanup()
     c.finish()
