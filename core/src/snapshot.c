@@ -697,6 +697,9 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
           (m->fallen >= 0 && m->fallen < m->died) || (m->died < 0 && m->fallen >= 0))
         SYLVA__FAIL(SYLVA_EBADIMAGE);
       if (m->died < 0) continue;
+      /* its measures are its last season's alive, the one before it died */
+      const sylva_species_def *sd = &w->species[st->species].def;
+      m->age = sd->years ? (int32_t)(m->died - 1 - st->born - sd->nursery) : -1;
       double *kept[] = {&m->leaf_area, &m->crown_area, &m->wood_volume, &m->biomass,
                         &m->biomass_model, &m->carbon, &m->co2};
       for (size_t i = 0; i < sizeof kept / sizeof *kept; i++) *kept[i] = get_f64(r);
