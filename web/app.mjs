@@ -6,7 +6,7 @@ import { $ } from './dom.mjs';
 import { Session } from './session.mjs';
 import { Watch } from './watch.mjs';
 import { View } from './scene.mjs';
-import { Plots } from './plots.mjs';
+import { Plots, StandFigures } from './plots.mjs';
 import { RunsPanel } from './runs.mjs';
 import { CreatePanel } from './create.mjs';
 import { ControlsPanel } from './controls.mjs';
@@ -40,7 +40,8 @@ const session = new Session({
   onMessage: (msg, meta) => handlers[msg.type]?.(msg, meta),
 });
 const view = new View($('view'));
-const plots = new Plots($('plots'));
+const plots = new Plots($('charts'));
+const stand = new StandFigures($('stand'), $('stand-figures'));
 const watch = new Watch({ session, view, plots, onChange: changed });
 
 // Watches a run that was just created or forked ({run, name}), then refreshes the
@@ -90,6 +91,7 @@ function changed(what) {
     shade.render();
     edit.render();
     conflicts.render();
+    stand.render(watch.shown().stand);
   } else if (what === 'snapshot') {
     timeline.reset();
     edit.speciesOptions();
@@ -102,12 +104,14 @@ function changed(what) {
     edit.render();
     conflicts.render();
     shade.refresh();
+    stand.render(watch.shown().stand);
   } else if (what === 'shown') {
     shade.refresh();
     timeline.render();
     controls.renderExports();
     edit.render();
     conflicts.render();
+    stand.render(watch.shown().stand);
   } else if (what === 'status') {
     controls.render();
   }
@@ -151,6 +155,9 @@ window.sylva = {
     drawnZones: view.drawnBounds('zone'),
     zones: zonesOf(watch.shown().obstacles).map((o) => o.id),
     highlighted: view.branches.highlighted(),
+    greyed: view.branches.greyed(),
+    stand: watch.shown().stand,
+    standFigures: stand.rows(),
     inZones: countInZones(watch.shown().end, watch.shown().dead, watch.shown().count, zonesOf(watch.shown().obstacles)),
     conflicts: conflicts.rows(),
     sky: light.sky,

@@ -3,7 +3,8 @@
 // parent, scaled by the node's radius), solid obstacles as translucent boxes or
 // prisms (a footprint with its holes, extruded over its z range) and clearance
 // zones as fainter amber ones, the internodes inside a zone in a colour of their
-// own, the ground with a 1 m grid and labelled scales, a light-slice heat map,
+// own, the stems of a stand that died (their snags) in bark grey, the ground with
+// a 1 m grid and labelled scales, a light-slice heat map,
 // orbit/front/side/top cameras and a compass that turns with them. The scene's
 // axes are the model's (x east, y north, z up): world points go in as they are.
 // The leaves (leaves.mjs) are lit by a sky light and a sun straight above (the
@@ -14,6 +15,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { isZone, markInZones, zonesOf } from './zones.mjs';
+import { markDeadStems } from './stand.mjs';
 import { Leaves } from './leaves.mjs';
 import { LEAF_BUDGET, LEAF_BUDGET_MIN } from './foliage.mjs';
 
@@ -107,6 +109,9 @@ export const plantColor = (i) => PALETTE[i % PALETTE.length];
 // Clearance zones (translucent boxes) and the internodes inside one.
 export const ZONE_COLOR = '#f0a020';
 export const ZONE_NODE_COLOR = '#e8112d';
+// A dead stem's snag (stand.mjs), whatever its plant's colour; the zone colour
+// still marks its internodes inside a zone.
+export const DEAD_COLOR = '#8c8780';
 
 const VERTEX = `
 attribute vec3 aStart;
@@ -114,8 +119,10 @@ attribute vec3 aEnd;
 attribute float aRadius;
 attribute float aPlant;
 attribute float aZone;       // 1 + the index of the zone the node is in, 0 for none
+attribute float aDead;       // 1: the node's stem is dead
 uniform vec3 uPalette[${PALETTE.length}];
 uniform vec3 uZoneColor;
+uniform vec3 uDeadColor;
 uniform float uPixelPersp;   // world size of a pixel per unit of distance (perspective)
 uniform float uPixelOrtho;   // world size of a pixel (orthographic)
 uniform float uMinPixels;    // thinnest drawn radius, pixels
@@ -135,7 +142,7 @@ void main() {
   vec3 p = aStart + axis * (position.y + 0.5) + (u * position.x + v * position.z) * r;
   vNormal = normalize(normalMatrix * (u * normal.x + v * normal.z));
   int k = int(aPlant + 0.5) - ${PALETTE.length} * (int(aPlant + 0.5) / ${PALETTE.length});
-  vColor = aZone > 0.5 ? uZoneColor : uPalette[k];
+  vColor = aZone > 0.5 ? uZoneColor : aDead > 0.5 ? uDeadColor : uPalette[k];
   gl_Position = projectionMatrix * modelViewMatrix * vec4(p, 1.0);
 }`;
 
@@ -164,6 +171,8 @@ class Branches {
     this.zone = null;       // the aZone attribute: its array is the page's own (zones.mjs)
     this.zones = [];        // the zones the marks are of
     this.zonesDirty = false; // the zones changed since the marks were made
+    this.dead = null;       // the aDead attribute: 1 for a slot of a dead stem (stand.mjs)
+    this.deadVersion = -1;  // the skeleton's deadVersion the marks are of
   }
 
   // The clearance zones whose internodes are drawn in the zone colour.
@@ -179,6 +188,19 @@ class Branches {
     let n = 0;
     for (let k = 0, count = this.sk.count; k < count; k++) if (a[k] > 0) n++;
     return n;
+  }
+
+  // Internodes drawn grey (dead stems' marks, as uploaded), by plant id.
+  greyed() {
+    const out = {};
+    if (!this.sk || !this.dead) return out;
+    const a = this.dead.array, { plant, plants } = this.sk;
+    for (let k = 0, count = this.sk.count; k < count; k++) {
+      if (a[k] === 0) continue;
+      const id = plants[plant[k]]?.id ?? String(plant[k]);
+      out[id] = (out[id] || 0) + 1;
+    }
+    return out;
   }
 
   rebuild(sk) {
@@ -199,12 +221,17 @@ class Branches {
     markInZones(sk.end, sk.dead, 0, sk.count, this.zones, marks);
     this.zonesDirty = false;
     this.zone = new THREE.InstancedBufferAttribute(marks, 1);
-    for (const a of [this.start, this.end, this.radius, this.plant, this.zone]) a.setUsage(THREE.DynamicDrawUsage);
+    const dead = new Float32Array(sk.capacity);
+    markDeadStems(sk.plant, sk.stem, sk.dead, 0, sk.count, sk.deadStems, dead);
+    this.deadVersion = sk.deadVersion;
+    this.dead = new THREE.InstancedBufferAttribute(dead, 1);
+    for (const a of [this.start, this.end, this.radius, this.plant, this.zone, this.dead]) a.setUsage(THREE.DynamicDrawUsage);
     g.setAttribute('aStart', this.start);
     g.setAttribute('aEnd', this.end);
     g.setAttribute('aRadius', this.radius);
     g.setAttribute('aPlant', this.plant);
     g.setAttribute('aZone', this.zone);
+    g.setAttribute('aDead', this.dead);
     g.instanceCount = sk.count;
     this.mesh = new THREE.Mesh(g, this.material);
     this.mesh.frustumCulled = false;
@@ -215,7 +242,8 @@ class Branches {
 
   // Uploads what changed since the last sync: the moved and added slots, and the
   // radii (changed radii are spread over the skeleton, so all of them go up); the
-  // zone marks of the changed slots, or of every slot when the zones changed.
+  // zone marks of the changed slots, or of every slot when the zones changed; the
+  // dead stems' marks likewise, of every slot when a stem died.
   sync(sk) {
     if (this.sk !== sk || this.version !== sk.version) {
       this.rebuild(sk);
@@ -241,6 +269,14 @@ class Branches {
       markInZones(sk.end, sk.dead, zfrom, n, this.zones, this.zone.array);
       this.zone.addUpdateRange(zfrom, n - zfrom);
       this.zone.needsUpdate = true;
+    }
+    const dfrom = this.deadVersion !== sk.deadVersion ? 0 : from;
+    this.deadVersion = sk.deadVersion;
+    this.dead.clearUpdateRanges();
+    if (dfrom < n) {
+      markDeadStems(sk.plant, sk.stem, sk.dead, dfrom, n, sk.deadStems, this.dead.array);
+      this.dead.addUpdateRange(dfrom, n - dfrom);
+      this.dead.needsUpdate = true;
     }
     this.mesh.geometry.instanceCount = n;
   }
@@ -337,6 +373,7 @@ export class View {
       uniforms: {
         uPalette: { value: PALETTE.map((c) => new THREE.Color(c)) },
         uZoneColor: { value: new THREE.Color(ZONE_NODE_COLOR) },
+        uDeadColor: { value: new THREE.Color(DEAD_COLOR) },
         uPixelPersp: { value: 0 }, uPixelOrtho: { value: 0 }, uMinPixels: { value: 0.6 },
       },
     });

@@ -8,8 +8,11 @@
 // them out later, in a task of its own, so that applying a delta stays short.
 // Each slot also holds its node's leaf count (the snapshot's and deltas' `leaves`);
 // the ids whose leaves changed are logged for the view's leaf cards (takeLeafLog).
+// The stems that are dead (their stats' `alive`: stand.mjs) are kept as keys, and
+// deadVersion bumps when they change, for the view's grey.
 // Nothing here knows about three.js or the DOM.
 import { pastStage } from './helpers.mjs';
+import { deadStemKeys, sameKeys } from './stand.mjs';
 
 const GROW = 2;
 const NONE = 2 ** 31;
@@ -30,6 +33,10 @@ export class Skeleton {
     this.world = null;
     this.voxel = 0;
     this.stats = [];
+    this.stand = null;       // the stand's figures (a stand's run: protocol.md), or null
+    this.plantIndex = new Map();  // plant id -> its index in plants
+    this.deadStems = new Set();   // keys (stand.mjs) of the stems whose stats say they are dead
+    this.deadVersion = 0;    // bumps when deadStems changes
     this.startYear = null;   // the calendar year of iteration 0 (a run with a start year)
     this.earliest = 0;       // the earliest birth of the snapshot: below 0 for a tree with a past
     this.foliage = [];       // per species {species, leaf_size, leaf_density, leaf_colour}
@@ -169,7 +176,8 @@ export class Skeleton {
     this.voxel = msg.voxel;
     this.iteration = msg.iteration;
     this.seq = msg.seq ?? -1;
-    this.stats = msg.stats || [];
+    this.plantIndex = new Map((msg.plants || []).map((p, i) => [p.id, i]));
+    this.setStats(msg.stats || [], msg.stand);
     this.changedFrom = 0;
     this.version++;
   }
@@ -188,9 +196,20 @@ export class Skeleton {
     if (msg.leaves) this.setLeaves(msg.leaves);
     this.iteration = msg.iteration;
     this.seq = msg.seq;
-    this.stats = msg.stats;
+    this.setStats(msg.stats, msg.stand);
     this.changedFrom = Math.min(this.changedFrom, from);
     return from;
+  }
+
+  // The stems' stats and the stand's figures of a message (undefined: none), and
+  // the dead stems they name.
+  setStats(stats, stand) {
+    this.stats = stats;
+    this.stand = stand ?? null;
+    const keys = deadStemKeys(stats, this.plantIndex);
+    if (sameKeys(keys, this.deadStems)) return;
+    this.deadStems = keys;
+    this.deadVersion++;
   }
 
   // Sets the leaf counts of a leaves list (wire.mjs: {n, id, count}) on the nodes

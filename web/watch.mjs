@@ -9,6 +9,7 @@
 //   'status'   the run's status changed.
 import { Skeleton } from './skeleton.mjs';
 import { parseStatsCsv, runSummary } from './helpers.mjs';
+import { standOfRows } from './stand.mjs';
 
 const TIMINGS = 200;   // delta timings kept for the page's state
 
@@ -69,7 +70,7 @@ export class Watch {
     this.plots.setPlants(this.live.plants.map((p) => p.id));
     this.plots.setStartYear(this.live.startYear);
     this.plots.truncate(msg.iteration);
-    if (msg.iteration > 0) this.plots.add(msg.iteration, msg.stats, msg.canopy_cover);
+    if (msg.iteration > 0) this.plots.add(msg.iteration, msg.stats, msg.canopy_cover, msg.stand);
     if (!this.statsLoaded) {
       this.statsLoaded = true;
       this.loadStats();
@@ -100,7 +101,7 @@ export class Watch {
     t.held.push([msg.iteration, this.live.live]);
     for (const a of [t.applyMs, t.parseMs, t.bytes, t.held, t.leafMs]) if (a.length > TIMINGS) a.shift();
     this.run.iteration = msg.iteration;
-    this.plots.add(msg.iteration, msg.stats, msg.canopy_cover);
+    this.plots.add(msg.iteration, msg.stats, msg.canopy_cover, msg.stand);
     this.onChange('live');
   }
 
@@ -130,7 +131,9 @@ export class Watch {
       const res = await this.session.fetch(`api/runs/${encodeURIComponent(run.name)}/stats.csv`);
       if (!res.ok || this.run !== run) return;
       const rows = parseStatsCsv(await res.text());
-      for (const [it, stats] of rows) if (it <= this.live.iteration) this.plots.add(it, stats, stats[0]?.canopy_cover);
+      for (const [it, stats] of rows) {
+        if (it <= this.live.iteration) this.plots.add(it, stats, stats[0]?.canopy_cover, standOfRows(stats));
+      }
     } catch (e) {
       this.session.message(`stats could not be loaded: ${e.message}`, true);
     }

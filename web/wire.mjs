@@ -40,7 +40,8 @@ export function deltaArrays(msg) {
   }
   return {
     type: 'delta', run: msg.run, seq: msg.seq, iteration: msg.iteration, stats: msg.stats,
-    canopy_cover: msg.canopy_cover, added, radii, shed: Int32Array.from(msg.shed), leaves: leafArrays(msg.leaves), typed: true,
+    canopy_cover: msg.canopy_cover, stand: msg.stand, added, radii, shed: Int32Array.from(msg.shed),
+    leaves: leafArrays(msg.leaves), typed: true,
   };
 }
 

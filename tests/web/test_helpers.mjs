@@ -11,6 +11,7 @@ import {
   isZone, zonesOf, solidsOf, insideBox, markInZones, countInZones, conflictRows, clearanceRows, stemLabel,
   boundsOf, insideFootprint, insideObstacle,
 } from '../../web/zones.mjs';
+import { STEM_KEY, deadStemKeys, sameKeys, markDeadStems, standRows, thinningPoint, standOfRows } from '../../web/stand.mjs';
 
 const run = (id, name, status) => ({ run: id, name, status, iteration: 3, stems: 1, nodes: 40 });
 
@@ -399,4 +400,72 @@ test('a measured tree\'s past stage: the nodes born by T, radii by the pipe mode
   assert.deepEqual(Array.from(pruned.slots), [0, 1, 2]);
   assert.deepEqual(Array.from(pruned.radius), [f(0.1, 1, 2), 0.08, 0.05].map(Math.fround));
   assert.deepEqual(tree, copy, 'the arguments are not changed');
+});
+
+test('a stand\'s dead stems: their keys from the stats, their slots marked', () => {
+  const plantIndex = new Map([['a', 0], ['b', 1]]);
+  const stats = [
+    { plant: 'a', stem: 0, alive: true, died: null },
+    { plant: 'b', stem: 0, alive: false, died: 3 },
+    { plant: 'b', stem: 1, alive: false, died: 2 },
+    { plant: 'gone', stem: 0, alive: false },   // a plant the skeleton does not hold
+  ];
+  const keys = deadStemKeys(stats, plantIndex);
+  assert.deepEqual([...keys].sort((x, y) => x - y), [STEM_KEY, STEM_KEY + 1]);
+  // stats without `alive` (an older daemon, IGM presets): none dead
+  assert.equal(deadStemKeys([{ plant: 'a', stem: 0 }], plantIndex).size, 0);
+  assert.equal(deadStemKeys(undefined, plantIndex).size, 0);
+  assert.ok(sameKeys(keys, new Set([STEM_KEY + 1, STEM_KEY])));
+  assert.ok(!sameKeys(keys, new Set([STEM_KEY])));
+  assert.ok(!sameKeys(keys, new Set([STEM_KEY, 1])));
+  // slots: a/0, b/0, b/1, b/0 shed, b/2
+  const plant = new Uint16Array([0, 1, 1, 1, 1]), stem = new Uint16Array([0, 0, 1, 0, 2]);
+  const dead = new Uint8Array([0, 0, 0, 1, 0]);
+  const out = new Float32Array(5).fill(7);
+  markDeadStems(plant, stem, dead, 0, 5, keys, out);
+  assert.deepEqual(Array.from(out), [0, 1, 1, 0, 0]);
+  // only the slots asked for; no dead stems: nothing marked
+  out.fill(7);
+  markDeadStems(plant, stem, null, 1, 3, keys, out);
+  assert.deepEqual(Array.from(out), [7, 1, 1, 7, 7]);
+  markDeadStems(plant, stem, null, 0, 5, new Set(), out);
+  assert.deepEqual(Array.from(out), [0, 0, 0, 0, 0]);
+});
+
+test('a stand\'s figures as listed, and its self-thinning point', () => {
+  const stand = { area: 208.3, alive: 3, died: 2, stems_per_ha: 1440.04, basal_area: 0.599, qmd: 7.28,
+    dominant_height: 5.147, sdi: 19.9, cv_height: 0.0052, cv_dbh: 0.0384 };
+  assert.deepEqual(standRows(stand), [
+    ['Stems', '1,440 /ha'], ['Basal area', '0.60 m²/ha'], ['QMD', '7.3 cm'], ['Dominant height', '5.15 m'],
+    ['SDI', '20'], ['Alive', '3 stems'], ['Died', '2 this iteration'],
+  ]);
+  // null figures (no stem alive) are dashes; no stand, no rows
+  const none = { ...stand, alive: 0, stems_per_ha: 0, basal_area: 0, qmd: null, dominant_height: null, sdi: null };
+  assert.deepEqual(standRows(none).map((r) => r[1]), ['0 /ha', '0.00 m²/ha', '–', '–', '–', '0 stems', '2 this iteration']);
+  assert.deepEqual(standRows(null), []);
+  assert.deepEqual(standRows(undefined), []);
+  assert.deepEqual(thinningPoint(stand), [7.28, 1440.04]);
+  assert.equal(thinningPoint(none), null);
+  assert.equal(thinningPoint({ ...stand, stems_per_ha: 0 }), null);
+  assert.equal(thinningPoint(undefined), null);
+});
+
+test('a stand\'s figures from stats.csv\'s rows of an iteration', () => {
+  // (cli.md, "export": the stems' alive, died and vigour, then the stand's on each row)
+  const csv = 'iteration,plant,stem,dbh,alive,died,vigour,stems_per_ha,basal_area,qmd,dominant_height,sdi,' +
+    'cv_height,cv_dbh,stand_died\n' +
+    '3,a,0,0.07,true,,0.59,144,0.599,7.28,5.147,19.9,0.0052,0.0384,2\n' +
+    '3,b,0,0.06,false,3,,144,0.599,7.28,5.147,19.9,0.0052,0.0384,2\n' +
+    '3,c,0,0.08,true,,0.61,144,0.599,7.28,5.147,19.9,0.0052,0.0384,2\n' +
+    '4,a,0,,,,,,,,,,,,\n';
+  const rows = parseStatsCsv(csv);
+  assert.deepEqual(standOfRows(rows.get(3)), { alive: 2, died: 2, stems_per_ha: 144, basal_area: 0.599, qmd: 7.28,
+    dominant_height: 5.147, sdi: 19.9, cv_height: 0.0052, cv_dbh: 0.0384 });
+  // rows stored before the stand was kept: every figure null, no point
+  const old = standOfRows(rows.get(4));
+  assert.equal(old.alive, null);
+  assert.equal(thinningPoint(old), null);
+  // a run without stands: not given
+  assert.equal(standOfRows(parseStatsCsv('iteration,plant,stem,height\n1,a,0,2\n').get(1)), undefined);
+  assert.equal(standOfRows([]), undefined);
 });

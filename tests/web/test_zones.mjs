@@ -260,9 +260,10 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
     assert.equal(await page.textContent('#timeline-label'), '2035 (iteration 8) (live)');
     assert.match(await page.textContent('#view-info'), /^2035 \(iteration 8\) · /);
 
-    // the plots: years on the x axis, and the crown's diameter and height
+    // the plots: years on the x axis, and the crown's diameter and height; a run
+    // in years has stands (docs/model.md, "Stands"): the self-thinning plot first
     await page.waitForFunction(() => window.sylva.plots().height?.iterations.length === 8);
-    const plots = await page.evaluate(() => window.sylva.plots());
+    const { self_thinning: thinning, ...plots } = await page.evaluate(() => window.sylva.plots());
     assert.deepEqual(Object.keys(plots), ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height',
       'leaf_area', 'crown_area', 'nodes', 'cap', 'canopy_cover']);
     const its = [1, 2, 3, 4, 5, 6, 7, 8];
@@ -278,6 +279,9 @@ test('a run in years: the calendar year on the timeline and the plots, crown dia
     assert.deepEqual(plots.crown_diameter.stems['old/0'].at(-1), snap.stats[1].crown_diameter);
     assert.deepEqual(plots.crown_height.stems['old/0'].at(-1), snap.stats[1].crown_height);
     assert.deepEqual(plots.leaf_area.stems['old/0'].at(-1), snap.stats[1].leaf_area);
+    assert.equal(thinning.axis, 'QMD (cm)');
+    assert.deepEqual([thinning.iterations.at(-1), thinning.x.at(-1), thinning.stems.stand.at(-1)],
+      [8, snap.stand.qmd, snap.stand.stems_per_ha]);
 
     // the conflicts table: the year the old tree first grew into the lane; its row
     // shows that year from the store
@@ -312,8 +316,9 @@ test('carbon and canopy plots: a library species beside one without carbon, gaps
     await until(page, (x) => x.status === 'finished' && x.iteration === 3, 'three iterations', 120000 * SLOW);
     await page.waitForFunction(() => window.sylva.plots().co2?.iterations.length === 3);
     const plots = await page.evaluate(() => window.sylva.plots());
-    assert.deepEqual(Object.keys(plots), ['height', 'dbh', 'crown_width', 'crown_diameter', 'crown_height',
-      'leaf_area', 'crown_area', 'co2', 'co2_sequestered', 'nodes', 'cap', 'canopy_cover']);
+    // (library species count in years: the run has stands, and the self-thinning plot)
+    assert.deepEqual(Object.keys(plots), ['self_thinning', 'height', 'dbh', 'crown_width', 'crown_diameter',
+      'crown_height', 'leaf_area', 'crown_area', 'co2', 'co2_sequestered', 'nodes', 'cap', 'canopy_cover']);
     const snap = await serverSnapshot(d, run);
     assert.equal(snap.iteration, 3);
     // the last point of every stem is the server's, null where the stem has none
