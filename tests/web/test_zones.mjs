@@ -326,10 +326,13 @@ test('carbon and canopy plots: a library species beside one without carbon, gaps
       for (const key of ['crown_area', 'co2', 'co2_sequestered'])
         assert.deepEqual(plots[key].stems[`${st.plant}/${st.stem}`].at(-1), st[key] ?? null, `${key} of ${st.plant}`);
     });
-    for (const key of ['co2', 'co2_sequestered']) {
-      assert.ok(plots[key].stems['south-west/0'].every((v) => v > 0), `${key}: ${plots[key].stems['south-west/0']}`);
+    // a plane slower than the species' typical tree (its vigour, docs/model.md "Stands")
+    // may stand still a season: its stock only grows, and in some season it does
+    const sw = plots.co2_sequestered.stems['south-west/0'];
+    assert.ok(plots.co2.stems['south-west/0'].every((v) => v > 0), `co2: ${plots.co2.stems['south-west/0']}`);
+    assert.ok(sw.every((v) => v >= 0) && sw.some((v) => v > 0), `co2_sequestered: ${sw}`);
+    for (const key of ['co2', 'co2_sequestered'])
       assert.deepEqual(plots[key].stems['oak/0'], [null, null, null], `${key} of the oak: gaps`);
-    }
     assert.ok(plots.crown_area.stems['oak/0'].every((v) => v !== null));
     assert.deepEqual(plots.canopy_cover.stems.site.at(-1), 100 * snap.canopy_cover);
     assert.ok(plots.canopy_cover.stems.site.every((v) => v > 0 && v <= 100), `${plots.canopy_cover.stems.site}`);
