@@ -1173,8 +1173,11 @@ const sylva_world_def *sylva_world_get_def(const sylva_world *w) { return &w->de
 int sylva_world_iteration(const sylva_world *w) { return w->iteration; }
 
 bool sylva_world_finished(const sylva_world *w) {
-  for (int s = 0; s < w->stem_count; s++)
-    if (!w->stems[s].finished && !sylva__stem_dead(&w->stems[s])) return false;
+  /* a dead stem is done once its snag fell: until then it still changes */
+  for (int s = 0; s < w->stem_count; s++) {
+    const sylva__stem *st = &w->stems[s];
+    if (sylva__stem_dead(st) ? st->stats.fallen < 0 : !st->finished) return false;
+  }
   return true;
 }
 

@@ -319,7 +319,8 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal);
 const sylva_world_def *sylva_world_get_def(const sylva_world *w);
 /** Iterations grown so far (0 before the first step). */
 int sylva_world_iteration(const sylva_world *w);
-/** True when every stem has finished by its growth equation (or there are none). */
+/** True when every stem has finished by its growth equation or, dead, has fallen (or
+ *  there are none). */
 bool sylva_world_finished(const sylva_world *w);
 /** Number of species, and a species' parameters and label by id (NULL for a bad id). */
 int sylva_world_species_count(const sylva_world *w);
