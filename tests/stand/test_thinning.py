@@ -12,7 +12,7 @@ per hectare) grows 60 years, seed 1:
 - every stem line's alive and died agree with the stand's counts, a dead stem keeps
   its last measures, and a stem that died stays dead;
 - the same seed gives the same lines (elapsed_ms aside), continuous or resumed from
-  a store at 30 years.
+  a store at 30 years (its first 30 years grown again alike).
 Then 16 lindens 10 m apart (100 stems per hectare) grow 60 years and none dies.
 """
 import importlib.machinery
@@ -101,8 +101,7 @@ check(consistent, "stems' alive and died agree with the stand's alive and died")
 check(stays, "a dead stem stays dead, with the year it died")
 check(kept, "a dead stem keeps its last measures")
 
-# same seed, same lines: again, and resumed from a store
-check(strip(run("run", stand, "--quiet-progress")) == strip(text), "same seed, same lines")
+# same seed, same lines: resumed from a store
 db = os.path.join(tmp, "stand.db")
 if os.path.exists(db):
     os.unlink(db)
