@@ -160,11 +160,10 @@ static int cmp_sprout(const void *a, const void *b) {
 }
 
 /* The leader's answer to light (docs/model.md, "Stands"): the share of a season its
- * clock advances at light l in the voxel of its highest node, l (1 + K) / (l + K),
- * 1 in full light (a site's sky gives open ground 1 to within rounding) and for
- * K = 0. */
+ * clock advances at light l = 1 - S in the voxel of its highest node, the plants'
+ * shade alone, l (1 + K) / (l + K): 1 in full light and for K = 0, 0 in the dark. */
 static double light_response(double l, double K) {
-  if (!(K > 0.0) || l >= 1.0 - 1e-9) return 1.0;
+  if (!(K > 0.0) || l >= 1.0) return 1.0;
   if (!(l > 0.0)) return 0.0;
   return l * (1.0 + K) / (l + K);
 }
@@ -194,8 +193,10 @@ static int season_clocks(sylva_world *w) {
     if (high[k] >= 0) {
       int v[3];
       sylva__node_voxel(w, high[k], v);
-      f = light_response(sylva__grid_light(&w->grid, v),
-                         w->species[st->species].def.height_light);
+      /* the plants' shade alone: the database's street trees grew beside buildings,
+       * so their curves hold a street's sky already */
+      double l = 1.0 - (double)sylva__grid_shade_raw(&w->grid, v) / SYLVA__SHADE_ONE;
+      f = light_response(l, w->species[st->species].def.height_light);
     }
     w->clock_next.data[k] = sylva__stem_dead(st) ? st->clock : st->clock + st->rate * f;
   }
