@@ -15,7 +15,7 @@
  * "years" grows library species in years (issue 20): a street of ten trees and a
  * hectare of 400, each 40 years; "street10" the street alone.
  *
- *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles|years|street10]
+ *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles|years|street10|thinning]
  *         [--scenarios DIR]
  *         [--edits N] */
 #include <math.h>
@@ -269,6 +269,22 @@ static void years(const char *dir, bool street_only) {
   sylva_world_destroy(w);
 }
 
+/* A stand that thins itself (issue 34, docs/model.md "Stands"): a hectare of 2,500
+ * lindens 2 m apart grown 60 years (targets: under 10 minutes and 4 GB on 2 cores);
+ * the time, the peak memory and the stand's end. */
+static void thinning(void) {
+  sylva_world *w = stand_of("utdb:NoEast:TICO", 50, 2.0, 30.0);
+  summary s = grow("a hectare of 2,500 library trees (utdb:NoEast:TICO, 2 m apart), 60 years", w,
+                   60, 0);
+  report(&s);
+  sylva_stand_stats st;
+  sylva_world_stand(w, &st);
+  printf("   stand at 60 years: %d of 2500 alive, %.0f stems/ha, QMD %.2f cm, SDI %.0f, "
+         "dominant height %.2f m\n", st.alive, st.stems_per_ha, st.qmd, st.sdi,
+         st.dominant_height);
+  sylva_world_destroy(w);
+}
+
 /* Shading one internode at heights from 1 to 20 m: the cost must not grow. */
 static void shade_by_height(void) {
   printf("\n== shade cost by height (pyramid depth 20, 5 cm voxels)\n");
@@ -503,6 +519,7 @@ int main(int argc, char **argv) {
   if (all || strcmp(what, "street") == 0) street(dir);
   if (all || strcmp(what, "years") == 0 || strcmp(what, "street10") == 0)
     years(dir, strcmp(what, "street10") == 0);
+  if (all || strcmp(what, "thinning") == 0) thinning();
   if (all || strcmp(what, "store5") == 0) {
     int limit;
     sylva_world *w = from_file(dir, "stand.json", &limit);
