@@ -5,6 +5,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "read_file.h"
 #include "sylva/scenario.h"
@@ -37,6 +38,19 @@ static inline sylva_world *scenario_world(const sylva_scenario *s) {
     fprintf(stderr, "build: %s\n", err);
     exit(1);
   }
+  return w;
+}
+
+/* The world of a scenario given as JSON text, or exits with the error. */
+static inline sylva_world *json_world(const char *json) {
+  sylva_scenario *s = NULL;
+  char err[512];
+  if (sylva_scenario_parse(json, strlen(json), &s, err, sizeof err) < 0) {
+    fprintf(stderr, "scenario: %s\n", err);
+    exit(1);
+  }
+  sylva_world *w = scenario_world(s);
+  sylva_scenario_free(s);
   return w;
 }
 #endif

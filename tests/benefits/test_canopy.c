@@ -14,17 +14,6 @@
 #include "sylva/sylva.h"
 
 
-static sylva_world *world_of(const char *json) {
-  sylva_scenario *s = NULL;
-  char err[512];
-  if (sylva_scenario_parse(json, strlen(json), &s, err, sizeof err) < 0) {
-    fprintf(stderr, "scenario: %s\n", err);
-    exit(1);
-  }
-  sylva_world *w = scenario_world(s);
-  sylva_scenario_free(s);
-  return w;
-}
 
 /* One leaf-bearing node of 0.1 m leaves at (1.05, 1.05) in 0.1 m cells: a leaf
  * reaches 0.1 m, half a cell's diagonal more makes 0.1707 m, which takes the node's
@@ -32,7 +21,7 @@ static sylva_world *world_of(const char *json) {
  * 0.09 m^2. A wall on the floor over x < 1 covers 200 of the 400 cells and 3 of the
  * crown's 9: the cover is 6 / 200. */
 static void test_hand_worked(void) {
-  sylva_world *w = world_of(
+  sylva_world *w = json_world(
       "{\"format\": \"sylva.scenario/1\", \"seed\": 1, \"iterations\": 1,"
       " \"world\": {\"min\": [0, 0, 0], \"max\": [2, 2, 2], \"voxel\": 0.1},"
       " \"species\": {\"s\": {\"leaf_size\": 0.1}},"
@@ -150,7 +139,7 @@ static void test_street(void) {
 /* Two planes 1.5 m apart: their crowns overlap, and the ground under both counts
  * once (the union is smaller than the sum). */
 static void test_overlap(void) {
-  sylva_world *w = world_of(
+  sylva_world *w = json_world(
       "{\"format\": \"sylva.scenario/1\", \"seed\": 3, \"iterations\": 6,"
       " \"world\": {\"min\": [-5, -5, 0], \"max\": [5, 5, 12]},"
       " \"species\": {\"plane\": {\"preset\": \"utdb:NoEast:PLAC\"}},"
@@ -170,7 +159,7 @@ static void test_overlap(void) {
 /* co2_sequestered: 0 at planting, then the year's change of co2; an image keeps it,
  * and the world read back goes on as the one that was not saved. */
 static void test_sequestered(void) {
-  sylva_world *w = world_of(
+  sylva_world *w = json_world(
       "{\"format\": \"sylva.scenario/1\", \"seed\": 4, \"iterations\": 3,"
       " \"world\": {\"min\": [-4, -4, 0], \"max\": [4, 4, 12]},"
       " \"species\": {\"plane\": {\"preset\": \"utdb:NoEast:PLAC\"}},"

@@ -364,14 +364,7 @@ static sylva_world *wall_site(double y, bool site) {
            site ? ", \"light\": {\"sky\": \"site\", \"latitude\": 50, \"north\": [0, 1],"
                   " \"season\": [91, 273], \"diffuse\": 0.4, \"samples\": 64}"
                 : "");
-  sylva_scenario *s = NULL;
-  char err[512];
-  if (sylva_scenario_parse(text, strlen(text), &s, err, sizeof err) < 0) {
-    fprintf(stderr, "wall_site: %s\n", err);
-    exit(1);
-  }
-  sylva_world *w = scenario_world(s);
-  sylva_scenario_free(s);
+  sylva_world *w = json_world(text);
   grow(w, 20);
   return w;
 }

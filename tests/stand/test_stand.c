@@ -12,17 +12,6 @@
 
 #define PI 3.14159265358979323846
 
-static sylva_world *world_of(const char *json) {
-  sylva_scenario *s = NULL;
-  char err[512];
-  if (sylva_scenario_parse(json, strlen(json), &s, err, sizeof err) < 0) {
-    fprintf(stderr, "scenario: %s\n", err);
-    exit(1);
-  }
-  sylva_world *w = scenario_world(s);
-  sylva_scenario_free(s);
-  return w;
-}
 
 static void grow(sylva_world *w, int n) {
   for (int i = 0; i < n; i++) CHECK_INT(sylva_world_step(w, NULL), 0);
@@ -85,7 +74,7 @@ static void check_figures(const sylva_world *w, double area, int dom) {
  * hull as it is and brings every nearest neighbour to sqrt(2) m. With a stand_area of
  * a hectare the figures are per the hectare, and all four are dominant. */
 static void test_hand_worked(void) {
-  sylva_world *w = world_of(STAND_JSON("",
+  sylva_world *w = json_world(STAND_JSON("",
       "{\"id\": \"a\", \"species\": \"s\", \"roots\": [[0, 0, 0]]},"
       " {\"id\": \"b\", \"species\": \"s\", \"roots\": [[2, 0, 0]]},"
       " {\"id\": \"c\", \"species\": \"s\", \"roots\": [[0, 2, 0]]},"
@@ -94,7 +83,7 @@ static void test_hand_worked(void) {
   check_figures(w, 12.0 + PI, 1);
   sylva_world_destroy(w);
 
-  w = world_of(STAND_JSON("",
+  w = json_world(STAND_JSON("",
       "{\"id\": \"a\", \"species\": \"s\", \"roots\": [[0, 0, 0]]},"
       " {\"id\": \"b\", \"species\": \"s\", \"roots\": [[2, 0, 0]]},"
       " {\"id\": \"c\", \"species\": \"s\", \"roots\": [[0, 2, 0]]},"
@@ -107,7 +96,7 @@ static void test_hand_worked(void) {
   CHECK(isnan(st.qmd) && isnan(st.basal_area) == false); /* planted: no dbh yet */
   sylva_world_destroy(w);
 
-  w = world_of(STAND_JSON(" \"stand_area\": 10000,",
+  w = json_world(STAND_JSON(" \"stand_area\": 10000,",
       "{\"id\": \"a\", \"species\": \"s\", \"roots\": [[0, 0, 0]]},"
       " {\"id\": \"b\", \"species\": \"s\", \"roots\": [[2, 0, 0]]},"
       " {\"id\": \"c\", \"species\": \"s\", \"roots\": [[0, 2, 0]]},"
@@ -117,7 +106,7 @@ static void test_hand_worked(void) {
   sylva_world_destroy(w);
 
   /* one tree: no ground of its own, so nothing per hectare */
-  w = world_of(STAND_JSON("", "{\"id\": \"a\", \"species\": \"s\", \"roots\": [[0, 0, 0]]}"));
+  w = json_world(STAND_JSON("", "{\"id\": \"a\", \"species\": \"s\", \"roots\": [[0, 0, 0]]}"));
   grow(w, 14);
   sylva_world_stand(w, &st);
   sylva_stem_stats s;
@@ -151,7 +140,7 @@ static int64_t stem_nodes(const sylva_world *w, int stem) {
 }
 
 static void test_snag_falls(void) {
-  sylva_world *a = world_of(SNAG_JSON("0")), *b = world_of(SNAG_JSON("8"));
+  sylva_world *a = json_world(SNAG_JSON("0")), *b = json_world(SNAG_JSON("8"));
   sylva_stem_stats before, dead, fallen;
   sylva_world_stem_stats(a, 0, &before);
   int64_t planted = stem_nodes(a, 0);
@@ -202,7 +191,7 @@ static void test_snag_falls(void) {
 /* An image of a world with a stem alive, one standing dead and one fallen loads to the
  * same world: the same hash and measures, and both grow on alike. */
 static void test_image(void) {
-  sylva_world *w = world_of(
+  sylva_world *w = json_world(
       "{\"format\": \"sylva.scenario/1\", \"seed\": 9, \"iterations\": 30,"
       " \"world\": {\"min\": [-12, -12, 0], \"max\": [12, 12, 20]},"
       " \"species\": {\"doomed\": {\"preset\": \"utdb:NoEast:TICO\", \"mortality\": 1,"
@@ -263,7 +252,7 @@ static void test_background(void) {
                     "%s{\"id\": \"t%d\", \"species\": \"s\", \"roots\": [[%d, %d, 0]]}", i ? ", " : "",
                     i, 2 * (i % 20), 2 * (i / 20));
     snprintf(json + k, 64 * 1024 - (size_t)k, "]}");
-    sylva_world *w = world_of(json);
+    sylva_world *w = json_world(json);
     free(json);
     int died_at[400];
     for (int i = 0; i < 400; i++) died_at[i] = -1;
