@@ -108,6 +108,8 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->shed.data);
   sylva__free(w->stats.data);
   sylva__free(w->finishing.data);
+  sylva__free(w->clock_next.data);
+  sylva__free(w->stem_high.data);
   sylva__free(w->caps.data);
   sylva__free(w->stem_first.data);
   sylva__free(w->stem_top.data);

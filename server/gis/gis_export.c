@@ -14,6 +14,7 @@
 
 #include "layer.h"
 #include "server_error.h"
+#include "sylva/encode.h"
 #include "sylva/sylva.h"
 
 /* The four kinds of feature: GeoPackage layers, GeoJSON `layer` values. */
@@ -197,13 +198,15 @@ static int close_file(writer *g, int rc) {
 
 /* ---- features -------------------------------------------------------------------------- */
 
-/* A figure to the decimals the CSV export gives it (export/csv.c): the store's
- * floats print no digits they do not hold. */
+/* A figure to the decimals the CSV export gives it (export/csv.c), printed as it
+ * prints them (an exact half rounds to even, as printf does: 14.03125 is 14.0312) and
+ * read back: the store's floats print no digits they do not hold. */
 static void set_real(OGRFeatureH f, int index, double v, int decimals) {
   if (index < 0) return;
   if (isfinite(v)) {
-    double scale = pow(10.0, decimals);
-    OGR_F_SetFieldDouble(f, index, round(v * scale) / scale);
+    char buf[SYLVA_FMT_BUFSIZE];
+    sylva_fmt_fixed(buf, sizeof buf, v, decimals);
+    OGR_F_SetFieldDouble(f, index, strtod(buf, NULL));
   } else {
     OGR_F_SetFieldNull(f, index);
   }

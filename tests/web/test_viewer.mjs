@@ -452,7 +452,9 @@ test('the page opens on the run its hash names, else on the most recently active
     await page.goBack();
     s = await watching(page, 'first');
     assert.equal(await hashOf(page), '#run=first');
-    assert.deepEqual(errors, []);
+    // a reload or going back aborts what the page was still fetching (the stats of
+    // the run it showed): the browser's doing, not a failure of the page
+    assert.deepEqual(errors.filter((e) => !e.endsWith('net::ERR_ABORTED')), []);
     await page.close();
 
     // without a hash, or with the name of no run: the running run
