@@ -116,13 +116,9 @@ static double cv_of(const double *v, size_t n) {
   return mean > 0.0 ? sqrt(ss / (double)n) / mean : NAN;
 }
 
-void sylva__stand(sylva_world *w) {
-  sylva_stand_stats *o = &w->stand;
-  if (w->stand_stems != w->stem_count) { /* roots never move: only a planting changes it */
-    w->stand_area = w->def.stand_area > 0.0 ? w->def.stand_area : occupied_area(w);
-    w->stand_stems = w->stem_count;
-  }
-  *o = (sylva_stand_stats){.area = w->stand_area};
+/* The figures of w's alive stems over `area` m^2 into *o. */
+static void stand_figures(const sylva_world *w, double area, sylva_stand_stats *o) {
+  *o = (sylva_stand_stats){.area = area};
   double ha = o->area / 10000.0;
   size_t n = 0, nd = 0;
   ranked_stem *r = sylva__malloc(((size_t)w->stem_count + 1) * sizeof *r);
@@ -169,4 +165,29 @@ void sylva__stand(sylva_world *w) {
   sylva__free(v);
 }
 
-void sylva_world_stand(const sylva_world *w, sylva_stand_stats *out) { *out = w->stand; }
+/* The stand's area: the def's, or the roots' widened hull. */
+static double stand_area_of(const sylva_world *w) {
+  return w->def.stand_area > 0.0 ? w->def.stand_area : occupied_area(w);
+}
+
+void sylva__stand(sylva_world *w) {
+  if (w->stand_stems != w->stem_count) { /* roots never move: only a planting changes it */
+    w->stand_area = stand_area_of(w);
+    w->stand_stems = w->stem_count;
+  }
+  stand_figures(w, w->stand_area, &w->stand);
+  w->stand_fresh = true;
+}
+
+void sylva__stand_stale(sylva_world *w) { w->stand_fresh = false; }
+
+void sylva_world_stand(const sylva_world *w, sylva_stand_stats *out) {
+  if (w->stand_fresh) {
+    *out = w->stand;
+    return;
+  }
+  /* after plantings (which only mark the figures stale, so that planting n trees is
+   * not n passes over the stand): found now, as the next step will find them */
+  double area = w->stand_stems == w->stem_count ? w->stand_area : stand_area_of(w);
+  stand_figures(w, area, out);
+}

@@ -662,7 +662,7 @@ static int finish_plant(sylva_world *w, const sylva_plant_def *def, int stems) {
     w->nodes.leaves[i] = (uint16_t)sylva__node_leaves(w, i);
   for (int r = 0; r < stems; r++) sylva__stats_planted(w, pl->first_stem + r);
   sylva__canopy(w);
-  sylva__stand(w);
+  sylva__stand_stale(w); /* found when asked for, or by the next step */
   sylva__conflicts(w, w->iteration);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   return pid;

@@ -207,11 +207,15 @@ struct sylva_world {
   sylva_stand_stats stand; /* the stand's figures (stand.c), as after the last change */
   double stand_area;       /* stand.c: the area of the stand_stems first stems' roots */
   int stand_stems;         /* stems when stand_area was found, -1 before */
+  bool stand_fresh;        /* w->stand is the stand as it is now */
 };
 
 /** The stand's figures into w->stand, from the stems' measures (docs/model.md,
  *  "Stands"). */
 void sylva__stand(sylva_world *w);
+/** Marks w->stand out of date (a planting): sylva_world_stand() finds the figures
+ *  itself until the next sylva__stand(). */
+void sylva__stand_stale(sylva_world *w);
 
 /** Most cells of the canopy's floor grid. */
 #define SYLVA__CANOPY_MAX_COLS (1 << 22)
