@@ -41,7 +41,7 @@ void sylva__grid_free(sylva__grid *g) {
   if (g->chunks) {
     size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
     for (size_t i = 0; i < nchunks; i++) {
-      if (g->chunks[i]) sylva__free(g->chunks[i]->column);
+      if (g->chunks[i]) sylva__free(g->chunks[i]->occ);
       sylva__free(g->chunks[i]);
     }
   }
@@ -80,7 +80,7 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
   return nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
-         g->column_count * SYLVA__CHUNK_VOXELS * sizeof(int64_t) +
+         g->occ_count * SYLVA__CHUNK_VOXELS * sizeof(uint32_t) +
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
          (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
@@ -218,11 +218,6 @@ static int64_t shade_in(const sylva__grid *g, const sylva__chunk *c, const int v
   if (c) {
     const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
     for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
-    int i = local_index(v[0], v[1], v[2]);
-    if (c->column) {
-      const int64_t *col = c->column + (i & 255);
-      for (int z = v[2] & 15; z < SYLVA__CHUNK; z++) s += col[z << 8];
-    }
   }
   const int64_t *col = g->colsum[(size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4)];
   if (col) {
@@ -252,13 +247,13 @@ double sylva__grid_light(const sylva__grid *g, const int v[3]) {
 
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]) {
   const sylva__chunk *c = chunk_at(g, v);
-  if (c && c->occ[local_index(v[0], v[1], v[2])]) return -1.0;
+  if (c && c->occ && c->occ[local_index(v[0], v[1], v[2])]) return -1.0;
   return light_in(g, c, v);
 }
 
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]) {
   const sylva__chunk *c = chunk_at(g, v);
-  if (!c) return -1;
+  if (!c || !c->occ) return -1;
   uint32_t o = c->occ[local_index(v[0], v[1], v[2])];
   return o ? (int32_t)(o >> SYLVA__OCC_COUNT_BITS) - 1 : -1;
 }
@@ -266,6 +261,11 @@ int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]) {
 int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
   sylva__chunk *c = chunk_get(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
   if (!c) return SYLVA_ENOMEM;
+  if (!c->occ) {
+    c->occ = sylva__calloc(SYLVA__CHUNK_VOXELS, sizeof *c->occ);
+    if (!c->occ) return SYLVA_ENOMEM;
+    g->occ_count++;
+  }
   uint32_t *o = &c->occ[local_index(v[0], v[1], v[2])];
   if (*o == 0) {
     *o = ((uint32_t)(stem + 1) << SYLVA__OCC_COUNT_BITS) | 1u;
@@ -280,7 +280,7 @@ int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
 
 void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
   sylva__chunk *c = g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
-  if (!c) return;
+  if (!c || !c->occ) return;
   uint32_t *o = &c->occ[local_index(v[0], v[1], v[2])];
   if ((*o & SYLVA__OCC_COUNT_MAX) <= 1)
     *o = 0;
@@ -333,9 +333,10 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
         }
       }
   /* Column: every voxel of the base footprint from depth + 1 below down to the
-   * ground gets p->column. Stored as one entry at its top voxel (summed by the
-   * voxels of that chunk below it) plus one block sum read by every lower chunk, so
-   * the cost does not depend on the height of the tree. */
+   * ground gets p->column. Inside the chunk where it starts it is written into the
+   * rows of every layer at and below its top voxel, as the pyramid's layers are;
+   * every lower chunk reads it from one block sum, so the cost does not depend on
+   * the height of the tree. */
   int ztop = v[2] - depth - 1;
   if (ztop < 0 || p->column == 0) return SYLVA_OK;
   int64_t value = sign * p->column;
@@ -344,11 +345,6 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
     for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {
       sylva__chunk *c = chunk_get(g, cx, cy, bz);
       if (!c) return SYLVA_ENOMEM;
-      if (!c->column) {
-        c->column = sylva__calloc(SYLVA__CHUNK_VOXELS, sizeof *c->column);
-        if (!c->column) return SYLVA_ENOMEM;
-        g->column_count++;
-      }
       int64_t *sum = NULL;
       if (bz > 0) {
         sum = colsum_get(g, cx, cy);
@@ -358,12 +354,18 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
       if (!sign) continue;
       int y0 = clip_lo(ylo, cy << 4), y1 = clip_hi(yhi, (cy << 4) + 15);
       int x0 = clip_lo(xlo, cx << 4), x1 = clip_hi(xhi, (cx << 4) + 15);
-      for (int y = y0; y <= y1; y++)
-        for (int x = x0; x <= x1; x++) {
-          int xy = (x & 15) | ((y & 15) << 4);
-          c->column[(zl << 8) | xy] += value;
-          if (sum) sum[xy] += value;
+      int e = (x1 & 15) + 1;
+      for (int z = 0; z <= zl; z++) {
+        int64_t *start = c->shade + (z << 8) + ((x0 & 15) << 4);
+        for (int y = y0 & 15; y <= (y1 & 15); y++) start[y] += value;
+        if (e < SYLVA__CHUNK) {
+          int64_t *stop = c->shade + (z << 8) + (e << 4);
+          for (int y = y0 & 15; y <= (y1 & 15); y++) stop[y] -= value;
         }
+      }
+      if (sum)
+        for (int y = y0; y <= y1; y++)
+          for (int x = x0; x <= x1; x++) sum[(x & 15) | ((y & 15) << 4)] += value;
     }
   return SYLVA_OK;
 }

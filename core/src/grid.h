@@ -1,5 +1,5 @@
-/* The voxel environment: sparse 16^3 chunks holding fixed-point shade and stem
- * occupancy, per-column block sums for the shade columns below pyramids, and
+/* The voxel environment: sparse 16^3 chunks holding fixed-point shade and (where
+ * a node lies) stem occupancy, per-column block sums for the shade columns below pyramids, and
  * obstacles as voxel boxes, listed under each chunk column they overlap and indexed
  * by label and id. Memory is spent only on chunks and columns something touched. */
 #ifndef SYLVA_GRID_H
@@ -21,15 +21,15 @@
 #define SYLVA__OCC_COUNT_MAX 4095u
 
 typedef struct sylva__chunk {
-  /* Pyramid shade as differences along x within each chunk row, stored with y
-   * fastest (index y + 16 x + 256 z): a voxel's value is the sum of its row from
-   * x = 0 up to itself, and a square layer is two contiguous runs of writes. */
+  /* Shade as differences along x within each chunk row, stored with y fastest
+   * (index y + 16 x + 256 z): a voxel's value is the sum of its row from x = 0 up to
+   * itself, and a square layer is two contiguous runs of writes. It holds the
+   * pyramids and the part of each shade column inside the chunk where the column
+   * starts (one run per row and layer at and below the column's top). */
   int64_t shade[SYLVA__CHUNK_VOXELS];
-  uint32_t occ[SYLVA__CHUNK_VOXELS];
-  /* Columns that start in this chunk, same index: the shade of the columns whose
-   * top voxel it is; a voxel sums the entries at or above it in the chunk. NULL
-   * until a column starts here. */
-  int64_t *column;
+  /* Stem occupancy, same index; NULL until a node lies in the chunk (the chunks
+   * below the crowns only hold shade). */
+  uint32_t *occ;
 } sylva__chunk;
 
 typedef struct sylva__obstacle {
@@ -66,7 +66,7 @@ typedef struct sylva__grid {
   /* Per chunk column (c0*c1): NULL or c2 blocks x 256 columns of shade that applies
    * to every voxel of blocks strictly below. */
   int64_t **colsum;
-  size_t chunk_count, colsum_count, column_count;
+  size_t chunk_count, colsum_count, occ_count;
   /* Obstacles in the order they were added, so by increasing id (found by binary
    * search): obstacle_slots slots, obstacle_count of them live. A removed obstacle
    * leaves a dead slot; once the dead outnumber the live the slots are compacted. */

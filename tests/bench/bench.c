@@ -15,7 +15,7 @@
  * "years" grows library species in years (issue 20): a street of ten trees and a
  * hectare of 400, each 40 years; "street10" the street alone.
  *
- *   bench [all|fig17b|stand5|stand100|shade|store5|store100|obstacles|years|street10|thinning]
+ *   bench [all|fig17b|stand5|stand100|shade|floor|store5|store100|obstacles|years|street10|thinning]
  *         [--scenarios DIR]
  *         [--edits N] */
 #include <math.h>
@@ -253,6 +253,25 @@ static void gives_cost(sylva_world *w, const summary *s) {
 /* Library species in years (issue 20): scenarios/street.json's street of library
  * trees, and a hectare of 400 trees 5 m apart, each grown 40 years; the time and the
  * peak memory of each. */
+/* What the voxels hold: chunks, those with a stem's node, column arrays. */
+static void voxel_census(const sylva_world *w) {
+  const sylva__grid *g = &w->grid;
+  size_t n = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2], occupied = 0, nonzero = 0;
+  for (size_t i = 0; i < n; i++) {
+    const sylva__chunk *c = g->chunks[i];
+    if (!c) continue;
+    bool any = false;
+    for (int k = 0; k < SYLVA__CHUNK_VOXELS; k++) {
+      any |= c->occ && c->occ[k] != 0;
+      nonzero += c->shade[k] != 0;
+    }
+    occupied += any;
+  }
+  printf("   voxels: %zu chunks of %zu (%zu with a node now, %zu with occupancy), %zu block sums; "
+         "%.1f%% of shade entries nonzero\n", g->chunk_count, n, occupied, g->occ_count,
+         g->colsum_count, g->chunk_count ? 100.0 * (double)nonzero / (double)(g->chunk_count * 4096) : 0.0);
+}
+
 static void years(const char *dir, bool street_only) {
   int limit;
   sylva_world *w = from_file(dir, "street-ten.json", &limit);
@@ -265,6 +284,7 @@ static void years(const char *dir, bool street_only) {
   w = stand_of("utdb:NoEast:TICO", 20, 5.0, 30.0);
   s = grow("a hectare of 400 library trees (utdb:NoEast:TICO, 5 m apart), 40 years", w, 40, 0);
   report(&s);
+  voxel_census(w);
   gives_cost(w, &s);
   sylva_world_destroy(w);
 }
@@ -308,6 +328,79 @@ static void shade_by_height(void) {
     printf("   at %4.1f m: %.2f us per internode\n", heights[h], (t1 - t0) * 1e6 / n);
   }
   sylva__grid_free(&g);
+}
+
+/* The engine against its shade floor (issue 35): 100 igm-fig13 trees 2.5 m apart
+ * grown 30 iterations, then the floor: every internode the run grew stamps its
+ * pyramid (the species' own, as the engine cast it) into a dense grid of the same
+ * voxels, as plain C, once. The engine also removes shade when it sheds and reads
+ * light; the floor only adds. */
+static void shade_floor(void) {
+  sylva_world *w = stand_of("igm-fig13", 10, 2.5, 14.0);
+  /* grown as grow() does, keeping each grown internode's voxel and pyramid */
+  size_t n = 0, cap = 1 << 16, created = 0;
+  int(*vox)[3] = malloc(cap * sizeof *vox);
+  const sylva__pyramid **pyr = malloc(cap * sizeof *pyr);
+  sylva__pyramid *kept = malloc(64 * sizeof *kept); /* one per iteration: the ages differ */
+  const sylva_journal *j;
+  double phase[SYLVA_PHASE_COUNT] = {0}, engine = 0;
+  while (sylva_world_iteration(w) < 30 && !sylva_world_finished(w)) {
+    double a = now(NULL);
+    if (sylva_world_step(w, &j)) break;
+    engine += now(NULL) - a;
+    for (int p = 0; p < SYLVA_PHASE_COUNT; p++) phase[p] += j->phase_seconds[p];
+    created += j->added_count;
+    for (size_t i = 0; i < j->added_count; i++) {
+      const sylva_node_info *ad = &j->added[i];
+      double p[3] = {ad->x, ad->y, ad->z};
+      float f[3];
+      if (n == cap) {
+        cap *= 2;
+        vox = realloc(vox, cap * sizeof *vox);
+        pyr = realloc(pyr, cap * sizeof *pyr);
+      }
+      if (!sylva__voxel_of(w, p, f, vox[n])) continue;
+      const sylva__stem *st = &w->stems[sylva_world_stem_index(w, ad->plant, ad->stem)];
+      kept[j->iteration] = *sylva__species_shade(&w->species[st->species], ad->birth - st->born);
+      pyr[n++] = &kept[j->iteration];
+    }
+  }
+  printf("\n== 100 igm-fig13 trees 2.5 m apart, 30 iterations: %d iterations, %zu live internodes "
+         "(%zu grown) in %.2f s, %.0f grown per s\n   phases (s):", sylva_world_iteration(w),
+         sylva_world_node_count(w), created, engine, (double)created / engine);
+  for (int p = 0; p < SYLVA_PHASE_COUNT; p++) printf(" %s %.2f", phase_names[p], phase[p]);
+  printf("\n");
+  voxel_census(w);
+  sylva_world *again = w;
+  const int *dim = again->grid.n;
+  size_t plane = (size_t)dim[0] * (size_t)dim[1];
+  int64_t *dense = calloc(plane * (size_t)dim[2], sizeof *dense);
+  memset(dense, 0, plane * (size_t)dim[2] * sizeof *dense); /* its pages, before the clock */
+  double t0 = now(NULL);
+  for (size_t i = 0; i < n; i++) {
+    const sylva__pyramid *p = pyr[i];
+    const int *v = vox[i];
+    for (int q = 1; q <= p->depth && v[2] - q >= 0; q++) {
+      int h = p->half[q - 1];
+      int64_t *layer = dense + (size_t)(v[2] - q) * plane;
+      int x0 = v[0] - h < 0 ? 0 : v[0] - h, x1 = v[0] + h >= dim[0] ? dim[0] - 1 : v[0] + h;
+      int y0 = v[1] - h < 0 ? 0 : v[1] - h, y1 = v[1] + h >= dim[1] ? dim[1] - 1 : v[1] + h;
+      for (int y = y0; y <= y1; y++)
+        for (int x = x0; x <= x1; x++) layer[(size_t)y * (size_t)dim[0] + (size_t)x] += p->w[q - 1];
+    }
+  }
+  double floor_s = now(NULL) - t0;
+  int64_t check = 0;
+  for (size_t i = 0; i < plane * (size_t)dim[2]; i += 4099) check ^= dense[i];
+  printf("-- shade floor: %zu internodes stamped into a dense %d x %d x %d grid in %.2f s "
+         "(%.0f per s; checksum %llx); the engine took %.2f s, %.2fx its floor\n",
+         n, dim[0], dim[1], dim[2], floor_s, (double)n / floor_s, (unsigned long long)check,
+         engine, engine / floor_s);
+  free(dense);
+  free(kept);
+  free(pyr);
+  free(vox);
+  sylva_world_destroy(w);
 }
 
 /* A site of 4000 x 4000 x 200 voxels: 200 m x 200 m x 10 m at 5 cm, nothing in it. */
@@ -501,6 +594,7 @@ int main(int argc, char **argv) {
   }
   bool all = strcmp(what, "all") == 0;
   if (all || strcmp(what, "shade") == 0) shade_by_height();
+  if (all || strcmp(what, "floor") == 0) shade_floor();
   if (all || strcmp(what, "obstacles") == 0) obstacles(edits > 0 ? edits : 1);
   if (all || strcmp(what, "fig17b") == 0) {
     sylva_world *w = single("igm-fig17b");
@@ -517,6 +611,13 @@ int main(int argc, char **argv) {
     sylva_world_destroy(w);
   }
   if (all || strcmp(what, "street") == 0) street(dir);
+  if (strcmp(what, "hectare") == 0) {
+    sylva_world *w = stand_of("utdb:NoEast:TICO", 20, 5.0, 30.0);
+    summary s = grow("a hectare of 400 library trees (utdb:NoEast:TICO, 5 m apart), 40 years", w, 40, 0);
+    report(&s);
+    voxel_census(w);
+    sylva_world_destroy(w);
+  }
   if (all || strcmp(what, "years") == 0 || strcmp(what, "street10") == 0)
     years(dir, strcmp(what, "street10") == 0);
   if (all || strcmp(what, "thinning") == 0) thinning();

@@ -175,7 +175,7 @@ static uint32_t occ_word(const sylva__grid *g, const int v[3]) {
   size_t ci = ((size_t)(v[2] >> 4) * (size_t)g->c[1] + (size_t)(v[1] >> 4)) * (size_t)g->c[0] +
               (size_t)(v[0] >> 4);
   const sylva__chunk *c = g->chunks[ci];
-  return c ? c->occ[(v[0] & 15) | ((v[1] & 15) << 4) | ((v[2] & 15) << 8)] : 0;
+  return c && c->occ ? c->occ[(v[0] & 15) | ((v[1] & 15) << 4) | ((v[2] & 15) << 8)] : 0;
 }
 
 /* Voxels whose shade or occupancy differ, over every chunk column either grid has
