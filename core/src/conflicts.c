@@ -247,12 +247,7 @@ static size_t cut(sylva_world *w, bool (*hit)(const sylva_world *w, size_t i, co
     if (!announced_only || s->birth[i] != T) roots[(*root_count)++] = s->id[i];
   }
   if (!doomed) return 0;
-  for (size_t i = 0; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-    int rc = sylva__remove_node(w, (int32_t)i, true);
-    SYLVA_ASSERT(rc == SYLVA_OK); /* its blocks exist: removing allocates nothing */
-    (void)rc;
-  }
+  sylva__remove_doomed(w, doomed, true);
   return doomed;
 }
 

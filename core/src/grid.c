@@ -3,6 +3,7 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #include "alloc.h"
@@ -124,7 +125,7 @@ int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   sylva_sky_dir *sky = sylva__calloc((size_t)count, sizeof *sky);
   sylva__site_cache *site = sylva__calloc(1, sizeof *site);
-  float **chunk = sylva__calloc(nchunks, sizeof *chunk);
+  sylva__site_factor_t **chunk = sylva__calloc(nchunks, sizeof *chunk);
   if (!sky || !site || !chunk) {
     sylva__free(sky);
     sylva__free(site);
@@ -140,23 +141,40 @@ int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count) {
   return SYLVA_OK;
 }
 
+static sylva__site_factor_t *site_chunk_make(const sylva__grid *g, size_t ci) {
+  sylva__site_factor_t *f = sylva__malloc(SYLVA__CHUNK_VOXELS * sizeof *f);
+  if (!f) return NULL;
+  for (int i = 0; i < SYLVA__CHUNK_VOXELS; i++) atomic_init(&f[i], -1.0f);
+  g->site->chunk[ci] = f;
+  g->site->count++;
+  return f;
+}
+
+/* The factor of voxel v in its chunk's cache f (NULL: none, computed unkept). */
+static double site_factor_in(const sylva__grid *g, sylva__site_factor_t *f, const int v[3]) {
+  if (!f) return (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
+  sylva__site_factor_t *at = &f[local_index(v[0], v[1], v[2])];
+  float x = atomic_load_explicit(at, memory_order_relaxed);
+  if (x < 0.0f) {
+    x = (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
+    atomic_store_explicit(at, x, memory_order_relaxed);
+  }
+  return x;
+}
+
 double sylva__grid_site_factor(const sylva__grid *g, const int v[3]) {
   if (!g->sky_count) return 1.0;
   size_t ci = chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
-  float *f = g->site->chunk[ci];
-  if (!f) { /* a chunk's factors, each computed when first read (-1 until then) */
-    f = sylva__malloc(SYLVA__CHUNK_VOXELS * sizeof *f);
-    if (!f) /* no room to keep it: this voxel alone, the same value */
-      return (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
-    for (int i = 0; i < SYLVA__CHUNK_VOXELS; i++) f[i] = -1.0f;
-    g->site->chunk[ci] = f;
-    g->site->count++;
-  }
-  float *at = &f[local_index(v[0], v[1], v[2])];
-  if (*at < 0.0f) *at = (float)sylva__site_factor(g, g->sky, g->sky_count, g->sky_top, v);
-  return *at;
+  sylva__site_factor_t *f = g->site->chunk[ci];
+  if (!f) f = site_chunk_make(g, ci); /* each factor computed when first read */
+  return site_factor_in(g, f, v);
 }
 
+bool sylva__grid_site_reserve(const sylva__grid *g, const int v[3]) {
+  if (!g->sky_count) return true;
+  size_t ci = chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
+  return g->site->chunk[ci] || site_chunk_make(g, ci);
+}
 
 static inline const sylva__chunk *chunk_at(const sylva__grid *g, const int v[3]) {
   return g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
@@ -231,10 +249,14 @@ int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]) {
   return shade_in(g, chunk_at(g, v), v);
 }
 
-static double light_in(const sylva__grid *g, const sylva__chunk *c, const int v[3]) {
+/* shared: never allocates (the site factor unkept where its chunk has no cache). */
+static double light_in(const sylva__grid *g, const sylva__chunk *c, const int v[3], bool shared) {
   if (g->sky_count) { /* a site's sky: what reaches the voxel, under the plants' shade */
     double l = 1.0 - (double)shade_in(g, c, v) / SYLVA__SHADE_ONE;
-    return l > 0.0 ? sylva__grid_site_factor(g, v) * l : 0.0;
+    if (!(l > 0.0)) return 0.0;
+    if (!shared) return sylva__grid_site_factor(g, v) * l;
+    size_t ci = chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
+    return site_factor_in(g, g->site->chunk[ci], v) * l;
   }
   if (g->obstacle_count && sylva__grid_under_obstacle(g, v)) return 0.0;
   double l = 1.0 - (double)shade_in(g, c, v) / SYLVA__SHADE_ONE;
@@ -242,13 +264,17 @@ static double light_in(const sylva__grid *g, const sylva__chunk *c, const int v[
 }
 
 double sylva__grid_light(const sylva__grid *g, const int v[3]) {
-  return light_in(g, chunk_at(g, v), v);
+  return light_in(g, chunk_at(g, v), v, false);
+}
+
+double sylva__grid_light_shared(const sylva__grid *g, const int v[3]) {
+  return light_in(g, chunk_at(g, v), v, true);
 }
 
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]) {
   const sylva__chunk *c = chunk_at(g, v);
   if (c && c->occ && c->occ[local_index(v[0], v[1], v[2])]) return -1.0;
-  return light_in(g, c, v);
+  return light_in(g, c, v, false);
 }
 
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]) {
@@ -291,9 +317,10 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }
 static int clip_hi(int v, int hi) { return v < hi ? v : hi; }
 
-/* One pass of a stamp: sign +1 or -1 writes it; sign 0 only makes every chunk,
- * column block and block sum the writes will touch. */
-static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
+/* One pass of a stamp over the chunk columns cx_min..cx_max: sign +1 or -1 writes
+ * it; sign 0 only makes every chunk and block sum the writes will touch. */
+static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign, int cx_min,
+                 int cx_max) {
   /* Pyramid: q = 1..depth voxels below, half-width half[q - 1]; walked chunk by
    * chunk so that each chunk is looked up once per stamp. */
   int depth = p->depth;
@@ -302,9 +329,10 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
   int zlo = clip_lo(v[2] - depth, 0), zhi = v[2] - 1;
   int xlo = clip_lo(v[0] - h, 0), xhi = clip_hi(v[0] + h, g->n[0] - 1);
   int ylo = clip_lo(v[1] - h, 0), yhi = clip_hi(v[1] + h, g->n[1] - 1);
+  int cx0 = clip_lo(xlo >> 4, cx_min), cx1 = clip_hi(xhi >> 4, cx_max);
   for (int cz = zlo >> 4; zhi >= 0 && cz <= zhi >> 4; cz++)
     for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
-      for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {
+      for (int cx = cx0; cx <= cx1; cx++) {
         int z0 = clip_lo(zlo, cz << 4), z1 = clip_hi(zhi, (cz << 4) + 15);
         /* the widest layer of this chunk is its lowest: skip chunks it misses */
         int hw = p->half[v[2] - z0 - 1];
@@ -342,7 +370,7 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
   int64_t value = sign * p->column;
   int bz = ztop >> 4, zl = ztop & 15;
   for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
-    for (int cx = xlo >> 4; cx <= xhi >> 4; cx++) {
+    for (int cx = cx0; cx <= cx1; cx++) {
       sylva__chunk *c = chunk_get(g, cx, cy, bz);
       if (!c) return SYLVA_ENOMEM;
       int64_t *sum = NULL;
@@ -373,8 +401,48 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
   /* Every block first, then the writes: a stamp that runs out of memory has written
    * nothing, and the blocks it made hold zeros, so the shade is as it was. */
-  int rc = stamp(g, v, p, 0);
-  return rc ? rc : stamp(g, v, p, sign);
+  int rc = stamp(g, v, p, 0, 0, g->c[0] - 1);
+  return rc ? rc : stamp(g, v, p, sign, 0, g->c[0] - 1);
+}
+
+typedef struct stamp_many_ctx {
+  sylva__grid *g;
+  const sylva__stamp *items;
+  size_t n;
+  int sign, parts;
+} stamp_many_ctx;
+
+/* Parts [begin, end) of a batch: part k writes the chunk columns of its own range of
+ * cx, every stamp's share of them. */
+static void stamp_parts(void *arg, size_t begin, size_t end) {
+  const stamp_many_ctx *c = arg;
+  int cols = c->g->c[0];
+  for (size_t k = begin; k < end; k++) {
+    int cx_min = (int)((int64_t)k * cols / c->parts);
+    int cx_max = (int)((int64_t)(k + 1) * cols / c->parts) - 1;
+    for (size_t i = 0; i < c->n; i++) {
+      const sylva__stamp *it = &c->items[i];
+      int h = it->p->half[it->p->depth - 1];
+      if ((it->v[0] + h) >> 4 < cx_min || (it->v[0] - h < 0 ? 0 : (it->v[0] - h) >> 4) > cx_max)
+        continue;
+      stamp(c->g, it->v, it->p, c->sign, cx_min, cx_max); /* its blocks exist: no failure */
+    }
+  }
+}
+
+int sylva__grid_stamp_many(sylva__grid *g, sylva__pool *pool, const sylva__stamp *items, size_t n,
+                           int sign) {
+  if (sign > 0)
+    for (size_t i = 0; i < n; i++) {
+      int rc = stamp(g, items[i].v, items[i].p, 0, 0, g->c[0] - 1);
+      if (rc) return rc; /* the blocks made so far hold zeros: the shade is as it was */
+    }
+  int threads = sylva__pool_threads(pool);
+  int parts = threads == 1 ? 1 : 4 * threads;
+  if (parts > g->c[0]) parts = g->c[0];
+  stamp_many_ctx c = {g, items, n, sign, parts};
+  sylva__pool_for(pool, (size_t)parts, 1, stamp_parts, &c);
+  return SYLVA_OK;
 }
 
 /* ---- obstacles ------------------------------------------------------------------ */

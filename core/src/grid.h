@@ -9,6 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pool.h"
 #include "sylva/world.h"
 
 #define SYLVA__CHUNK_BITS 4
@@ -93,10 +94,14 @@ typedef struct sylva__grid {
   struct sylva__site_cache *site;
 } sylva__grid;
 
+/** A voxel's site factor, -1 until computed. Threads reading the light at once may
+ *  compute the same voxel's factor: they store the same value, atomically. */
+typedef _Atomic float sylva__site_factor_t;
+
 /** The site factors read so far: c0*c1*c2 entries, NULL or 4096
- *  floats in the chunk's voxel order, -1 where not computed yet. */
+ *  factors in the chunk's voxel order. */
 typedef struct sylva__site_cache {
-  float **chunk;
+  sylva__site_factor_t **chunk;
   size_t count;
 } sylva__site_cache;
 
@@ -104,8 +109,17 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
 /** Gives the grid a site's sky (copied); its light then is the site factor times
  *  the light under the plants' shade. SYLVA_ENOMEM leaves it as it was. */
 int sylva__grid_set_sky(sylva__grid *g, const sylva_sky_dir *dirs, int count);
-/** The site factor of voxel v (1 without a sky; cached per chunk). */
+/** The site factor of voxel v (1 without a sky; cached per chunk). Safe on several
+ *  threads at once only for voxels whose chunk has its cache (sylva__grid_site_reserve);
+ *  elsewhere it allocates. */
 double sylva__grid_site_factor(const sylva__grid *g, const int v[3]);
+/** Makes the cache of voxel v's chunk (one thread at a time), so that readers on
+ *  several threads may then fill it; false when there was no memory for it (the
+ *  factors are then computed each time, unkept, by every reader). */
+bool sylva__grid_site_reserve(const sylva__grid *g, const int v[3]);
+/** The light of voxel v as sylva__grid_light, never allocating: safe on several
+ *  threads at once while nothing writes the grid. */
+double sylva__grid_light_shared(const sylva__grid *g, const int v[3]);
 void sylva__grid_free(sylva__grid *g);
 /** Bytes of the site factors cached so far (part of sylva__grid_bytes). */
 size_t sylva__grid_site_bytes(const sylva__grid *g);
@@ -145,6 +159,21 @@ typedef struct sylva__pyramid {
 /** Adds (sign +1) or removes (-1) the shade of one node at voxel v. SYLVA_ENOMEM
  *  leaves the shade as it was. */
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
+
+/** One node's shade in a batch: its voxel and its pyramid. */
+typedef struct sylva__stamp {
+  int v[3];
+  const sylva__pyramid *p;
+} sylva__stamp;
+
+/** Adds (+1) or removes (-1) the shade of n nodes on the pool's threads (NULL: the
+ *  caller's alone). Each thread writes the chunk columns of its own range of x, and
+ *  the sums are exact integers, so the grid is the one the stamps give one by one in
+ *  any order, on any number of threads. Adding makes every chunk first, on the
+ *  caller's thread: SYLVA_ENOMEM leaves the shade as it was. Removing never fails:
+ *  the chunks of a stamp added before exist (chunks live as long as the grid). */
+int sylva__grid_stamp_many(sylva__grid *g, sylva__pool *pool, const sylva__stamp *items,
+                           size_t n, int sign);
 
 /** Adds a solid box with the next id; returns the id, SYLVA_EINVAL for a bad box or
  *  label or a label in use, SYLVA_ENOMEM leaving the grid as it was. */

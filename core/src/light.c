@@ -4,27 +4,60 @@
 
 #include "world_impl.h"
 
-void sylva__light_collect(sylva_world *w, int iteration, double *light) {
-  sylva__skeleton *s = &w->nodes;
+typedef struct collect_ctx {
+  sylva_world *w;
+  int iteration;
+  double *light;
+} collect_ctx;
+
+/* The light each node in [begin, end) collects: reads the grid and the species'
+ * cached powers, writes only its own nodes' q and light. */
+static void collect_range(void *arg, size_t begin, size_t end) {
+  const collect_ctx *c = arg;
+  sylva_world *w = c->w;
+  const sylva__skeleton *s = &w->nodes;
   int32_t cur_stem = -1;
-  sylva__species *sp = NULL;
-  for (size_t i = 0; i < s->count; i++) {
+  const sylva__species *sp = NULL;
+  for (size_t i = begin; i < end; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     if (s->stem[i] != cur_stem) {
       cur_stem = s->stem[i];
       sp = &w->species[w->stems[cur_stem].species];
     }
-    int age = sylva__leaf_age(s, &sp->def, i, iteration);
+    int age = sylva__leaf_age(s, &sp->def, i, c->iteration);
     double L = 0.0;
     if (age >= 0) {
       int v[3];
       sylva__node_voxel(w, (int32_t)i, v);
-      double l = sylva__grid_light(&w->grid, v);
-      L = sylva__collected(sp->def.alpha, l, age > 0 ? sylva__species_age_pow(sp, age) : 0.0);
+      double l = sylva__grid_light_shared(&w->grid, v);
+      /* the cache holds age^sigma for every age a leaf has (warmed below) */
+      double p = age == 0 ? 0.0
+                 : age < sp->age_pow_n ? sp->age_pow[age]
+                                       : pow((double)age, sp->def.sigma);
+      L = sylva__collected(sp->def.alpha, l, p);
     }
     w->q[i] = L;
-    if (light) light[i] = L;
+    if (c->light) c->light[i] = L;
   }
+}
+
+void sylva__light_collect(sylva_world *w, int iteration, double *light) {
+  sylva__skeleton *s = &w->nodes;
+  /* What the threads only read: every species' powers of a leaf's ages, and the
+   * site factors' cache of every lit node's chunk. */
+  for (int k = 0; k < w->species_count; k++) {
+    const sylva_species_def *d = &w->species[k].def;
+    sylva__species_age_pow(&w->species[k], d->leaf_age > 1 ? d->leaf_age : 1);
+  }
+  if (w->grid.sky_count)
+    for (size_t i = 0; i < s->count; i++) {
+      if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+      int v[3];
+      sylva__node_voxel(w, (int32_t)i, v);
+      sylva__grid_site_reserve(&w->grid, v);
+    }
+  collect_ctx c = {w, iteration, light};
+  sylva__pool_for(w->pool, s->count, 4096, collect_range, &c);
   /* Children sit in higher slots than their parents: one reverse sweep adds each
    * finished subtree total into its parent. */
   for (size_t i = s->count; i-- > 0;)

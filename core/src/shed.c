@@ -5,10 +5,9 @@
 
 #include "world_impl.h"
 
-int sylva__remove_node(sylva_world *w, int32_t i, bool pruned) {
+/* A removed node's voxel, slot and count; its shade is gone already. */
+static void remove_rest(sylva_world *w, int32_t i, bool pruned) {
   sylva__skeleton *s = &w->nodes;
-  int rc = sylva__shade_node(w, i, -1);
-  if (rc) return rc;
   int v[3];
   sylva__node_voxel(w, i, v);
   sylva__grid_vacate(&w->grid, v);
@@ -18,7 +17,56 @@ int sylva__remove_node(sylva_world *w, int32_t i, bool pruned) {
     w->stems[s->stem[i]].stats.pruned++;
   else
     w->stems[s->stem[i]].stats.shed++;
+}
+
+int sylva__remove_node(sylva_world *w, int32_t i, bool pruned) {
+  int rc = sylva__shade_node(w, i, -1);
+  if (rc) return rc;
+  remove_rest(w, i, pruned);
   return SYLVA_OK;
+}
+
+void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
+  sylva__skeleton *s = &w->nodes;
+  /* Shade sums are exact integers, so the removals may run in any order and on any
+   * number of threads: take them chunk by chunk (z, y, x of 16-voxel chunks) so that
+   * neighbouring pyramids share the cache. Without memory for that, or for a
+   * pyramid's table, they run one by one in slot order, to the same grid, so this
+   * never fails for want of it. */
+  bool batch = !SYLVA__VEC_RESERVE(w->cells, doomed) && !SYLVA__VEC_RESERVE(w->stamps, doomed);
+  if (batch) {
+    w->cells.len = 0;
+    for (size_t i = 0; i < s->count; i++) {
+      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+      int v[3];
+      sylva__node_voxel(w, (int32_t)i, v);
+      int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
+      w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
+    }
+    qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
+    w->stamps.len = 0;
+    for (size_t k = 0; k < w->cells.len && batch; k++) {
+      int32_t i = w->cells.data[k].item;
+      const sylva__stem *st = &w->stems[s->stem[i]];
+      sylva__species *sp = &w->species[st->species];
+      int t = s->birth[i] - st->born;
+      batch = !sylva__species_shade_reserve(sp, t);
+      sylva__stamp *it = &w->stamps.data[w->stamps.len++];
+      sylva__node_voxel(w, i, it->v);
+      it->p = batch ? sylva__species_shade_at(sp, t) : NULL;
+    }
+  }
+  if (!batch) {
+    for (size_t i = 0; i < s->count; i++) {
+      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+      int rc = sylva__remove_node(w, (int32_t)i, pruned);
+      SYLVA_ASSERT(rc == SYLVA_OK); /* its blocks exist: removing allocates nothing */
+      (void)rc;
+    }
+    return;
+  }
+  sylva__grid_stamp_many(&w->grid, w->pool, w->stamps.data, w->stamps.len, -1);
+  for (size_t k = 0; k < w->cells.len; k++) remove_rest(w, w->cells.data[k].item, pruned);
 }
 
 /* Dooms the branch that starts at node i, born before or at `iteration`: a lateral
@@ -225,31 +273,7 @@ int sylva__shed(sylva_world *w, int iteration) {
     }
   }
   if (!doomed) return SYLVA_OK;
-  /* Shade sums are exact integers, so the removals may run in any order: take them
-   * chunk by chunk (z, y, x of 16-voxel chunks) so that neighbouring pyramids share
-   * the cache. Without memory for that order they run in slot order, to the same
-   * grid, so this phase never fails for want of it. */
-  if (SYLVA__VEC_RESERVE(w->cells, doomed)) {
-    for (size_t i = 0; i < s->count; i++) {
-      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-      int rc = sylva__remove_node(w, (int32_t)i, false);
-      if (rc) return rc;
-    }
-  } else {
-    w->cells.len = 0;
-    for (size_t i = 0; i < s->count; i++) {
-      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-      int v[3];
-      sylva__node_voxel(w, (int32_t)i, v);
-      int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
-      w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
-    }
-    qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
-    for (size_t k = 0; k < w->cells.len; k++) {
-      int rc = sylva__remove_node(w, w->cells.data[k].item, false);
-      if (rc) return rc;
-    }
-  }
+  sylva__remove_doomed(w, doomed, false);
   /* the removed subtrees no longer send light to their parents */
   sylva__light_collect(w, iteration + 1, NULL);
   return SYLVA_OK;

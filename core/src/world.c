@@ -35,6 +35,7 @@ int sylva_world_def_check(const sylva_world_def *def) {
   if (def->sky_count < 0 || def->sky_count > SYLVA_MAX_SKY || (def->sky_count && !def->sky))
     return SYLVA_EINVAL;
   if (!(def->stand_area >= 0.0) || !isfinite(def->stand_area)) return SYLVA_EINVAL;
+  if (def->threads < 0 || def->threads > SYLVA_MAX_THREADS) return SYLVA_EINVAL;
   for (int i = 0; i < def->sky_count; i++) {
     const sylva_sky_dir *s = &def->sky[i];
     double len = sqrt(s->d[0] * s->d[0] + s->d[1] * s->d[1] + s->d[2] * s->d[2]);
@@ -72,15 +73,32 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
     return SYLVA_ENOMEM;
   }
   sylva__rng_seed(&w->rng, def->seed);
+  sylva__pool_create(def->threads, &w->pool); /* one thread if it fails: the same world */
   *out = w;
   return SYLVA_OK;
 }
 
+int sylva_world_set_threads(sylva_world *w, int threads) {
+  if (threads < 0 || threads > SYLVA_MAX_THREADS) return SYLVA_EINVAL;
+  if ((threads <= 1 ? 1 : threads) == sylva__pool_threads(w->pool)) return SYLVA_OK;
+  sylva__pool_destroy(w->pool);
+  w->def.threads = threads;
+  int rc = sylva__pool_create(threads, &w->pool);
+  if (rc) w->def.threads = 1;
+  return rc;
+}
+
+int sylva_world_threads(const sylva_world *w) { return sylva__pool_threads(w->pool); }
+
 void sylva_world_destroy(sylva_world *w) {
   if (!w) return;
+  sylva__pool_destroy(w->pool);
   sylva__grid_free(&w->grid);
   sylva__skeleton_free(&w->nodes);
-  for (int i = 0; i < w->species_count; i++) sylva__free(w->species[i].age_pow);
+  for (int i = 0; i < w->species_count; i++) {
+    sylva__free(w->species[i].age_pow);
+    sylva__free(w->species[i].shades);
+  }
   sylva__free(w->species);
   sylva__free(w->plants);
   sylva__free(w->plant_index);
@@ -115,6 +133,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->stem_top.data);
   sylva__free(w->crown_bins.data);
   sylva__free(w->cells.data);
+  sylva__free(w->stamps.data);
   sylva__free(w->cell_first.data);
   sylva__free(w->cell_items.data);
   sylva__free(w->cell_pos.data);
@@ -225,7 +244,6 @@ int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const 
   scale_counts(sp);
   strcpy(sp->label, label);
   sp->t95 = first_t95(&sp->def.growth);
-  sp->shade_cache_t = -1;
   return w->species_count++;
 }
 
@@ -249,22 +267,46 @@ static double chain_weight(const sylva__species *sp, double b) {
   return (x / (1.0 - x)) / (y / (1.0 - y));
 }
 
-const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
-  if (sp->shade_cache_t != t) {
-    sylva__pyramid *p = &sp->shade;
-    double b = sylva__species_b(sp, t);
-    p->depth = sp->def.pyramid_depth;
-    double weight = sp->def.shade_weight * chain_weight(sp, b);
-    for (int q = 1; q <= p->depth; q++) {
-      p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * weight * SYLVA__SHADE_ONE + 0.5);
-      p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
-    }
-    /* the column: a point below a crown sums the nodes above it in its voxel column,
-     * s times as many per metre of shoot in a voxel s^2 times smaller: weighted s, the
-     * same crown casts the same column shade at any rho */
-    p->column = (int64_t)floor(sp->def.shade_column * sp->scale * sp->def.shade_weight * SYLVA__SHADE_ONE + 0.5);
-    sp->shade_cache_t = t;
+static void make_shade(const sylva__species *sp, int t, sylva__pyramid *p) {
+  double b = sylva__species_b(sp, t);
+  p->depth = sp->def.pyramid_depth;
+  double weight = sp->def.shade_weight * chain_weight(sp, b);
+  for (int q = 1; q <= p->depth; q++) {
+    p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * weight * SYLVA__SHADE_ONE + 0.5);
+    p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
   }
+  /* the column: a point below a crown sums the nodes above it in its voxel column,
+   * s times as many per metre of shoot in a voxel s^2 times smaller: weighted s, the
+   * same crown casts the same column shade at any rho */
+  p->column = (int64_t)floor(sp->def.shade_column * sp->scale * sp->def.shade_weight * SYLVA__SHADE_ONE + 0.5);
+}
+
+/* The table entry of local birth iteration t (see sylva__species.shades). */
+static int64_t shade_entry(const sylva__species *sp, int t) {
+  int64_t tau = sp->def.tau, hi = sp->t95 > sp->def.tau ? sp->t95 : tau + 1;
+  return t <= tau ? 0 : t >= hi ? hi - tau : (int64_t)t - tau;
+}
+
+int sylva__species_shade_reserve(sylva__species *sp, int t) {
+  int64_t k = shade_entry(sp, t);
+  if (k < sp->shades_n) return SYLVA_OK;
+  int64_t n = k + 16 > 2 * (int64_t)sp->shades_n ? k + 16 : 2 * (int64_t)sp->shades_n;
+  if (n > INT_MAX / 2) return SYLVA_ENOMEM;
+  sylva__pyramid *p = sylva__realloc(sp->shades, (size_t)n * sizeof *p);
+  if (!p) return SYLVA_ENOMEM;
+  for (int64_t i = sp->shades_n; i < n; i++) make_shade(sp, (int)(sp->def.tau + i), &p[i]);
+  sp->shades = p;
+  sp->shades_n = (int)n;
+  return SYLVA_OK;
+}
+
+const sylva__pyramid *sylva__species_shade_at(const sylva__species *sp, int t) {
+  return &sp->shades[shade_entry(sp, t)];
+}
+
+const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
+  if (!sylva__species_shade_reserve(sp, t)) return sylva__species_shade_at(sp, t);
+  make_shade(sp, t, &sp->shade); /* no room for the table: this one, the same */
   return &sp->shade;
 }
 

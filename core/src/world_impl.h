@@ -5,6 +5,7 @@
 #include "alloc.h"
 #include "debug.h"
 #include "grid.h"
+#include "pool.h"
 #include "prism.h"
 #include "rng.h"
 #include "skeleton.h"
@@ -21,8 +22,13 @@ typedef struct sylva__species {
   int t95;             /* first local iteration with X(T) >= 0.95 limit */
   double *age_pow;     /* age^sigma by age, grown on demand */
   int age_pow_n;
-  int shade_cache_t;   /* local iteration whose pyramid is cached, -1 none */
-  sylva__pyramid shade; /* fixed-point b^-q, q = 1..pyramid_depth, and its shape */
+  /* The shade of a node by its local birth iteration t (fixed-point b^-q, q =
+   * 1..pyramid_depth, and its shape), made when first needed: b varies only between
+   * tau and t95, so entry k is t = tau + k, entry 0 every t <= tau and the last
+   * (once made) every t >= t95. */
+  sylva__pyramid *shades;
+  int shades_n;
+  sylva__pyramid shade; /* scratch: the one pyramid asked for when the table could not grow */
 } sylva__species;
 
 typedef struct sylva__plant {
@@ -112,6 +118,7 @@ typedef struct sylva__mark {
 
 struct sylva_world {
   sylva_world_def def;
+  sylva__pool *pool; /* NULL: the caller's thread alone */
   sylva__grid grid;
   sylva__skeleton nodes;
   sylva__rng rng;
@@ -185,6 +192,7 @@ struct sylva_world {
   SYLVA__VEC(int32_t) shed;
   SYLVA__VEC(sylva_stem_stats) stats;
   SYLVA__VEC(sylva__keyed) cells;   /* shed nodes sorted by chunk */
+  SYLVA__VEC(sylva__stamp) stamps;  /* their shade, in that order */
   SYLVA__VEC(int32_t) cell_first;    /* competition index: first item of each cell */
   SYLVA__VEC(int32_t) cell_items;    /* sprout indices, cell by cell */
   SYLVA__VEC(float) cell_pos;        /* their positions, x y z */
@@ -299,6 +307,12 @@ double sylva__species_b(const sylva__species *sp, int t);
 const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t);
 /** age^sigma, cached. NaN on allocation failure is avoided by computing directly. */
 double sylva__species_age_pow(sylva__species *sp, int age);
+/** Makes the shade of local birth iterations up to t (one thread at a time);
+ *  SYLVA_ENOMEM when the table could not grow. */
+int sylva__species_shade_reserve(sylva__species *sp, int t);
+/** The shade of local birth iteration t, made already (sylva__species_shade_reserve):
+ *  safe on several threads at once. */
+const sylva__pyramid *sylva__species_shade_at(const sylva__species *sp, int t);
 
 /** Rounds p to the stored float position f and finds its voxel; false if outside. */
 bool sylva__voxel_of(const sylva_world *w, const double p[3], float f[3], int v[3]);
@@ -349,6 +363,9 @@ int sylva__shed(sylva_world *w, int iteration);
 /** Removes a node marked for removal: its shade, its voxel, its slot; counted in
  *  its stem's stats.pruned or stats.shed. */
 int sylva__remove_node(sylva_world *w, int32_t slot, bool pruned);
+/** Removes the doomed nodes, the count given, as sylva__remove_node does one by
+ *  one: their shade on the world's threads, at once. Never fails. */
+void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned);
 /** Per-stem measures into stems[].stats. */
 void sylva__stats(sylva_world *w, int iteration);
 /** Measures of a stem just planted (its vertical initial trunk), without a pass

@@ -17,7 +17,7 @@
  *
  *   bench [all|fig17b|stand5|stand100|shade|floor|store5|store100|obstacles|years|street10|thinning]
  *         [--scenarios DIR]
- *         [--edits N] */
+ *         [--edits N] [--threads N] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,6 +35,8 @@
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
 #include "sylva/sylva.h"
+
+static int bench_threads = 1; /* --threads N: the worlds grow on N threads */
 
 static double now(void *ctx) {
   (void)ctx;
@@ -65,7 +67,8 @@ static const char *phase_names[SYLVA_PHASE_COUNT] = {"light", "alloc", "shoots",
 /* Grows w until finished, `limit` iterations, or `target` live internodes. */
 static summary grow(const char *name, sylva_world *w, int limit, size_t target) {
   summary s = {.name = name};
-  printf("\n== %s\n%4s %9s %8s %8s", name, "T", "live", "new", "ms");
+  sylva_world_set_threads(w, bench_threads);
+  printf("\n== %s (%d threads)\n%4s %9s %8s %8s", name, bench_threads, "T", "live", "new", "ms");
   for (int p = 0; p < SYLVA_PHASE_COUNT; p++) printf(" %7s", phase_names[p]);
   printf(" %9s %9s\n", "voxelMB", "skelMB");
   double t0 = now(NULL);
@@ -337,6 +340,7 @@ static void shade_by_height(void) {
  * light; the floor only adds. */
 static void shade_floor(void) {
   sylva_world *w = stand_of("igm-fig13", 10, 2.5, 14.0);
+  sylva_world_set_threads(w, bench_threads);
   /* grown as grow() does, keeping each grown internode's voxel and pyramid */
   size_t n = 0, cap = 1 << 16, created = 0;
   int(*vox)[3] = malloc(cap * sizeof *vox);
@@ -365,11 +369,11 @@ static void shade_floor(void) {
       pyr[n++] = &kept[j->iteration];
     }
   }
-  printf("\n== 100 igm-fig13 trees 2.5 m apart, 30 iterations: %d iterations, %zu live internodes "
-         "(%zu grown) in %.2f s, %.0f grown per s\n   phases (s):", sylva_world_iteration(w),
+  printf("\n== 100 igm-fig13 trees 2.5 m apart, 30 iterations, %d threads: %d iterations, %zu live internodes "
+         "(%zu grown) in %.2f s, %.0f grown per s\n   phases (s):", bench_threads, sylva_world_iteration(w),
          sylva_world_node_count(w), created, engine, (double)created / engine);
   for (int p = 0; p < SYLVA_PHASE_COUNT; p++) printf(" %s %.2f", phase_names[p], phase[p]);
-  printf("\n");
+  printf("\n   world hash %016llx\n", (unsigned long long)sylva_world_hash(w));
   voxel_census(w);
   sylva_world *again = w;
   const int *dim = again->grid.n;
@@ -587,6 +591,8 @@ int main(int argc, char **argv) {
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--scenarios") == 0 && i + 1 < argc)
       dir = argv[++i];
+    else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc)
+      bench_threads = atoi(argv[++i]);
     else if (strcmp(argv[i], "--edits") == 0 && i + 1 < argc)
       edits = atoi(argv[++i]);
     else

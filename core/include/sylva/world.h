@@ -66,7 +66,14 @@ typedef struct sylva_world_def {
   /** Optional clock (seconds) used only to time phases; never affects results. */
   double (*clock)(void *ctx);
   void *clock_ctx;
+  /** Threads that grow the world, the caller's included: 0 or 1 for the caller's
+   *  alone, at most SYLVA_MAX_THREADS. Never affects results: every number of
+   *  threads grows the same world to the bit (docs/model.md, "Determinism"). */
+  int threads;
 } sylva_world_def;
+
+/** The most threads a world grows on. */
+#define SYLVA_MAX_THREADS 256
 
 /** A plant: one root is a tree, several roots make a shrub (one stem per root). */
 /** A node of a measured plant (sylva_plant_def.nodes), parents before children. */
@@ -308,6 +315,14 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
 
 /** Sets (or clears, with NULL) the clock that times the phases of each step. */
 void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx);
+
+/** Grows the world on this many threads from now on (as sylva_world_def.threads; a
+ *  loaded snapshot starts on one). SYLVA_EINVAL outside 0..SYLVA_MAX_THREADS;
+ *  SYLVA_ENOMEM (memory or threads the system would not give) leaves it on one
+ *  thread, which grows the same world. */
+int sylva_world_set_threads(sylva_world *w, int threads);
+/** The threads the world grows on (1 without a pool). */
+int sylva_world_threads(const sylva_world *w);
 
 /** Grows one iteration. SYLVA_EFINISHED when every stem has finished. SYLVA_ENOMEM
  *  when memory ran out: the world is as it was before the call (the previous
