@@ -295,6 +295,7 @@ int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
   uint32_t *o = &c->occ[local_index(v[0], v[1], v[2])];
   if (*o == 0) {
     *o = ((uint32_t)(stem + 1) << SYLVA__OCC_COUNT_BITS) | 1u;
+    c->occupied++;
     return SYLVA_OK;
   }
   if ((int32_t)(*o >> SYLVA__OCC_COUNT_BITS) - 1 != stem ||
@@ -308,10 +309,17 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
   sylva__chunk *c = g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
   if (!c || !c->occ) return;
   uint32_t *o = &c->occ[local_index(v[0], v[1], v[2])];
-  if ((*o & SYLVA__OCC_COUNT_MAX) <= 1)
-    *o = 0;
-  else
+  if ((*o & SYLVA__OCC_COUNT_MAX) > 1) {
     (*o)--;
+    return;
+  }
+  if (*o && --c->occupied == 0) { /* the chunk's last node left */
+    sylva__free(c->occ);
+    c->occ = NULL;
+    g->occ_count--;
+    return;
+  }
+  *o = 0;
 }
 
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }

@@ -28,9 +28,11 @@ typedef struct sylva__chunk {
    * pyramids and the part of each shade column inside the chunk where the column
    * starts (one run per row and layer at and below the column's top). */
   int64_t shade[SYLVA__CHUNK_VOXELS];
-  /* Stem occupancy, same index; NULL until a node lies in the chunk (the chunks
-   * below the crowns only hold shade). */
+  /* Stem occupancy, same index; NULL while no node lies in the chunk (the chunks
+   * below the crowns only hold shade): made when one enters, freed when the last
+   * leaves. */
   uint32_t *occ;
+  int32_t occupied; /* voxels of occ that hold a node */
 } sylva__chunk;
 
 typedef struct sylva__obstacle {
