@@ -81,7 +81,7 @@ size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
   return nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
-         g->occ_count * SYLVA__CHUNK_VOXELS * sizeof(uint32_t) +
+         g->occ_bytes +
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
          (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
@@ -271,55 +271,117 @@ double sylva__grid_light_shared(const sylva__grid *g, const int v[3]) {
   return light_in(g, chunk_at(g, v), v, true);
 }
 
+/* ---- occupancy ------------------------------------------------------------------ */
+
+static inline uint32_t occ_home(const sylva__occ *o, int i) {
+  return ((uint32_t)i * 0x9E3779B1u) & (o->cap - 1);
+}
+
+/* The slot of local voxel i in table o, or the empty slot where it would go. */
+static inline uint32_t occ_find(const sylva__occ *o, int i) {
+  uint64_t key = (uint64_t)(i + 1) << 32;
+  uint32_t k = occ_home(o, i);
+  while (o->slot[k] && (o->slot[k] & 0xFFFFFFFF00000000ULL) != key) k = (k + 1) & (o->cap - 1);
+  return k;
+}
+
+static inline uint32_t occ_word(const sylva__chunk *c, int i) {
+  if (!c || !c->occ) return 0;
+  return (uint32_t)c->occ->slot[occ_find(c->occ, i)];
+}
+
+/* A table of cap slots holding o's entries (o NULL: none); NULL without memory. */
+static sylva__occ *occ_table(sylva__grid *g, const sylva__occ *o, uint32_t cap) {
+  sylva__occ *t = sylva__calloc(1, sizeof *t + (size_t)cap * sizeof t->slot[0]);
+  if (!t) return NULL;
+  t->cap = cap;
+  g->occ_bytes += sizeof *t + (size_t)cap * sizeof t->slot[0];
+  if (o)
+    for (uint32_t k = 0; k < o->cap; k++)
+      if (o->slot[k]) {
+        int i = (int)(o->slot[k] >> 32) - 1;
+        t->slot[occ_find(t, i)] = o->slot[k];
+        t->count++;
+      }
+  return t;
+}
+
+static void occ_free(sylva__grid *g, sylva__occ *o) {
+  if (!o) return;
+  g->occ_bytes -= sizeof *o + (size_t)o->cap * sizeof o->slot[0];
+  sylva__free(o);
+}
+
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]) {
   const sylva__chunk *c = chunk_at(g, v);
-  if (c && c->occ && c->occ[local_index(v[0], v[1], v[2])]) return -1.0;
+  if (occ_word(c, local_index(v[0], v[1], v[2]))) return -1.0;
   return light_in(g, c, v, false);
 }
 
+uint32_t sylva__grid_occ_word(const sylva__grid *g, const int v[3]) {
+  return occ_word(chunk_at(g, v), local_index(v[0], v[1], v[2]));
+}
+
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]) {
-  const sylva__chunk *c = chunk_at(g, v);
-  if (!c || !c->occ) return -1;
-  uint32_t o = c->occ[local_index(v[0], v[1], v[2])];
+  uint32_t o = occ_word(chunk_at(g, v), local_index(v[0], v[1], v[2]));
   return o ? (int32_t)(o >> SYLVA__OCC_COUNT_BITS) - 1 : -1;
 }
 
 int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
   sylva__chunk *c = chunk_get(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
   if (!c) return SYLVA_ENOMEM;
-  if (!c->occ) {
-    c->occ = sylva__calloc(SYLVA__CHUNK_VOXELS, sizeof *c->occ);
-    if (!c->occ) return SYLVA_ENOMEM;
-    g->occ_count++;
+  int i = local_index(v[0], v[1], v[2]);
+  if (c->occ) {
+    uint32_t k = occ_find(c->occ, i);
+    uint64_t *slot = &c->occ->slot[k];
+    if (*slot) {
+      uint32_t o = (uint32_t)*slot;
+      if ((int32_t)(o >> SYLVA__OCC_COUNT_BITS) - 1 != stem ||
+          (o & SYLVA__OCC_COUNT_MAX) == SYLVA__OCC_COUNT_MAX)
+        return SYLVA_EOCCUPIED;
+      (*slot)++;
+      return SYLVA_OK;
+    }
   }
-  uint32_t *o = &c->occ[local_index(v[0], v[1], v[2])];
-  if (*o == 0) {
-    *o = ((uint32_t)(stem + 1) << SYLVA__OCC_COUNT_BITS) | 1u;
-    c->occupied++;
-    return SYLVA_OK;
+  if (!c->occ || 2 * (c->occ->count + 1) > c->occ->cap) { /* room for one more */
+    sylva__occ *t = occ_table(g, c->occ, c->occ ? 2 * c->occ->cap : 16);
+    if (!t) return SYLVA_ENOMEM;
+    occ_free(g, c->occ);
+    if (!c->occ) g->occ_count++;
+    c->occ = t;
   }
-  if ((int32_t)(*o >> SYLVA__OCC_COUNT_BITS) - 1 != stem ||
-      (*o & SYLVA__OCC_COUNT_MAX) == SYLVA__OCC_COUNT_MAX)
-    return SYLVA_EOCCUPIED;
-  (*o)++;
+  c->occ->slot[occ_find(c->occ, i)] =
+      (uint64_t)(i + 1) << 32 | ((uint32_t)(stem + 1) << SYLVA__OCC_COUNT_BITS) | 1u;
+  c->occ->count++;
   return SYLVA_OK;
 }
 
 void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
   sylva__chunk *c = g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
   if (!c || !c->occ) return;
-  uint32_t *o = &c->occ[local_index(v[0], v[1], v[2])];
-  if ((*o & SYLVA__OCC_COUNT_MAX) > 1) {
-    (*o)--;
+  sylva__occ *o = c->occ;
+  uint32_t k = occ_find(o, local_index(v[0], v[1], v[2]));
+  if (!o->slot[k]) return;
+  if ((o->slot[k] & SYLVA__OCC_COUNT_MAX) > 1) {
+    o->slot[k]--;
     return;
   }
-  if (*o && --c->occupied == 0) { /* the chunk's last node left */
-    sylva__free(c->occ);
+  if (--o->count == 0) { /* the chunk's last node left */
+    occ_free(g, o);
     c->occ = NULL;
     g->occ_count--;
     return;
   }
-  *o = 0;
+  /* take the slot out, moving later slots of its probe run back into the gap */
+  uint32_t mask = o->cap - 1;
+  for (uint32_t j = (k + 1) & mask; o->slot[j]; j = (j + 1) & mask) {
+    uint32_t home = occ_home(o, (int)(o->slot[j] >> 32) - 1);
+    bool stays = k <= j ? (home > k && home <= j) : (home > k || home <= j);
+    if (stays) continue;
+    o->slot[k] = o->slot[j];
+    k = j;
+  }
+  o->slot[k] = 0;
 }
 
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }

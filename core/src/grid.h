@@ -28,12 +28,20 @@ typedef struct sylva__chunk {
    * pyramids and the part of each shade column inside the chunk where the column
    * starts (one run per row and layer at and below the column's top). */
   int64_t shade[SYLVA__CHUNK_VOXELS];
-  /* Stem occupancy, same index; NULL while no node lies in the chunk (the chunks
-   * below the crowns only hold shade): made when one enters, freed when the last
-   * leaves. */
-  uint32_t *occ;
-  int32_t occupied; /* voxels of occ that hold a node */
+  /* Stem occupancy of the voxels that hold a node; NULL while none does (the chunks
+   * below the crowns hold shade alone): made when a node enters, freed when the
+   * last leaves. */
+  struct sylva__occ *occ;
 } sylva__chunk;
+
+/** A chunk's occupied voxels: open addressing with linear probing over cap (a power
+ *  of two, at least twice count) slots, each 0 or (local index + 1) << 32 | the
+ *  voxel's occupancy word. A crown's chunk holds nodes in a few hundred of its 4,096
+ *  voxels: a few kilobytes instead of 16. */
+typedef struct sylva__occ {
+  uint32_t cap, count;
+  uint64_t slot[];
+} sylva__occ;
 
 typedef struct sylva__obstacle {
   int id;
@@ -70,6 +78,7 @@ typedef struct sylva__grid {
    * to every voxel of blocks strictly below. */
   int64_t **colsum;
   size_t chunk_count, colsum_count, occ_count;
+  size_t occ_bytes; /* the occupancy tables */
   /* Obstacles in the order they were added, so by increasing id (found by binary
    * search): obstacle_slots slots, obstacle_count of them live. A removed obstacle
    * leaves a dead slot; once the dead outnumber the live the slots are compacted. */
@@ -139,6 +148,8 @@ int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]);
 double sylva__grid_light(const sylva__grid *g, const int v[3]);
 /** Light of voxel v if no stem occupies it, else -1 (one chunk lookup for both). */
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]);
+/** Voxel v's occupancy word ((stem + 1) << 12 | its nodes there), 0 when free. */
+uint32_t sylva__grid_occ_word(const sylva__grid *g, const int v[3]);
 /** Stem occupying voxel v, or -1. */
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]);
 /** Adds one node of stem to voxel v. SYLVA_EOCCUPIED if another stem holds it or

@@ -263,15 +263,11 @@ static void voxel_census(const sylva_world *w) {
   for (size_t i = 0; i < n; i++) {
     const sylva__chunk *c = g->chunks[i];
     if (!c) continue;
-    bool any = false;
-    for (int k = 0; k < SYLVA__CHUNK_VOXELS; k++) {
-      any |= c->occ && c->occ[k] != 0;
-      nonzero += c->shade[k] != 0;
-    }
-    occupied += any;
+    for (int k = 0; k < SYLVA__CHUNK_VOXELS; k++) nonzero += c->shade[k] != 0;
+    occupied += c->occ != NULL;
   }
-  printf("   voxels: %zu chunks of %zu (%zu with a node now, %zu with occupancy), %zu block sums; "
-         "%.1f%% of shade entries nonzero\n", g->chunk_count, n, occupied, g->occ_count,
+  printf("   voxels: %zu chunks of %zu (%zu with a node, %.1f MB of occupancy), %zu block sums; "
+         "%.1f%% of shade entries nonzero\n", g->chunk_count, n, occupied, (double)g->occ_bytes / 1048576.0,
          g->colsum_count, g->chunk_count ? 100.0 * (double)nonzero / (double)(g->chunk_count * 4096) : 0.0);
 }
 

@@ -171,13 +171,6 @@ static void conflict_tally(const sylva_world *w, int64_t *inside, int *out_of_ra
 
 /* ---- grids ------------------------------------------------------------------- */
 
-static uint32_t occ_word(const sylva__grid *g, const int v[3]) {
-  size_t ci = ((size_t)(v[2] >> 4) * (size_t)g->c[1] + (size_t)(v[1] >> 4)) * (size_t)g->c[0] +
-              (size_t)(v[0] >> 4);
-  const sylva__chunk *c = g->chunks[ci];
-  return c && c->occ ? c->occ[(v[0] & 15) | ((v[1] & 15) << 4) | ((v[2] & 15) << 8)] : 0;
-}
-
 /* Voxels whose shade or occupancy differ, over every chunk column either grid has
  * touched (elsewhere both are empty); *compared counts the voxels looked at. */
 static long grids_differ(const sylva__grid *a, const sylva__grid *b, long *compared) {
@@ -197,7 +190,7 @@ static long grids_differ(const sylva__grid *a, const sylva__grid *b, long *compa
             int v[3] = {x, y, z};
             (*compared)++;
             if (sylva__grid_shade_raw(a, v) != sylva__grid_shade_raw(b, v) ||
-                occ_word(a, v) != occ_word(b, v))
+                sylva__grid_occ_word(a, v) != sylva__grid_occ_word(b, v))
               bad++;
           }
     }
