@@ -1,3 +1,5 @@
+/* madvise and MADV_HUGEPAGE (the chunks' huge pages) */
+#define _DEFAULT_SOURCE
 #include "grid.h"
 #include "prism.h"
 
@@ -5,6 +7,7 @@
 #include <math.h>
 #include <stdatomic.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "alloc.h"
 #include "site.h"
@@ -30,8 +33,9 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
   g->chunks = sylva__calloc(nchunks, sizeof *g->chunks);
+  g->occ = sylva__calloc(nchunks, sizeof *g->occ);
   g->colsum = sylva__calloc(ncols, sizeof *g->colsum);
-  if (!g->chunks || !g->colsum) {
+  if (!g->chunks || !g->occ || !g->colsum) {
     sylva__grid_free(g);
     return SYLVA_ENOMEM;
   }
@@ -39,12 +43,14 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
 }
 
 void sylva__grid_free(sylva__grid *g) {
-  if (g->chunks) {
+  if (g->occ) {
     size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
-    for (size_t i = 0; i < nchunks; i++) {
-      if (g->chunks[i]) sylva__free(g->chunks[i]->occ);
-      sylva__free(g->chunks[i]);
-    }
+    for (size_t i = 0; i < nchunks; i++) sylva__free(g->occ[i]);
+  }
+  while (g->slabs) {
+    sylva__slab *next = g->slabs->next;
+    sylva__free(g->slabs);
+    g->slabs = next;
   }
   if (g->colsum) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
@@ -63,6 +69,7 @@ void sylva__grid_free(sylva__grid *g) {
   sylva__free(g->site);
   sylva__free(g->sky);
   sylva__free(g->chunks);
+  sylva__free(g->occ);
   sylva__free(g->colsum);
   sylva__free(g->obstacles);
   sylva__free(g->obstacle_rank);
@@ -80,7 +87,7 @@ size_t sylva__grid_site_bytes(const sylva__grid *g) {
 size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
-  return nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
+  return 2 * nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
          g->occ_bytes +
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
@@ -180,10 +187,34 @@ static inline const sylva__chunk *chunk_at(const sylva__grid *g, const int v[3])
   return g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
 }
 
+/* A zeroed chunk from the newest slab, or a new slab twice the last's size. */
+static sylva__chunk *chunk_new(sylva__grid *g) {
+  sylva__slab *s = g->slabs;
+  if (!s || s->used == s->count) {
+    const uintptr_t huge = (uintptr_t)2 << 20;
+    size_t n = s ? 2 * s->count : 4;
+    if (n > 128) n = 128;
+    size_t bytes = sizeof *s + huge + n * sizeof(sylva__chunk);
+    s = sylva__calloc(1, bytes); /* untouched pages: the slack costs no memory */
+    if (!s) return NULL;
+    uintptr_t first = ((uintptr_t)(s + 1) + huge - 1) & ~(huge - 1);
+    s->chunk = (sylva__chunk *)first;
+#ifdef MADV_HUGEPAGE
+    uintptr_t end = (first + n * sizeof(sylva__chunk) + huge - 1) & ~(huge - 1);
+    if (end > (uintptr_t)s + bytes) end = ((uintptr_t)s + bytes) & ~(huge - 1);
+    if (end > first) madvise((void *)first, end - first, MADV_HUGEPAGE); /* a hint */
+#endif
+    s->count = n;
+    s->next = g->slabs;
+    g->slabs = s;
+  }
+  return &s->chunk[s->used++];
+}
+
 static sylva__chunk *chunk_get(sylva__grid *g, int cx, int cy, int cz) {
   sylva__chunk **slot = &g->chunks[chunk_index(g, cx, cy, cz)];
   if (!*slot) {
-    *slot = sylva__calloc(1, sizeof **slot);
+    *slot = chunk_new(g);
     if (!*slot) return NULL;
     g->chunk_count++;
   }
@@ -285,9 +316,10 @@ static inline uint32_t occ_find(const sylva__occ *o, int i) {
   return k;
 }
 
-static inline uint32_t occ_word(const sylva__chunk *c, int i) {
-  if (!c || !c->occ) return 0;
-  return (uint32_t)c->occ->slot[occ_find(c->occ, i)];
+/* The occupancy word of voxel v (0: free). */
+static inline uint32_t occ_word(const sylva__grid *g, const int v[3]) {
+  const sylva__occ *o = g->occ[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
+  return o ? (uint32_t)o->slot[occ_find(o, local_index(v[0], v[1], v[2]))] : 0;
 }
 
 /* A table of cap slots holding o's entries (o NULL: none); NULL without memory. */
@@ -313,27 +345,24 @@ static void occ_free(sylva__grid *g, sylva__occ *o) {
 }
 
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]) {
-  const sylva__chunk *c = chunk_at(g, v);
-  if (occ_word(c, local_index(v[0], v[1], v[2]))) return -1.0;
-  return light_in(g, c, v, false);
+  if (occ_word(g, v)) return -1.0;
+  return light_in(g, chunk_at(g, v), v, false);
 }
 
 uint32_t sylva__grid_occ_word(const sylva__grid *g, const int v[3]) {
-  return occ_word(chunk_at(g, v), local_index(v[0], v[1], v[2]));
+  return occ_word(g, v);
 }
 
 int32_t sylva__grid_occupant(const sylva__grid *g, const int v[3]) {
-  uint32_t o = occ_word(chunk_at(g, v), local_index(v[0], v[1], v[2]));
+  uint32_t o = occ_word(g, v);
   return o ? (int32_t)(o >> SYLVA__OCC_COUNT_BITS) - 1 : -1;
 }
 
 int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
-  sylva__chunk *c = chunk_get(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
-  if (!c) return SYLVA_ENOMEM;
+  sylva__occ **table = &g->occ[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
   int i = local_index(v[0], v[1], v[2]);
-  if (c->occ) {
-    uint32_t k = occ_find(c->occ, i);
-    uint64_t *slot = &c->occ->slot[k];
+  if (*table) {
+    uint64_t *slot = &(*table)->slot[occ_find(*table, i)];
     if (*slot) {
       uint32_t o = (uint32_t)*slot;
       if ((int32_t)(o >> SYLVA__OCC_COUNT_BITS) - 1 != stem ||
@@ -343,23 +372,25 @@ int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
       return SYLVA_OK;
     }
   }
-  if (!c->occ || 2 * (c->occ->count + 1) > c->occ->cap) { /* room for one more */
-    sylva__occ *t = occ_table(g, c->occ, c->occ ? 2 * c->occ->cap : 16);
+  if (!*table || 2 * ((*table)->count + 1) > (*table)->cap) { /* room for one more */
+    sylva__occ *t = occ_table(g, *table, *table ? 2 * (*table)->cap : 16);
     if (!t) return SYLVA_ENOMEM;
-    occ_free(g, c->occ);
-    if (!c->occ) g->occ_count++;
-    c->occ = t;
+    if (*table)
+      occ_free(g, *table);
+    else
+      g->occ_count++;
+    *table = t;
   }
-  c->occ->slot[occ_find(c->occ, i)] =
+  (*table)->slot[occ_find(*table, i)] =
       (uint64_t)(i + 1) << 32 | ((uint32_t)(stem + 1) << SYLVA__OCC_COUNT_BITS) | 1u;
-  c->occ->count++;
+  (*table)->count++;
   return SYLVA_OK;
 }
 
 void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
-  sylva__chunk *c = g->chunks[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
-  if (!c || !c->occ) return;
-  sylva__occ *o = c->occ;
+  sylva__occ **table = &g->occ[chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4)];
+  sylva__occ *o = *table;
+  if (!o) return;
   uint32_t k = occ_find(o, local_index(v[0], v[1], v[2]));
   if (!o->slot[k]) return;
   if ((o->slot[k] & SYLVA__OCC_COUNT_MAX) > 1) {
@@ -368,7 +399,7 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
   }
   if (--o->count == 0) { /* the chunk's last node left */
     occ_free(g, o);
-    c->occ = NULL;
+    *table = NULL;
     g->occ_count--;
     return;
   }

@@ -253,24 +253,23 @@ static void gives_cost(sylva_world *w, const summary *s) {
          canopy, wood, 100 * (canopy + wood) / it, it, sylva_world_canopy_cover(w));
 }
 
-/* Library species in years (issue 20): scenarios/street.json's street of library
- * trees, and a hectare of 400 trees 5 m apart, each grown 40 years; the time and the
- * peak memory of each. */
-/* What the voxels hold: chunks, those with a stem's node, column arrays. */
+/* What the voxels hold: chunks of shade, chunks with a node, block sums. */
 static void voxel_census(const sylva_world *w) {
   const sylva__grid *g = &w->grid;
-  size_t n = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2], occupied = 0, nonzero = 0;
+  size_t n = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2], nonzero = 0;
   for (size_t i = 0; i < n; i++) {
     const sylva__chunk *c = g->chunks[i];
     if (!c) continue;
     for (int k = 0; k < SYLVA__CHUNK_VOXELS; k++) nonzero += c->shade[k] != 0;
-    occupied += c->occ != NULL;
   }
-  printf("   voxels: %zu chunks of %zu (%zu with a node, %.1f MB of occupancy), %zu block sums; "
-         "%.1f%% of shade entries nonzero\n", g->chunk_count, n, occupied, (double)g->occ_bytes / 1048576.0,
+  printf("   voxels: %zu chunks of shade of %zu, %zu with a node (%.1f MB of occupancy), %zu block "
+         "sums; %.1f%% of shade entries nonzero\n", g->chunk_count, n, g->occ_count, (double)g->occ_bytes / 1048576.0,
          g->colsum_count, g->chunk_count ? 100.0 * (double)nonzero / (double)(g->chunk_count * 4096) : 0.0);
 }
 
+/* Library species in years (issue 20): scenarios/street.json's street of library
+ * trees, and a hectare of 400 trees 5 m apart, each grown 40 years; the time and the
+ * peak memory of each. */
 static void years(const char *dir, bool street_only) {
   int limit;
   sylva_world *w = from_file(dir, "street-ten.json", &limit);
@@ -369,7 +368,10 @@ static void shade_floor(void) {
          "(%zu grown) in %.2f s, %.0f grown per s\n   phases (s):", bench_threads, sylva_world_iteration(w),
          sylva_world_node_count(w), created, engine, (double)created / engine);
   for (int p = 0; p < SYLVA_PHASE_COUNT; p++) printf(" %s %.2f", phase_names[p], phase[p]);
-  printf("\n   world hash %016llx\n", (unsigned long long)sylva_world_hash(w));
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  printf("\n   world hash %016llx; %ld page faults so far\n", (unsigned long long)sylva_world_hash(w),
+         ru.ru_minflt + ru.ru_majflt);
   voxel_census(w);
   sylva_world *again = w;
   const int *dim = again->grid.n;
