@@ -35,7 +35,8 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
   g->chunks = sylva__calloc(nchunks, sizeof *g->chunks);
   g->occ = sylva__calloc(nchunks, sizeof *g->occ);
   g->colsum = sylva__calloc(ncols, sizeof *g->colsum);
-  if (!g->chunks || !g->occ || !g->colsum) {
+  g->colsum_top = sylva__calloc(ncols, sizeof *g->colsum_top);
+  if (!g->chunks || !g->occ || !g->colsum || !g->colsum_top) {
     sylva__grid_free(g);
     return SYLVA_ENOMEM;
   }
@@ -71,6 +72,7 @@ void sylva__grid_free(sylva__grid *g) {
   sylva__free(g->chunks);
   sylva__free(g->occ);
   sylva__free(g->colsum);
+  sylva__free(g->colsum_top);
   sylva__free(g->obstacles);
   sylva__free(g->obstacle_rank);
   sylva__free(g->label_slot);
@@ -87,7 +89,7 @@ size_t sylva__grid_site_bytes(const sylva__grid *g) {
 size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
-  return 2 * nchunks * sizeof(void *) + ncols * sizeof(void *) + g->chunk_count * sizeof(sylva__chunk) +
+  return 2 * nchunks * sizeof(void *) + ncols * (sizeof(void *) + sizeof(int32_t)) + g->chunk_count * sizeof(sylva__chunk) +
          g->occ_bytes +
          g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
@@ -268,11 +270,13 @@ static int64_t shade_in(const sylva__grid *g, const sylva__chunk *c, const int v
     const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
     for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
   }
-  const int64_t *col = g->colsum[(size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4)];
-  if (col) {
-    int xy = (v[0] & 15) | ((v[1] & 15) << 4);
-    for (int b = (v[2] >> 4) + 1; b < g->c[2]; b++) s += col[(size_t)b * 256 + (size_t)xy];
-  }
+  size_t ci = (size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4);
+  const int64_t *col = g->colsum[ci];
+  if (col) /* the blocks above, up to the highest a column starts in */
+    for (int b = (v[2] >> 4) + 1; b <= g->colsum_top[ci]; b++) {
+      const int64_t *row = col + (size_t)b * 256 + (v[1] & 15);
+      for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
+    }
   return s;
 }
 
@@ -418,6 +422,17 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }
 static int clip_hi(int v, int hi) { return v < hi ? v : hi; }
 
+/* Adds value to the voxels x0..x1, y0..y1 (chunk-local) of a 16 x 16 layer held as
+ * differences along x, y fastest: two runs of writes. */
+static inline void row_runs(int64_t *layer, int x0, int x1, int y0, int y1, int64_t value) {
+  int64_t *start = layer + (x0 << 4);
+  for (int y = y0; y <= y1; y++) start[y] += value;
+  if (x1 + 1 < SYLVA__CHUNK) { /* the difference ends after x1, unless at the row's end */
+    int64_t *stop = layer + ((x1 + 1) << 4);
+    for (int y = y0; y <= y1; y++) stop[y] -= value;
+  }
+}
+
 /* One pass of a stamp over the chunk columns cx_min..cx_max: sign +1 or -1 writes
  * it; sign 0 only makes every chunk and block sum the writes will touch. */
 static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign, int cx_min,
@@ -450,15 +465,7 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
           int y0 = clip_lo(clip_lo(v[1] - hq, cy << 4), 0);
           int y1 = clip_hi(clip_hi(v[1] + hq, (cy << 4) + 15), g->n[1] - 1);
           if (x0 > x1 || y0 > y1) continue; /* this layer misses the chunk */
-          int64_t value = sign * w[q - 1];
-          int64_t *layer = c->shade + ((z & 15) << 8);
-          int e = (x1 & 15) + 1; /* the difference ends after x1, unless at the row's end */
-          int64_t *start = layer + ((x0 & 15) << 4);
-          for (int y = y0 & 15; y <= (y1 & 15); y++) start[y] += value;
-          if (e < SYLVA__CHUNK) {
-            int64_t *stop = layer + (e << 4);
-            for (int y = y0 & 15; y <= (y1 & 15); y++) stop[y] -= value;
-          }
+          row_runs(c->shade + ((z & 15) << 8), x0 & 15, x1 & 15, y0 & 15, y1 & 15, sign * w[q - 1]);
         }
       }
   /* Column: every voxel of the base footprint from depth + 1 below down to the
@@ -481,20 +488,14 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
         sum += (size_t)bz * 256;
       }
       if (!sign) continue;
-      int y0 = clip_lo(ylo, cy << 4), y1 = clip_hi(yhi, (cy << 4) + 15);
-      int x0 = clip_lo(xlo, cx << 4), x1 = clip_hi(xhi, (cx << 4) + 15);
-      int e = (x1 & 15) + 1;
-      for (int z = 0; z <= zl; z++) {
-        int64_t *start = c->shade + (z << 8) + ((x0 & 15) << 4);
-        for (int y = y0 & 15; y <= (y1 & 15); y++) start[y] += value;
-        if (e < SYLVA__CHUNK) {
-          int64_t *stop = c->shade + (z << 8) + (e << 4);
-          for (int y = y0 & 15; y <= (y1 & 15); y++) stop[y] -= value;
-        }
+      int y0 = clip_lo(ylo, cy << 4) & 15, y1 = clip_hi(yhi, (cy << 4) + 15) & 15;
+      int x0 = clip_lo(xlo, cx << 4) & 15, x1 = clip_hi(xhi, (cx << 4) + 15) & 15;
+      for (int z = 0; z <= zl; z++) row_runs(c->shade + (z << 8), x0, x1, y0, y1, value);
+      if (sum) {
+        row_runs(sum, x0, x1, y0, y1, value);
+        int32_t *top = &g->colsum_top[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+        if (bz > *top) *top = bz;
       }
-      if (sum)
-        for (int y = y0; y <= y1; y++)
-          for (int x = x0; x <= x1; x++) sum[(x & 15) | ((y & 15) << 4)] += value;
     }
   return SYLVA_OK;
 }

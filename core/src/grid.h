@@ -85,9 +85,13 @@ typedef struct sylva__grid {
    * while none does (the chunks below the crowns hold shade alone, the crowns' tops
    * occupancy alone): made when a node enters, freed when the last leaves. */
   struct sylva__occ **occ;
-  /* Per chunk column (c0*c1): NULL or c2 blocks x 256 columns of shade that applies
-   * to every voxel of blocks strictly below. */
+  /* Per chunk column (c0*c1): NULL or c2 blocks of the shade of the columns whose
+   * top lies in the block, which applies to every voxel of the blocks strictly
+   * below; a block holds it as a chunk's layer does, as differences along x, so a
+   * column's footprint is two runs per row. colsum_top: the highest block any column
+   * started in (0: none above the ground block), where a read stops. */
   int64_t **colsum;
+  int32_t *colsum_top;
   size_t chunk_count, colsum_count, occ_count;
   size_t occ_bytes; /* the occupancy tables */
   /* Obstacles in the order they were added, so by increasing id (found by binary
