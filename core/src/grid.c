@@ -34,7 +34,7 @@ int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], d
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
   g->chunks = sylva__calloc(nchunks, sizeof *g->chunks);
   g->occ = sylva__calloc(nchunks, sizeof *g->occ);
-  g->colsum = sylva__calloc(ncols, sizeof *g->colsum);
+  g->colsum = sylva__calloc(nchunks, sizeof *g->colsum);
   g->colsum_top = sylva__calloc(ncols, sizeof *g->colsum_top);
   if (!g->chunks || !g->occ || !g->colsum || !g->colsum_top) {
     sylva__grid_free(g);
@@ -54,8 +54,8 @@ void sylva__grid_free(sylva__grid *g) {
     g->slabs = next;
   }
   if (g->colsum) {
-    size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
-    for (size_t i = 0; i < ncols; i++) sylva__free(g->colsum[i]);
+    size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+    for (size_t i = 0; i < nchunks; i++) sylva__free(g->colsum[i]);
   }
   if (g->obstacle_cols) {
     size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
@@ -89,9 +89,9 @@ size_t sylva__grid_site_bytes(const sylva__grid *g) {
 size_t sylva__grid_bytes(const sylva__grid *g) {
   size_t nchunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
   size_t ncols = (size_t)g->c[0] * (size_t)g->c[1];
-  return 2 * nchunks * sizeof(void *) + ncols * (sizeof(void *) + sizeof(int32_t)) + g->chunk_count * sizeof(sylva__chunk) +
+  return 3 * nchunks * sizeof(void *) + ncols * sizeof(int32_t) + g->chunk_count * sizeof(sylva__chunk) +
          g->occ_bytes +
-         g->colsum_count * (size_t)g->c[2] * 256 * sizeof(int64_t) +
+         g->colsum_count * 256 * sizeof(int64_t) +
          (size_t)g->obstacle_cap * (sizeof(sylva__obstacle) + sizeof(int32_t)) +
          (g->obstacle_rank ? sizeof(int32_t) : 0) + (size_t)g->label_cap * sizeof(int32_t) +
          (g->obstacle_cols ? ncols * sizeof(void *) : 0) + g->obstacle_list_bytes + g->footprint_bytes +
@@ -223,10 +223,11 @@ static sylva__chunk *chunk_get(sylva__grid *g, int cx, int cy, int cz) {
   return *slot;
 }
 
-static int64_t *colsum_get(sylva__grid *g, int cx, int cy) {
-  int64_t **slot = &g->colsum[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+/* The block sum of chunk (cx, cy, cz), made when a column first starts in it. */
+static int64_t *colsum_get(sylva__grid *g, int cx, int cy, int cz) {
+  int64_t **slot = &g->colsum[chunk_index(g, cx, cy, cz)];
   if (!*slot) {
-    *slot = sylva__calloc((size_t)g->c[2] * 256, sizeof **slot);
+    *slot = sylva__calloc(256, sizeof **slot);
     if (!*slot) return NULL;
     g->colsum_count++;
   }
@@ -270,13 +271,15 @@ static int64_t shade_in(const sylva__grid *g, const sylva__chunk *c, const int v
     const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
     for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
   }
+  /* the block sums above, up to the highest a column starts in */
   size_t ci = (size_t)(v[1] >> 4) * (size_t)g->c[0] + (size_t)(v[0] >> 4);
-  const int64_t *col = g->colsum[ci];
-  if (col) /* the blocks above, up to the highest a column starts in */
-    for (int b = (v[2] >> 4) + 1; b <= g->colsum_top[ci]; b++) {
-      const int64_t *row = col + (size_t)b * 256 + (v[1] & 15);
-      for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
-    }
+  size_t plane = (size_t)g->c[0] * (size_t)g->c[1];
+  for (int b = (v[2] >> 4) + 1; b <= g->colsum_top[ci]; b++) {
+    const int64_t *sum = g->colsum[(size_t)b * plane + ci];
+    if (!sum) continue;
+    const int64_t *row = sum + (v[1] & 15);
+    for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
+  }
   return s;
 }
 
@@ -376,7 +379,7 @@ int sylva__grid_occupy(sylva__grid *g, const int v[3], int32_t stem) {
       return SYLVA_OK;
     }
   }
-  if (!*table || 2 * ((*table)->count + 1) > (*table)->cap) { /* room for one more */
+  if (!*table || 4 * ((*table)->count + 1) > 3 * (*table)->cap) { /* room for one more */
     sylva__occ *t = occ_table(g, *table, *table ? 2 * (*table)->cap : 16);
     if (!t) return SYLVA_ENOMEM;
     if (*table)
@@ -483,9 +486,8 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
       if (!c) return SYLVA_ENOMEM;
       int64_t *sum = NULL;
       if (bz > 0) {
-        sum = colsum_get(g, cx, cy);
+        sum = colsum_get(g, cx, cy, bz);
         if (!sum) return SYLVA_ENOMEM;
-        sum += (size_t)bz * 256;
       }
       if (!sign) continue;
       int y0 = clip_lo(ylo, cy << 4) & 15, y1 = clip_hi(yhi, (cy << 4) + 15) & 15;

@@ -31,7 +31,7 @@ typedef struct sylva__chunk {
 } sylva__chunk;
 
 /** A chunk's occupied voxels: open addressing with linear probing over cap (a power
- *  of two, at least twice count) slots, each 0 or (local index + 1) << 32 | the
+ *  of two, at least 4/3 count) slots, each 0 or (local index + 1) << 32 | the
  *  voxel's occupancy word. A crown's chunk holds nodes in a few hundred of its 4,096
  *  voxels: a few kilobytes instead of 16. */
 typedef struct sylva__occ {
@@ -85,10 +85,10 @@ typedef struct sylva__grid {
    * while none does (the chunks below the crowns hold shade alone, the crowns' tops
    * occupancy alone): made when a node enters, freed when the last leaves. */
   struct sylva__occ **occ;
-  /* Per chunk column (c0*c1): NULL or c2 blocks of the shade of the columns whose
-   * top lies in the block, which applies to every voxel of the blocks strictly
-   * below; a block holds it as a chunk's layer does, as differences along x, so a
-   * column's footprint is two runs per row. colsum_top: the highest block any column
+  /* Per chunk (c0*c1*c2, the block): NULL or the shade of the columns whose top lies
+   * in the block, which applies to every voxel of the blocks strictly below it; held
+   * as a chunk's layer is, as differences along x, so a column's footprint is two
+   * runs per row. colsum_top, per chunk column (c0*c1): the highest block any column
    * started in (0: none above the ground block), where a read stops. */
   int64_t **colsum;
   int32_t *colsum_top;

@@ -178,7 +178,7 @@ static long grids_differ(const sylva__grid *a, const sylva__grid *b, long *compa
   for (int cy = 0; cy < a->c[1]; cy++)
     for (int cx = 0; cx < a->c[0]; cx++) {
       size_t col = (size_t)cy * (size_t)a->c[0] + (size_t)cx;
-      bool any = a->colsum[col] || b->colsum[col];
+      bool any = a->colsum_top[col] || b->colsum_top[col];
       for (int cz = 0; cz < a->c[2] && !any; cz++) {
         size_t ci = ((size_t)cz * (size_t)a->c[1] + (size_t)cy) * (size_t)a->c[0] + (size_t)cx;
         any = a->chunks[ci] || b->chunks[ci];
