@@ -98,29 +98,20 @@ int sylva__conflicts_reserve(sylva_world *w, int first_stem) {
   if (SYLVA__VEC_RESERVE(w->stem_box, nstems) || SYLVA__VEC_RESERVE(w->stem_nodes, s->count) ||
       SYLVA__VEC_RESERVE(w->stem_nodes_first, nstems + 1))
     return SYLVA_ENOMEM;
-  /* each stem's box and its live nodes, grouped by stem in slot order */
-  int32_t *first = w->stem_nodes_first.data;
-  for (size_t k = 0; k <= nstems; k++) first[k] = 0;
+  /* each stem's live nodes, grouped by stem in slot order, and its box */
+  sylva__group_by_stem(w);
+  const int32_t *first = w->stem_nodes_first.data;
   for (size_t k = 0; k < nstems; k++)
     w->stem_box.data[k] = (sylva__box){{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
-    int32_t k = s->stem[i];
-    first[k + 1]++;
-    sylva__box *b = &w->stem_box.data[k];
+    sylva__box *b = &w->stem_box.data[s->stem[i]];
     double p[3] = {s->x[i], s->y[i], s->z[i]};
     for (int a = 0; a < 3; a++) {
       if (p[a] < b->min[a]) b->min[a] = p[a];
       if (p[a] > b->max[a]) b->max[a] = p[a];
     }
   }
-  for (size_t k = 0; k < nstems; k++) first[k + 1] += first[k];
-  for (size_t i = 0; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
-    w->stem_nodes.data[first[s->stem[i]]++] = (int32_t)i;
-  }
-  for (size_t k = nstems; k > 0; k--) first[k] = first[k - 1];
-  first[0] = 0;
   /* the obstacles that may touch each stem: zones its box meets, solids within range */
   size_t zones = 0, solids = 0;
   double range2 = SYLVA_CLEARANCE_RANGE * SYLVA_CLEARANCE_RANGE;

@@ -23,54 +23,70 @@ static double tip_share(const sylva__skeleton *s, size_t i, double scale) {
   return length >= scale ? 1.0 : (double)length / scale;
 }
 
-int sylva__radii(sylva_world *w, int iteration) {
+typedef struct radii_ctx {
+  sylva_world *w;
+  int iteration;
+} radii_ctx;
+
+/* Stems [begin, end): each stem's nodes apex to root (its slots downwards, as its
+ * children sit above their parents), writing only that stem's radii and pipes; a
+ * radius reported this iteration is marked in w->remap. */
+static void radii_stems(void *arg, size_t begin, size_t end) {
+  const radii_ctx *c = arg;
+  sylva_world *w = c->w;
   sylva__skeleton *s = &w->nodes;
   double *pipe = w->pipe, *sap = w->sap;
-  memset(pipe, 0, s->count * sizeof *pipe);
-  memset(sap, 0, s->count * sizeof *sap);
-  int32_t cur_stem = -1;
-  double v = 2.5, inv_v = 0.4, r_tip = 0.0, scale = 1.0, heartwood = 0.0;
-  for (size_t i = s->count; i-- > 0;) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
-    if (s->stem[i] != cur_stem) {
-      cur_stem = s->stem[i];
-      const sylva_species_def *d = &w->species[w->stems[cur_stem].species].def;
-      v = d->pipe_exponent;
-      inv_v = 1.0 / v;
-      r_tip = d->r_tip;
-      scale = w->species[w->stems[cur_stem].species].scale;
-      heartwood = d->heartwood;
-    }
-    bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
-    double r = terminal ? r_tip : pow(pipe[i], inv_v);
-    /* Heartwood h: the node's pipes r^v grow by h times its functional pipes, the
-     * tips' above it; the pipes of its children still bound them from below
-     * (docs/model.md, "Species in years", "Heartwood"). */
-    if (heartwood > 0.0 && !terminal) {
-      double kept = pow(pow((double)s->radius[i], v) + heartwood * sap[i], inv_v);
-      if (kept > r) r = kept;
-    }
-    if (r > (double)s->radius[i]) {
-      float old = s->radius[i];
-      s->radius[i] = (float)r;
-      if (s->radius[i] != old && s->birth[i] != iteration) {
-        if (SYLVA__VEC_RESERVE(w->radii, w->radii.len + 1)) return SYLVA_ENOMEM;
-        w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
+  const int32_t *first = w->stem_nodes_first.data, *nodes = w->stem_nodes.data;
+  for (size_t k = begin; k < end; k++) {
+    const sylva__species *sp = &w->species[w->stems[k].species];
+    const sylva_species_def *d = &sp->def;
+    double v = d->pipe_exponent, inv_v = 1.0 / v, r_tip = d->r_tip, scale = sp->scale,
+           heartwood = d->heartwood;
+    for (int32_t at = first[k + 1]; at-- > first[k];) {
+      int32_t i = nodes[at];
+      bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
+      double r = terminal ? r_tip : pow(pipe[i], inv_v);
+      /* Heartwood h: the node's pipes r^v grow by h times its functional pipes, the
+       * tips' above it; the pipes of its children still bound them from below
+       * (docs/model.md, "Species in years", "Heartwood"). */
+      if (heartwood > 0.0 && !terminal) {
+        double kept = pow(pow((double)s->radius[i], v) + heartwood * sap[i], inv_v);
+        if (kept > r) r = kept;
+      }
+      w->remap[i] = 0;
+      if (r > (double)s->radius[i]) {
+        float old = s->radius[i];
+        s->radius[i] = (float)r;
+        w->remap[i] = s->radius[i] != old && s->birth[i] != c->iteration;
+      }
+      if (s->parent[i] >= 0) {
+        /* a tip's pipes are functional; a cut end (a terminal wider than a tip) has none */
+        bool tip = terminal && s->radius[i] <= (float)r_tip;
+        double share = tip ? tip_share(s, (size_t)i, scale) : 1.0;
+        pipe[s->parent[i]] += pow((double)s->radius[i], v) * share;
+        sap[s->parent[i]] += tip ? pow(r_tip, v) * share : terminal ? 0.0 : sap[i];
       }
     }
-    if (s->parent[i] >= 0) {
-      /* a tip's pipes are functional; a cut end (a terminal wider than a tip) has none */
-      bool tip = terminal && s->radius[i] <= (float)r_tip;
-      double share = tip ? tip_share(s, i, scale) : 1.0;
-      pipe[s->parent[i]] += pow((double)s->radius[i], v) * share;
-      sap[s->parent[i]] += tip ? pow(r_tip, v) * share : terminal ? 0.0 : sap[i];
-    }
   }
-  /* the list was built apex to root; report it in id order */
-  for (size_t a = 0, b = w->radii.len; a + 1 < b; a++, b--) {
-    sylva_radius_change t = w->radii.data[a];
-    w->radii.data[a] = w->radii.data[b - 1];
-    w->radii.data[b - 1] = t;
+}
+
+int sylva__radii(sylva_world *w, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  memset(w->pipe, 0, s->count * sizeof *w->pipe);
+  memset(w->sap, 0, s->count * sizeof *w->sap);
+  /* Stems share no node: each grows its radii on its own, on the world's threads
+   * (room for the grouping was reserved with the step's). */
+  if (SYLVA__VEC_RESERVE(w->stem_nodes, s->count) ||
+      SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1))
+    return SYLVA_ENOMEM;
+  sylva__group_by_stem(w);
+  radii_ctx c = {w, iteration};
+  sylva__pool_for(w->pool, (size_t)w->stem_count, 1, radii_stems, &c);
+  /* the radii that changed, in id order (slot order) */
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_ALIVE) || !w->remap[i]) continue;
+    if (SYLVA__VEC_RESERVE(w->radii, w->radii.len + 1)) return SYLVA_ENOMEM;
+    w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
   }
   return SYLVA_OK;
 }

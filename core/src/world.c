@@ -1042,9 +1042,25 @@ static int reserve_rest(sylva_world *w) {
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
       SYLVA__VEC_RESERVE(w->leaf_changes, count) ||
       SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) ||
-      SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) || sylva__conflicts_reserve(w, 0))
+      SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
+      SYLVA__VEC_RESERVE(w->stem_nodes, count) ||
+      SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1) ||
+      sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
   return SYLVA_OK;
+}
+
+void sylva__group_by_stem(sylva_world *w) {
+  const sylva__skeleton *s = &w->nodes;
+  int32_t *first = w->stem_nodes_first.data;
+  for (int k = 0; k <= w->stem_count; k++) first[k] = 0;
+  for (size_t i = 0; i < s->count; i++)
+    if (s->flags[i] & SYLVA__NODE_ALIVE) first[s->stem[i] + 1]++;
+  for (int k = 0; k < w->stem_count; k++) first[k + 1] += first[k];
+  for (size_t i = 0; i < s->count; i++)
+    if (s->flags[i] & SYLVA__NODE_ALIVE) w->stem_nodes.data[first[s->stem[i]]++] = (int32_t)i;
+  for (int k = w->stem_count; k > 0; k--) first[k] = first[k - 1];
+  first[0] = 0;
 }
 
 static void node_info(const sylva_world *w, size_t slot, sylva_node_info *out) {

@@ -181,8 +181,8 @@ struct sylva_world {
   SYLVA__VEC(double) work_light; /* light of each bud's stretch of one axis */
   SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */
   SYLVA__VEC(sylva__box) stem_box;        /* conflicts: each stem's nodes' box */
-  SYLVA__VEC(int32_t) stem_nodes;         /* conflicts: live slots grouped by stem */
-  SYLVA__VEC(int32_t) stem_nodes_first;   /* conflicts: each stem's first, stem_count + 1 */
+  SYLVA__VEC(int32_t) stem_nodes;         /* radii, conflicts: live slots grouped by stem */
+  SYLVA__VEC(int32_t) stem_nodes_first;   /* each stem's first, stem_count + 1 */
   SYLVA__VEC(sylva__candidate) candidates; /* conflicts: obstacles near each stem */
   int conflicts_from;                      /* conflicts: the first stem of the reserve */
   SYLVA__VEC(int32_t) pruned_ids;          /* sylva_world_prune: the subtrees' roots */
@@ -366,6 +366,9 @@ int sylva__remove_node(sylva_world *w, int32_t slot, bool pruned);
 /** Removes the doomed nodes, the count given, as sylva__remove_node does one by
  *  one: their shade on the world's threads, at once. Never fails. */
 void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned);
+/** Groups the live slots by stem, in slot order, into stem_nodes (stem k's from
+ *  stem_nodes_first[k] to [k + 1]); room for both was reserved. */
+void sylva__group_by_stem(sylva_world *w);
 /** Per-stem measures into stems[].stats. */
 void sylva__stats(sylva_world *w, int iteration);
 /** Measures of a stem just planted (its vertical initial trunk), without a pass
