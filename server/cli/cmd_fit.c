@@ -25,7 +25,8 @@ static const cli_option fit_options[OPT_COUNT] = {
     [OPT_SEEDS] = {"seeds", 0, "N", "trees grown per evaluation, medians taken (1-16, default 3)"},
     [OPT_EVALS] = {"evals", 0, "N", "evaluations of the search (1-1000, default 40)"},
     [OPT_RHO] = {"rho", 0, "M", "internode length in m (0.05-2; default 0.25, halved for slow growth)"},
-    [OPT_THREADS] = {"threads", 0, "N", "trees grown at once (1-64, default 2)"},
+    [OPT_THREADS] = {"threads", 0, "N",
+                     "trees grown at once, one thread each (1 to 256, default: the cores)"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
 
@@ -97,6 +98,7 @@ int cmd_fit(int argc, char **argv) {
   const char *utdb_key = NULL, *out_path = NULL, *report = NULL, *arg;
   sylva_fit_options o = sylva_fit_default_options();
   o.progress = on_progress;
+  o.threads = cli_default_threads(1);
   int first = argc, opt;
   uint64_t v;
   while ((opt = cli_next(&p, &arg, &first)) >= 0) {
@@ -113,8 +115,7 @@ int cmd_fit(int argc, char **argv) {
       o.max_evals = (int)v;
       break;
     case OPT_THREADS:
-      if (cli_parse_u64("fit", "threads", arg, 1, 64, &v)) return CLI_EXIT_USAGE;
-      o.threads = (int)v;
+      if (cli_parse_threads("fit", arg, &o.threads)) return CLI_EXIT_USAGE;
       break;
     case OPT_RHO: {
       char *end;

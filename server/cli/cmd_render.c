@@ -19,8 +19,8 @@
 #include "render.h"
 #include "sylva/scenario.h"
 
-enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_SEED, OPT_ITERATIONS, OPT_VIEW, OPT_WIDTH,
-       OPT_NO_LEAVES, OPT_OUT, OPT_HELP, OPT_COUNT };
+enum { OPT_DB, OPT_NAME, OPT_ITERATION, OPT_SEED, OPT_ITERATIONS, OPT_THREADS, OPT_VIEW,
+       OPT_WIDTH, OPT_NO_LEAVES, OPT_OUT, OPT_HELP, OPT_COUNT };
 
 static const cli_option render_cli_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store holding the run"},
@@ -28,6 +28,8 @@ static const cli_option render_cli_options[OPT_COUNT] = {
     [OPT_ITERATION] = {"iteration", 0, "T", "the stored iteration (default: the last)"},
     [OPT_SEED] = {"seed", 0, "N", "SCENARIO: override its seed (0 to 2^53)"},
     [OPT_ITERATIONS] = {"iterations", 0, "N", "SCENARIO: override its limit (1 to 100000)"},
+    [OPT_THREADS] = {"threads", 0, "N",
+                     "threads the world grows on (1 to 256, default: the cores)"},
     [OPT_VIEW] = {"view", 0, "V", "front, side, top or all (default all)"},
     [OPT_WIDTH] = {"width", 0, "PX", "picture width, 400 to 16384 (default 500 per view)"},
     [OPT_NO_LEAVES] = {"no-leaves", 0, NULL, "draw the branches only, without the leaves"},
@@ -66,6 +68,7 @@ typedef struct render_args {
   const char *db, *name, *scenario, *seed_text, *out;
   uint64_t iteration, seed, iterations;
   bool has_iteration;
+  int threads;
   render_options ro;
 } render_args;
 
@@ -95,6 +98,9 @@ static int parse_args(int argc, char **argv, render_args *a) {
       if (cli_parse_u64("render", "iterations", arg, 1, SYLVA_SCENARIO_MAX_ITERATIONS,
                         &a->iterations))
         return CLI_EXIT_USAGE;
+      break;
+    case OPT_THREADS:
+      if (cli_parse_threads("render", arg, &a->threads)) return CLI_EXIT_USAGE;
       break;
     case OPT_VIEW:
       if (!render_view_parse(arg, &a->ro.view))
@@ -151,6 +157,7 @@ static int render_stored(render_args *a) {
   cli_outfile o = {0};
   if (rc == CLI_EXIT_OK) rc = cli_outfile_open(&o, "-o", a->out, false);
   sylva_world *w = NULL;
+  store_set_threads(st, a->threads); /* its regrowing from the snapshot before it */
   if (rc == CLI_EXIT_OK) rc = cli_store_world_at(st, &r, at, &w);
   a->ro.name = r.name;
   a->ro.start_year = r.start_year;
@@ -173,7 +180,7 @@ static int render_scenario(render_args *a) {
   rc = cli_outfile_open(&o, "-o", a->out, false);
   sylva_world *w = NULL;
   if (rc == CLI_EXIT_OK) rc = cli_input_world(a->scenario, s, &w);
-  grow_job job = {.label = a->scenario, .w = w,
+  grow_job job = {.label = a->scenario, .w = w, .threads = a->threads,
                   .limit = a->iterations ? (int)a->iterations : s->iterations,
                   .progress = isatty(STDERR_FILENO), .silent = true};
   if (rc == CLI_EXIT_OK) rc = grow_run(&job);
@@ -187,7 +194,8 @@ static int render_scenario(render_args *a) {
 }
 
 int cmd_render(int argc, char **argv) {
-  render_args a = {.ro = {.format = RENDER_PNG, .view = RENDER_ALL, .width = 0, .name = NULL}};
+  render_args a = {.threads = cli_default_threads(1),
+                   .ro = {.format = RENDER_PNG, .view = RENDER_ALL, .width = 0, .name = NULL}};
   int rc = parse_args(argc, argv, &a);
   if (rc != CLI_PARSED) return rc;
   rc = a.scenario ? render_scenario(&a) : render_stored(&a);

@@ -10,12 +10,14 @@
 #include "sylva/encode.h"
 #include "sylva/scenario.h"
 
-enum { OPT_DB, OPT_NAME, OPT_ITERATIONS, OPT_QUIET, OPT_HELP, OPT_COUNT };
+enum { OPT_DB, OPT_NAME, OPT_ITERATIONS, OPT_THREADS, OPT_QUIET, OPT_HELP, OPT_COUNT };
 
 static const cli_option resume_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (required)"},
     [OPT_NAME] = {"name", 0, "NAME", "the run to continue (required)"},
     [OPT_ITERATIONS] = {"iterations", 0, "N", "a new iteration limit (1 to 100000)"},
+    [OPT_THREADS] = {"threads", 0, "N",
+                     "threads the world grows on (1 to 256, default: the cores)"},
     [OPT_QUIET] = {"quiet-progress", 0, NULL, "no progress bar on stderr"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
@@ -40,7 +42,7 @@ int cmd_resume(int argc, char **argv) {
   const char *db = NULL, *name = NULL, *arg;
   uint64_t iterations = 0;
   bool quiet = false;
-  int first = argc, opt;
+  int first = argc, opt, threads = cli_default_threads(1);
   while ((opt = cli_next(&p, &arg, &first)) >= 0) {
     switch (opt) {
     case OPT_DB: db = arg; break;
@@ -48,6 +50,9 @@ int cmd_resume(int argc, char **argv) {
     case OPT_ITERATIONS:
       if (cli_parse_u64("resume", "iterations", arg, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &iterations))
         return CLI_EXIT_USAGE;
+      break;
+    case OPT_THREADS:
+      if (cli_parse_threads("resume", arg, &threads)) return CLI_EXIT_USAGE;
       break;
     case OPT_QUIET: quiet = true; break;
     default:
@@ -61,7 +66,9 @@ int cmd_resume(int argc, char **argv) {
   store_run r;
   int rc = cli_open_run("resume", db, name, &st, &r);
   if (rc) return rc;
-  grow_job job = {.label = r.name, .limit = iterations ? (int)iterations : r.iterations,
+  store_set_threads(st, threads); /* the regrowing to its last iteration too */
+  grow_job job = {.label = r.name, .threads = threads,
+                  .limit = iterations ? (int)iterations : r.iterations,
                   .progress = !quiet && isatty(STDERR_FILENO), .st = st, .run = r.id,
                   .snapshot_every = r.snapshot_every, .start_year = r.start_year};
   rc = cli_store_world_at(st, &r, r.last_iteration, &job.w);

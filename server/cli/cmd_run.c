@@ -19,13 +19,15 @@
 #include "sylva/status.h"
 
 enum {
-  OPT_SEED, OPT_ITERATIONS, OPT_DB, OPT_NAME, OPT_SNAPSHOT_EVERY, OPT_EXPORT, OPT_QUIET,
-  OPT_HELP, OPT_COUNT
+  OPT_SEED, OPT_ITERATIONS, OPT_THREADS, OPT_DB, OPT_NAME, OPT_SNAPSHOT_EVERY, OPT_EXPORT,
+  OPT_QUIET, OPT_HELP, OPT_COUNT
 };
 
 static const cli_option run_options[OPT_COUNT] = {
     [OPT_SEED] = {"seed", 0, "N", "override the scenario's seed (0 to 2^53)"},
     [OPT_ITERATIONS] = {"iterations", 0, "N", "override the iteration limit (1 to 100000)"},
+    [OPT_THREADS] = {"threads", 0, "N",
+                     "threads the world grows on (1 to 256, default: the cores)"},
     [OPT_DB] = {"db", 0, "FILE", "store the run (snapshots and stats) in this SQLite file"},
     [OPT_NAME] = {"name", 0, "NAME", "name of the stored run (default: the scenario's name)"},
     [OPT_SNAPSHOT_EVERY] = {"snapshot-every", 0, "N",
@@ -61,9 +63,12 @@ int cmd_run(int argc, char **argv) {
   const char *seed_text = NULL, *export_path = NULL, *db_path = NULL, *name = NULL, *arg;
   uint64_t seed = 0, iterations = 0, snapshot_every = STORE_SNAPSHOT_EVERY;
   bool quiet = false;
-  int first = argc, opt;
+  int first = argc, opt, threads = cli_default_threads(1);
   while ((opt = cli_next(&p, &arg, &first)) >= 0) {
     switch (opt) {
+    case OPT_THREADS:
+      if (cli_parse_threads("run", arg, &threads)) return CLI_EXIT_USAGE;
+      break;
     case OPT_SEED:
       if (cli_parse_u64("run", "seed", arg, 0, (uint64_t)SYLVA_SCENARIO_SEED_MAX, &seed))
         return CLI_EXIT_USAGE;
@@ -119,7 +124,7 @@ int cmd_run(int argc, char **argv) {
 
   sylva_world *w = NULL;
   rc = cli_input_world(path, s, &w);
-  grow_job job = {.label = path, .w = w, .limit = limit,
+  grow_job job = {.label = path, .w = w, .threads = threads, .limit = limit,
                   .progress = !quiet && isatty(STDERR_FILENO),
                   .snapshot_every = (int)snapshot_every, .start_year = s->start_year};
   if (rc == CLI_EXIT_OK && db_path) rc = cli_store_new_run(db_path, name ? name : s->name, s,

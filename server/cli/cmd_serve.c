@@ -13,8 +13,8 @@
 
 enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_TOKEN_FILE,
        OPT_PUBLIC_READ, OPT_HOST, OPT_ORIGIN, OPT_INSECURE, OPT_MAX_MESSAGE, OPT_RATE,
-       OPT_WORKERS, OPT_MAX_RUNS, OPT_MAX_STEMS, OPT_MAX_OBSTACLES, OPT_MAX_CLIENTS, OPT_MAX_JOBS,
-       OPT_MAX_INPUT, OPT_MEMORY, OPT_HELP, OPT_COUNT };
+       OPT_THREADS, OPT_WORKERS, OPT_MAX_RUNS, OPT_MAX_STEMS, OPT_MAX_OBSTACLES, OPT_MAX_CLIENTS,
+       OPT_MAX_JOBS, OPT_MAX_INPUT, OPT_MEMORY, OPT_TRACE, OPT_HELP, OPT_COUNT };
 
 static const cli_option serve_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
@@ -38,6 +38,8 @@ static const cli_option serve_options[OPT_COUNT] = {
     [OPT_INSECURE] = {"insecure", 0, NULL, "allow a non-loopback address without --token"},
     [OPT_MAX_MESSAGE] = {"max-message", 0, "BYTES", "largest client message (default 1 MiB)"},
     [OPT_RATE] = {"rate-limit", 0, "N", "most client messages per second (default 50)"},
+    [OPT_THREADS] = {"threads", 0, "N",
+                     "threads each run's world grows on (1 to 256, default: the cores)"},
     [OPT_WORKERS] = {"workers", 0, "N", "threads that grow the runs, in turn (default 2)"},
     [OPT_MAX_RUNS] = {"max-runs", 0, "N", "most runs held, forks included (default 64)"},
     [OPT_MAX_STEMS] = {"max-stems", 0, "N", "most stems in one world (default 2000)"},
@@ -51,6 +53,10 @@ static const cli_option serve_options[OPT_COUNT] = {
                        "most bytes of unfinished messages of all clients (default 64 MiB)"},
     [OPT_MEMORY] = {"memory-budget", 0, "MIB",
                     "memory the runs' worlds may take, by estimate (default 4096)"},
+    [OPT_TRACE] = {"trace-iterations", 0, "FILE",
+                   "append a line per grown iteration: run, iteration, and the monotonic "
+                   "seconds when its step returned, was stored, its delta encoded and handed "
+                   "out"},
     [OPT_HELP] = {"help", 'h', NULL, "show this help"},
 };
 
@@ -125,7 +131,8 @@ int cmd_serve(int argc, char **argv) {
       .clients = {.max_message = DAEMON_MAX_MESSAGE, .rate_limit = DAEMON_RATE_LIMIT,
                   .max_pending = DAEMON_MAX_PENDING, .max_clients = DAEMON_MAX_CLIENTS,
                   .max_input = DAEMON_MAX_INPUT, .message_ms = DAEMON_MESSAGE_MS},
-      .workers = DAEMON_WORKERS, .max_runs = DAEMON_MAX_RUNS, .max_stems = DAEMON_MAX_STEMS,
+      .workers = DAEMON_WORKERS, .threads = cli_default_threads(1),
+      .max_runs = DAEMON_MAX_RUNS, .max_stems = DAEMON_MAX_STEMS,
       .max_obstacles = DAEMON_MAX_OBSTACLES, .max_jobs = DAEMON_MAX_JOBS,
       .memory_budget = (size_t)DAEMON_MEMORY_BUDGET_MIB << 20};
   static char host[256], token[512];
@@ -189,6 +196,9 @@ int cmd_serve(int argc, char **argv) {
       if (cli_parse_u64("serve", "rate-limit", arg, 1, 1000000, &v)) return CLI_EXIT_USAGE;
       o.clients.rate_limit = (int)v;
       break;
+    case OPT_THREADS:
+      if (cli_parse_threads("serve", arg, &o.threads)) return CLI_EXIT_USAGE;
+      break;
     case OPT_WORKERS: case OPT_MAX_RUNS: case OPT_MAX_STEMS: case OPT_MAX_OBSTACLES:
     case OPT_MAX_CLIENTS: case OPT_MAX_JOBS: {
       const cli_int_option *n = &int_options[opt - OPT_WORKERS];
@@ -204,6 +214,12 @@ int cmd_serve(int argc, char **argv) {
     case OPT_MEMORY:
       if (cli_parse_u64("serve", "memory-budget", arg, 16, 1u << 20, &v)) return CLI_EXIT_USAGE;
       o.memory_budget = (size_t)v << 20;
+      break;
+    case OPT_TRACE:
+      if (o.trace) fclose(o.trace);
+      if (!(o.trace = fopen(arg, "a")))
+        return cli_usage_error("serve", "--trace-iterations: cannot write '%s'", arg);
+      setvbuf(o.trace, NULL, _IOLBF, 0); /* each line as it is made */
       break;
     default:
       serve_usage(stdout);
@@ -222,5 +238,7 @@ int cmd_serve(int argc, char **argv) {
                            "--insecure to serve anyone who can reach it)", o.host);
   if (!web_given && is_dir("web")) o.web = "web";
   if (!scenarios_given && is_dir("scenarios")) o.scenarios = "scenarios";
-  return server_main(&o);
+  int rc = server_main(&o);
+  if (o.trace) fclose(o.trace);
+  return rc;
 }

@@ -23,13 +23,16 @@
 #include "sylva/scenario.h"
 
 enum {
-  OPT_DB, OPT_JOBS, OPT_ITERATIONS, OPT_FORCE, OPT_SLURM, OPT_SUBMIT, OPT_TASKS, OPT_TASK,
-  OPT_MERGE, OPT_QUIET, OPT_HELP, OPT_COUNT
+  OPT_DB, OPT_JOBS, OPT_THREADS, OPT_ITERATIONS, OPT_FORCE, OPT_SLURM, OPT_SUBMIT, OPT_TASKS,
+  OPT_TASK, OPT_MERGE, OPT_QUIET, OPT_HELP, OPT_COUNT
 };
 
 static const cli_option sweep_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store of the sweep's runs (a task's store with --task)"},
     [OPT_JOBS] = {"jobs", 'j', "N", "runs at a time, each in a process (default: the cores)"},
+    [OPT_THREADS] = {"threads", 0, "N",
+                     "threads per run (1 to 256; default: the cores / --jobs, at least 1; "
+                     "1 with --slurm)"},
     [OPT_ITERATIONS] = {"iterations", 0, "N", "every run's iteration limit (1 to 100000)"},
     [OPT_FORCE] = {"force", 0, NULL, "run a plan of more than 10000 runs"},
     [OPT_SLURM] = {"slurm", 0, "DIR", "write DIR/sweep.sbatch, a Slurm array job of the plan"},
@@ -62,6 +65,7 @@ typedef struct sweep_ctx {
   const sweep_plan *plan;
   const char *db;
   int iterations;   /* 0: the scenario's */
+  int threads;      /* each run's */
   int *pending;     /* the positions still to grow, in plan order */
   int count, done, failed;
   bool progress;
@@ -117,9 +121,11 @@ static bool run_complete(bool finished, const char *reason, int last_iteration, 
                       (reason && strcmp(reason, "finished") == 0));
 }
 
-/* Grows one run of the plan into the store: creates it, or resumes it from its last
- * stored iteration when an earlier sweep left it unfinished. Runs in a worker. */
-static int grow_one(const sweep_plan *p, const char *db, int position, int iterations) {
+/* Grows one run of the plan into the store, on `threads` threads: creates it, or
+ * resumes it from its last stored iteration when an earlier sweep left it
+ * unfinished. Runs in a worker. */
+static int grow_one(const sweep_plan *p, const char *db, int position, int iterations,
+                    int threads) {
   sweep_run r;
   char err[1024];
   if (sweep_plan_run(p, position, &r, err, sizeof err)) {
@@ -135,7 +141,8 @@ static int grow_one(const sweep_plan *p, const char *db, int position, int itera
     rc = CLI_EXIT_FAILURE;
   }
   sylva_scenario *s = NULL;
-  grow_job job = {.label = r.name, .silent = true, .st = st};
+  if (rc == CLI_EXIT_OK) store_set_threads(st, threads); /* a resumed run's regrowing too */
+  grow_job job = {.label = r.name, .silent = true, .st = st, .threads = threads};
   if (rc == CLI_EXIT_OK && found) {
     job.run = stored.id;
     job.limit = iterations ? iterations : stored.iterations;
@@ -187,7 +194,7 @@ static int grow_one(const sweep_plan *p, const char *db, int position, int itera
 
 static int pool_job(int i, void *ctx) {
   sweep_ctx *c = ctx;
-  return grow_one(c->plan, c->db, c->pending[i], c->iterations);
+  return grow_one(c->plan, c->db, c->pending[i], c->iterations, c->threads);
 }
 
 /* One line per started run: how far the sweep is, and which run it grows now. */
@@ -268,9 +275,9 @@ static int stored_state(const sweep_plan *p, const char *db, int iterations, boo
 }
 
 /* Runs the positions of the plan that are not finished in db (of task k of t, or
- * all when t is 0), in up to jobs processes. */
-static int run_local(const sweep_plan *p, const char *db, int jobs, int iterations, int k, int t,
-                     bool progress) {
+ * all when t is 0), in up to jobs processes of `threads` threads each. */
+static int run_local(const sweep_plan *p, const char *db, int jobs, int threads, int iterations,
+                     int k, int t, bool progress) {
   bool *finished = calloc((size_t)p->runs, sizeof *finished);
   int *pending = malloc((size_t)p->runs * sizeof *pending);
   if (!finished || !pending) {
@@ -280,7 +287,8 @@ static int run_local(const sweep_plan *p, const char *db, int jobs, int iteratio
     return CLI_EXIT_FAILURE;
   }
   int rc = stored_state(p, db, iterations, finished);
-  sweep_ctx c = {.plan = p, .db = db, .iterations = iterations, .pending = pending,
+  sweep_ctx c = {.plan = p, .db = db, .iterations = iterations, .threads = threads,
+                 .pending = pending,
                  .progress = progress, .t0 = wall_seconds(), .jobs = jobs};
   int kept = 0;
   for (int i = 0; i < p->runs && rc == CLI_EXIT_OK; i++) {
@@ -290,7 +298,8 @@ static int run_local(const sweep_plan *p, const char *db, int jobs, int iteratio
     else pending[c.count++] = i;
   }
   if (rc == CLI_EXIT_OK && progress)
-    fprintf(stderr, "sweep: %s: %d runs to grow in %d processes%s\n", p->name, c.count, jobs,
+    fprintf(stderr, "sweep: %s: %d runs to grow in %d processes (%d thread%s each)%s\n",
+            p->name, c.count, jobs, threads, threads == 1 ? "" : "s",
             kept ? " (the finished ones kept)" : "");
   if (rc == CLI_EXIT_OK && c.count > 0) {
     pool_def def = {.workers = jobs, .count = c.count, .job = pool_job, .started = pool_started,
@@ -411,7 +420,7 @@ static int merge(const sweep_plan *p, const char *dir, const char *db) {
 }
 
 static int write_slurm(const sweep_plan *p, const char *plan_path, const char *dir, int tasks,
-                       int jobs, bool submit) {
+                       int jobs, int threads, bool submit) {
   char exe[4096];
   ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
   if (n <= 0) {
@@ -420,7 +429,7 @@ static int write_slurm(const sweep_plan *p, const char *plan_path, const char *d
   }
   exe[n] = '\0';
   slurm_script s = {.dir = dir, .exe = exe, .plan = plan_path, .tasks = tasks, .jobs = jobs,
-                    .runs = p->runs, .force = p->runs > SWEEP_MAX_RUNS};
+                    .threads = threads, .runs = p->runs, .force = p->runs > SWEEP_MAX_RUNS};
   char *script, err[1024];
   if (slurm_write_script(&s, &script, err, sizeof err)) {
     fprintf(stderr, "sylva: sweep --slurm: %s\n", err);
@@ -447,14 +456,17 @@ int cmd_sweep(int argc, char **argv) {
   cli_parser_init(&p, "sweep", sweep_options, OPT_COUNT, argc, argv);
   const char *db = NULL, *slurm = NULL, *merge_dir = NULL, *arg;
   uint64_t jobs = 0, iterations = 0, tasks = 0, task = 0;
+  int threads = 0; /* 0: not given */
   bool force = false, submit = false, quiet = false, has_task = false;
   int first = argc, opt;
-  long cores = sysconf(_SC_NPROCESSORS_ONLN);
   while ((opt = cli_next(&p, &arg, &first)) >= 0) {
     switch (opt) {
     case OPT_DB: db = arg; break;
     case OPT_JOBS:
       if (cli_parse_u64("sweep", "jobs", arg, 1, 1024, &jobs)) return CLI_EXIT_USAGE;
+      break;
+    case OPT_THREADS:
+      if (cli_parse_threads("sweep", arg, &threads)) return CLI_EXIT_USAGE;
       break;
     case OPT_ITERATIONS:
       if (cli_parse_u64("sweep", "iterations", arg, 1, SYLVA_SCENARIO_MAX_ITERATIONS, &iterations))
@@ -491,8 +503,8 @@ int cmd_sweep(int argc, char **argv) {
   if (has_task && task >= tasks)
     return cli_usage_error("sweep", "--task %llu: the tasks are 0 to %llu",
                            (unsigned long long)task, (unsigned long long)tasks - 1);
-  if (merge_dir && (jobs || iterations))
-    return cli_usage_error("sweep", "--merge takes no --jobs or --iterations");
+  if (merge_dir && (jobs || threads || iterations))
+    return cli_usage_error("sweep", "--merge takes no --jobs, --threads or --iterations");
   if (slurm && iterations)
     return cli_usage_error("sweep", "--iterations is the plan's to say with --slurm "
                                     "(a variant may replace /iterations)");
@@ -514,10 +526,13 @@ int cmd_sweep(int argc, char **argv) {
                       "%d tasks\n", t, plan->runs, plan->runs);
       t = plan->runs;
     }
-    rc = write_slurm(plan, plan_path, slurm, t, jobs ? (int)jobs : 1, submit);
+    rc = write_slurm(plan, plan_path, slurm, t, jobs ? (int)jobs : 1, threads ? threads : 1,
+                     submit);
   } else {
-    int j = jobs ? (int)jobs : has_task ? 1 : cores > 0 ? (int)cores : 1;
-    rc = run_local(plan, db, j, (int)iterations, (int)task, has_task ? (int)tasks : 0, !quiet);
+    int j = jobs ? (int)jobs : has_task ? 1 : cli_cores();
+    /* by default jobs x threads stays within the cores */
+    rc = run_local(plan, db, j, threads ? threads : cli_default_threads(j), (int)iterations,
+                   (int)task, has_task ? (int)tasks : 0, !quiet);
   }
   sweep_plan_free(plan);
   return rc;

@@ -40,8 +40,15 @@ bool grow_put_line(const char *line) {
   return fflush(stdout) == 0;
 }
 
+void grow_set_threads(sylva_world *w, int threads) {
+  if (sylva_world_set_threads(w, threads))
+    fprintf(stderr, "sylva: warning: cannot start %d threads; growing on one (the same "
+                    "world)\n", threads);
+}
+
 int grow_run(grow_job *job) {
   sylva_world *w = job->w;
+  if (job->threads > 0) grow_set_threads(w, job->threads);
   progress pr = {.enabled = job->progress, .width = 0};
   int rc = CLI_EXIT_OK;
   job->reason = NULL;

@@ -1,10 +1,14 @@
 #include "options.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <stdbool.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+
+#include "sylva/world.h"
 
 void cli_parser_init(cli_parser *p, const char *command, const cli_option *options, int count,
                      int argc, char **argv) {
@@ -53,8 +57,8 @@ int cli_next(cli_parser *p, const char **arg, int *first_positional) {
   if (c == ':' || c == '?') {
     int i = option_index(p, optopt);
     if (c == ':' && i >= 0)
-      cli_usage_error(p->command, "option --%s needs an argument (%s)", p->options[i].name,
-                      p->options[i].arg);
+      cli_usage_error(p->command, "option --%s needs an argument (%s): %s", p->options[i].name,
+                      p->options[i].arg, p->options[i].help);
     else if (c == ':')
       cli_usage_error(p->command, "option '%s' needs an argument", seen);
     else if (i >= 0 && !p->options[i].arg)
@@ -108,4 +112,21 @@ int cli_parse_u64(const char *command, const char *option, const char *text, uin
                            option, (unsigned long long)lo, (unsigned long long)hi, text);
   *out = (uint64_t)v;
   return 0;
+}
+
+int cli_parse_threads(const char *command, const char *text, int *out) {
+  uint64_t v = 0;
+  if (cli_parse_u64(command, "threads", text, 1, SYLVA_MAX_THREADS, &v)) return CLI_EXIT_USAGE;
+  *out = (int)v;
+  return 0;
+}
+
+int cli_cores(void) {
+  long cores = sysconf(_SC_NPROCESSORS_ONLN);
+  return cores < 1 ? 1 : cores > INT_MAX ? INT_MAX : (int)cores;
+}
+
+int cli_default_threads(int sharers) {
+  int n = cli_cores() / (sharers > 1 ? sharers : 1);
+  return n < 1 ? 1 : n > SYLVA_MAX_THREADS ? SYLVA_MAX_THREADS : n;
 }

@@ -60,4 +60,16 @@ int cli_usage_error(const char *command, const char *fmt, ...)
 int cli_parse_u64(const char *command, const char *option, const char *text, uint64_t lo,
                   uint64_t hi, uint64_t *out);
 
+/** The value of a --threads option: an integer from 1 to SYLVA_MAX_THREADS, parsed
+ *  and refused as cli_parse_u64 does ("sylva CMD: --threads: expected an integer
+ *  from 1 to 256, got 'abc'"). */
+int cli_parse_threads(const char *command, const char *text, int *out);
+
+/** The machine's cores online (sysconf), at least 1. */
+int cli_cores(void);
+
+/** The default of --threads: the cores shared by `sharers` processes (1: by none),
+ *  from 1 to SYLVA_MAX_THREADS. */
+int cli_default_threads(int sharers);
+
 #endif

@@ -272,6 +272,8 @@ int server_main(const server_options *opt) {
     free(d);
     return 2;
   }
+  /* the worlds of runs loaded, resumed and forked from the store */
+  store_set_threads(d->reader, opt->threads);
   lws_set_log_level(LLL_ERR, lws_log);
   struct lws_http_mount static_mount = {
       .mountpoint = "/", .origin = opt->web, .def = "index.html",

@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <uv.h>
 
 #include "access.h"
@@ -86,11 +87,13 @@ typedef struct server_options {
   bool public_read;      /**< with a token, reading needs none */
   client_limits clients; /**< message size and rate, backlog, clients, input */
   int workers;           /**< threads of the run pool */
+  int threads;           /**< threads every run's world grows on (0 or 1: one) */
   int max_runs;          /**< runs held (forks count) */
   int max_stems;         /**< stems per world */
   int max_obstacles;     /**< obstacles per world */
   int max_jobs;          /**< exports, histories and forks at once */
   size_t memory_budget;  /**< bytes the runs' worlds may take, by estimate */
+  FILE *trace;           /**< --trace-iterations: a line per grown iteration, or NULL */
 } server_options;
 
 

@@ -241,7 +241,8 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
   *res = (step_result){.status = SYLVA_OK};
   double t0 = mono_ms();
   res->status = sylva_world_step(r->w, &j);
-  res->ms = mono_ms() - t0;
+  res->at_ms[0] = mono_ms();
+  res->ms = res->at_ms[0] - t0;
   if (res->status != SYLVA_OK) {
     snprintf(res->error, sizeof res->error, "iteration %d: %s", sylva_world_iteration(r->w) + 1,
              sylva_strerror(res->status));
@@ -252,7 +253,9 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
     res->status = SYLVA_EINVAL;
     return false;
   }
+  res->at_ms[1] = mono_ms();
   res->text = sylva_msg_delta(r->id, seq, r->w, j, r->start_year);
+  res->at_ms[2] = mono_ms();
   res->iteration = sylva_world_iteration(r->w);
   res->stems = sylva_world_stem_count(r->w);
   res->obstacles = sylva_world_obstacle_count(r->w);
@@ -432,6 +435,9 @@ static void done_step(run *r, const step_result *res) {
     if (!m) s->need_snapshot = true;
     if (!s->need_snapshot) client_send(c, m);
   }
+  if (d->opt.trace) /* the step returned, stored, its delta encoded, handed out */
+    fprintf(d->opt.trace, "%lld %d %.6f %.6f %.6f %.6f\n", (long long)r->id, res->iteration,
+            res->at_ms[0] / 1e3, res->at_ms[1] / 1e3, res->at_ms[2] / 1e3, mono_ms() / 1e3);
   if (r->steps > 0) r->steps--;
   if (d->stopping) return;
   if (r->stop_after || r->finished || r->iteration >= r->limit) {
@@ -1019,6 +1025,8 @@ static void create_work(job *j) {
     snprintf(j->err, sizeof j->err, "/scenario%s%s", why[0] == '/' ? "" : ": ", why);
     return;
   }
+  /* one thread if the system gives no more: the same world */
+  sylva_world_set_threads(j->w, d->opt.threads);
   char *json = sylva_scenario_json(s);
   if (!json) {
     j->code = "internal";

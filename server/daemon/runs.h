@@ -45,6 +45,8 @@ typedef struct step_result {
   char error[256];
   char *text;        /**< the encoded delta (malloc'd; NULL when out of memory) */
   double ms;
+  double at_ms[3];   /**< CLOCK_MONOTONIC ms when the step returned, when it was
+                          stored and when its delta was encoded (--trace-iterations) */
   /* the world's summary after it */
   int iteration, stems, obstacles;
   int64_t nodes;

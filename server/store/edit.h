@@ -58,10 +58,11 @@ int edit_reserve(edit *e, int removals, int obstacles, int plants);
 /** Frees what an edit owns and zeroes it. */
 void edit_free(edit *e);
 
-/** Makes *out, a copy of w with the edit applied, and returns 0. On failure w is
- *  untouched, err names what and where ("/add_plants/1/roots/0: root inside an
- *  obstacle") and the status is negative (SYLVA_ENOMEM when memory ran out,
- *  SYLVA_EINVAL for an edit that does not fit the world). */
+/** Makes *out, a copy of w with the edit applied, on the threads of w, and returns
+ *  0. On failure w is untouched, err names what and where
+ *  ("/add_plants/1/roots/0: root inside an obstacle") and the status is negative
+ *  (SYLVA_ENOMEM when memory ran out, SYLVA_EINVAL for an edit that does not fit
+ *  the world). */
 int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err,
                size_t errlen);
 #endif

@@ -255,6 +255,8 @@ int store_open(const char *path, bool create, store **out) {
   return SERVER_OK;
 }
 
+void store_set_threads(store *st, int threads) { st->threads = threads; }
+
 void store_close(store *st) {
   if (!st) return;
   sqlite3_close_v2(st->db);
@@ -725,6 +727,8 @@ static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(cons
       *world_out = NULL;
     }
     if (!problem) {
+      /* one thread if the system gives no more: the same world */
+      if (st->threads > 1) sylva_world_set_threads(*world_out, st->threads);
       *from = it;
       sqlite3_finalize(q);
       return 0;

@@ -67,6 +67,11 @@ int store_open(const char *path, bool create, store **out);
 void store_close(store *st);
 /** What the calling thread's last failing store call said (as errno is per thread). */
 const char *store_error(const store *st);
+/** The worlds the store restores from now on (store_load_world, store_world_at,
+ *  before any regrowing) grow on this many threads (0 or 1: one; see
+ *  sylva_world_set_threads; a thread count never changes a world). */
+void store_set_threads(store *st, int threads);
+
 /** The message of a failed store_open (which has no store to ask). */
 const char *store_open_error(void);
 

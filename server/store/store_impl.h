@@ -12,6 +12,7 @@ struct store {
   sqlite3 *db;
   char *path;
   pthread_mutex_t lock; /* recursive: one caller at a time on the one connection */
+  int threads;          /* the worlds it restores grow on this many (store_set_threads) */
 };
 
 #define STORE_ERROR_MAX 512

@@ -65,12 +65,13 @@ int slurm_write_script(const slurm_script *s, char **path, char *err, size_t err
           "#SBATCH --cpus-per-task=%d\n"
           "#SBATCH --output=\"%s/task-%%a.log\"\n" /* sbatch takes the quotes off */
           "exec ",
-          s->runs, s->tasks, s->tasks, s->tasks - 1, s->jobs, dir);
+          s->runs, s->tasks, s->tasks, s->tasks - 1, s->jobs * s->threads, dir);
   put_quoted(f, exe);
   fputs(" sweep ", f);
   put_quoted(f, plan);
-  fprintf(f, " --task \"$SLURM_ARRAY_TASK_ID\" --tasks %d --jobs %d%s --quiet-progress \\\n"
-             "  --db ", s->tasks, s->jobs, s->force ? " --force" : "");
+  fprintf(f, " --task \"$SLURM_ARRAY_TASK_ID\" --tasks %d --jobs %d --threads %d%s"
+             " --quiet-progress \\\n  --db ", s->tasks, s->jobs, s->threads,
+             s->force ? " --force" : "");
   put_quoted(f, dir);
   fputs("\"/task-$SLURM_ARRAY_TASK_ID.db\"\n", f);
   bool ok = !ferror(f);

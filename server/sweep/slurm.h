@@ -16,7 +16,8 @@ typedef struct slurm_script {
   const char *exe;  /**< the sylva binary every node runs */
   const char *plan; /**< the plan file */
   int tasks;        /**< array tasks: task K grows the runs at positions K, K + T, ... */
-  int jobs;         /**< processes per task (--cpus-per-task) */
+  int jobs;         /**< processes per task */
+  int threads;      /**< threads per process (--cpus-per-task: jobs x threads) */
   int runs;         /**< the plan's runs (for the script's comment) */
   bool force;       /**< the plan has more than SWEEP_MAX_RUNS runs: the tasks need --force */
 } slurm_script;

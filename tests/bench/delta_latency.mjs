@@ -2,16 +2,25 @@
 // viewers, and how long a fresh subscriber waits for the snapshot of a big world.
 //
 //   node tests/bench/delta_latency.mjs [--exe build/server/sylva] [--viewers 100]
-//        [--iterations5 20] [--iterations100 24] [--threads 2] [--only 5|100]
+//        [--iterations5 20] [--iterations100 24] [--years 15] [--threads 2]
+//        [--serve-threads 1,2] [--only 5|100|hectare]
 //
-// Two runs: the five-tree stand (scenarios/stand.json) and a generated 100-tree
-// stand (igm-fig17b, tropism up, 10 x 10 trees 2 m apart in a 26 x 26 x 14 m world).
-// The viewers live in worker threads (each its own event loop) and stamp every
-// message on arrival with the system's monotonic clock. The daemon does not stamp
-// deltas, so the latency reported is relative: for each delta, arrival at a viewer
-// minus the first arrival at any viewer (the fan-out spread), as p50/p99 over every
-// (delta, viewer) pair and the largest spread per delta; plus bytes per delta. After
-// the run, a fresh client subscribes and times the snapshot of the final world (sent,
+// Three runs: the five-tree stand (scenarios/stand.json), a generated 100-tree
+// stand (igm-fig17b, tropism up, 10 x 10 trees 2 m apart in a 26 x 26 x 14 m world)
+// and the growing hectare (400 utdb:NoEast:TICO 5 m apart, --years), the last once
+// per --serve-threads value (`sylva serve --threads`; default: the daemon's own).
+// The viewers live in worker threads (--threads of them, each its own event loop)
+// and stamp every message on arrival with the system's monotonic clock, which is
+// the daemon's CLOCK_MONOTONIC: the daemon writes when each iteration's step
+// returned, was stored, its delta encoded and handed to the clients
+// (`--trace-iterations`), so the latency is absolute: a viewer's receipt minus the
+// iteration's end, as p50/p99/max over every (delta, viewer) pair, the worst per
+// delta, and the daemon's own share (handed out minus end: storing, encoding, the
+// loop's wait). Viewers the daemon closes as too slow (64 MiB behind) are counted.
+// The relative latency is reported too: arrival at a viewer minus the first
+// arrival at any viewer (the fan-out spread); plus bytes per delta, and the CPU
+// of the daemon, its loop thread and the viewers while growing. After the run, a
+// fresh client subscribes and times the snapshot of the final world (sent,
 // received and parsed), and asks for the same iteration with `get` (from the store).
 // Use a release build on a quiet machine; the numbers include the viewers' own
 // receive path on the same machine.
@@ -22,7 +31,7 @@ import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { stand100 } from './stand100.mjs';
+import { hectare, stand100 } from './stand100.mjs';
 
 const require = createRequire(new URL('../server/package.json', import.meta.url));
 const WebSocket = require('ws');
@@ -33,12 +42,26 @@ const now = () => Number(process.hrtime.bigint()) / 1e6; // ms, monotonic, share
 if (!isMainThread) {
   const { url, run, count } = workerData;
   const records = []; // [viewer, type, seq, iteration, bytes, t]
+  const dropped = []; // [viewer, close code, reason]: closed by the daemon before the end
   let subscribed = 0;
   let finished = 0;
   const sockets = [];
+  const ended = new Set();
+  const end = (v) => { // the run finished for this viewer, or the daemon closed it
+    if (ended.has(v)) return;
+    ended.add(v);
+    if (++finished === count) {
+      parentPort.postMessage({ records, dropped });
+      for (const s of sockets) s.close();
+    }
+  };
   for (let v = 0; v < count; v++) {
     const ws = new WebSocket(url, 'sylva.v1', { perMessageDeflate: false, maxPayload: 2 ** 31 });
     sockets.push(ws);
+    ws.on('close', (code, reason) => {
+      if (!ended.has(v)) dropped.push([v, code, String(reason)]);
+      end(v);
+    });
     ws.on('message', (data) => {
       const t = now();
       const head = data.toString('latin1', 0, Math.min(data.length, 100));
@@ -50,10 +73,7 @@ if (!isMainThread) {
         records.push([v, type, Number(m[1]), Number(m[2]), data.length, t]);
         if (type === 'snapshot' && ++subscribed === count) parentPort.postMessage({ subscribed: true });
       } else if (type === 'status' && /"status":"(finished|failed)"/.test(head)) {
-        if (++finished === count) {
-          parentPort.postMessage({ records });
-          for (const s of sockets) s.close();
-        }
+        end(v);
       }
     });
     ws.on('error', (e) => parentPort.postMessage({ error: String(e) }));
@@ -67,11 +87,13 @@ function arg(name, def) {
   return i > 0 ? process.argv[i + 1] : def;
 }
 
-async function startDaemon(exe, root) {
+async function startDaemon(exe, root, extra) {
   const dir = mkdtempSync(join(tmpdir(), 'sylva-bench-'));
   const port = 20000 + Math.floor(Math.random() * 20000);
+  const trace = join(dir, 'iterations.trace');
   const proc = spawn(exe, ['serve', '--db', join(dir, 'runs.db'), '--listen', `127.0.0.1:${port}`,
-    '--scenarios', join(root, 'scenarios'), '--max-message', String(1 << 26)],
+    '--scenarios', join(root, 'scenarios'), '--max-message', String(1 << 26),
+    '--trace-iterations', trace, ...extra],
   { stdio: ['ignore', 'ignore', 'pipe'] });
   let err = '';
   proc.stderr.on('data', (d) => { err += d; });
@@ -81,7 +103,7 @@ async function startDaemon(exe, root) {
       if (proc.exitCode !== null) { clearInterval(timer); fail(new Error(err)); }
     }, 20);
   });
-  return { proc, dir, port, url: `ws://127.0.0.1:${port}/ws`, http: `http://127.0.0.1:${port}`, log: () => err };
+  return { proc, dir, port, trace, url: `ws://127.0.0.1:${port}/ws`, http: `http://127.0.0.1:${port}`, log: () => err };
 }
 
 // A client that parses everything (for the control connection and the fresh subscriber).
@@ -117,7 +139,7 @@ function quantile(sorted, q) {
 }
 
 async function bench(label, scenario, opts) {
-  const d = await startDaemon(opts.exe, opts.root);
+  const d = await startDaemon(opts.exe, opts.root, opts.daemonArgs || []);
   try {
     const ctl = client(d.url);
     await ctl.opened;
@@ -127,6 +149,7 @@ async function bench(label, scenario, opts) {
     const per = Math.ceil(opts.viewers / opts.threads);
     const workers = [];
     const results = [];
+    const dropped = [];
     for (let k = 0, left = opts.viewers; left > 0; k++, left -= per) {
       const count = Math.min(per, left);
       const w = new Worker(fileURLToPath(import.meta.url), { workerData: { url: d.url, run, count } });
@@ -135,20 +158,41 @@ async function bench(label, scenario, opts) {
           if (m.error) fail(new Error(m.error));
           if (m.subscribed) ok();
           if (m.records) results.push(m.records.map((r) => [r[0] + k * per, ...r.slice(1)]));
+          if (m.dropped) dropped.push(...m.dropped);
         });
         w.on('error', fail);
       });
       workers.push({ w, sub, done: new Promise((ok) => w.on('exit', ok)) });
     }
     await Promise.all(workers.map((x) => x.sub));
-    ctl.send({ type: 'subscribe', run }); // for the status broadcasts
-    await ctl.next((x) => headType(x) === 'snapshot');
     const t0 = now();
+    const cpu0 = process.cpuUsage(); // this process: the viewers' threads and the control
     ctl.send({ type: 'control', run, action: 'start' });
-    await ctl.next((x) => headType(x) === 'status' && /"status":"(finished|failed)"/.test(x.data.toString('latin1', 0, 80)));
+    // the run's end from /api/runs: a subscribed control client could fall behind and
+    // be closed as too slow (as viewers can), and then never hear of it
+    for (;;) {
+      const runs = await (await fetch(`${d.http}/api/runs`)).json();
+      if (/^(finished|failed)$/.test(runs.find((x) => x.run === run).status)) break;
+      await new Promise((ok) => setTimeout(ok, 100));
+    }
     const grow = now() - t0;
     await Promise.all(workers.map((x) => x.done));
+    const cpu = (path) => { // utime + stime, seconds (the fields after the command's ')')
+      const f = readFileSync(path, 'utf8').split(') ')[1].split(' ');
+      return (Number(f[11]) + Number(f[12])) / 100;
+    };
+    const cpuAll = cpu(`/proc/${d.proc.pid}/stat`);
+    const cpuLoop = cpu(`/proc/${d.proc.pid}/task/${d.proc.pid}/stat`); // the libuv loop
+    const used = process.cpuUsage(cpu0);
+    const cpuViewers = (used.user + used.system) / 1e6;
     const records = results.flat();
+    const deltaBytes = records.reduce((n, x) => n + (x[1] === 'delta' ? x[4] : 0), 0);
+    // the daemon's trace: iteration -> [step returned, stored, encoded, handed out], ms
+    const traced = new Map();
+    for (const line of readFileSync(d.trace, 'utf8').split('\n')) {
+      const [id, it, ...times] = line.split(' ').map(Number);
+      if (id === run) traced.set(it, times.map((t) => t * 1e3));
+    }
 
     // per delta: arrivals at every viewer
     const bySeq = new Map();
@@ -160,6 +204,9 @@ async function bench(label, scenario, opts) {
     }
     const rel = [];
     const spreads = [];
+    const abs = []; // receipt at a viewer - the iteration's end in the daemon
+    const worst = [];
+    const shares = [];
     const rows = [];
     let incomplete = 0;
     for (const [seq, x] of [...bySeq].sort((a, b) => a[0] - b[0])) {
@@ -169,10 +216,14 @@ async function bench(label, scenario, opts) {
       const r = x.arrivals.map((t) => t - first).sort((a, b) => a - b);
       rel.push(...r);
       spreads.push(last - first);
-      rows.push({ seq, iteration: x.it, bytes: x.bytes, p50: quantile(r, 0.5), p99: quantile(r, 0.99), spread: last - first });
+      const [end, stored, encoded, out] = traced.get(x.it) || [NaN, NaN, NaN, NaN];
+      abs.push(...x.arrivals.map((t) => t - end));
+      worst.push(last - end);
+      shares.push(out - end);
+      rows.push({ seq, iteration: x.it, bytes: x.bytes, p50: quantile(r, 0.5), p99: quantile(r, 0.99), spread: last - first,
+        share: out - end, store: stored - end, encode: encoded - stored, wait: out - encoded, absP50: quantile(x.arrivals.map((t) => t - end).sort((a, b) => a - b), 0.5), worst: last - end });
     }
-    rel.sort((a, b) => a - b);
-    spreads.sort((a, b) => a - b);
+    for (const a of [rel, spreads, abs, worst, shares]) a.sort((p, q) => p - q);
 
     // a fresh subscriber of the final world, and `get` of the same iteration
     const snaps = [];
@@ -202,7 +253,7 @@ async function bench(label, scenario, opts) {
     const status = readFileSync(`/proc/${d.proc.pid}/status`, 'utf8');
     const hwm = Number(status.match(/VmHWM:\s+(\d+)/)[1]) / 1024;
     ctl.ws.close();
-    return { label, grow, rows, rel, spreads, incomplete, snaps, hwm,
+    return { label, grow, rows, rel, spreads, abs, worst, shares, incomplete, snaps, hwm, cpuAll, cpuLoop, cpuViewers, deltaBytes, dropped,
       iterSeconds: Number(pick('sylva_iteration_seconds_total')), sent: Number(pick('sylva_bytes_sent_total')) };
   } finally {
     d.proc.kill('SIGTERM');
@@ -217,11 +268,22 @@ function fmtBytes(x) { return x >= 2 ** 20 ? `${(x / 2 ** 20).toFixed(1)} MiB` :
 function report(r, viewers) {
   console.log(`\n== ${r.label}: ${viewers} viewers ==`);
   console.log(`grew ${r.rows.length} iterations in ${(r.grow / 1000).toFixed(2)} s (${r.iterSeconds.toFixed(2)} s of it growing, the rest fan-out and scheduling); ${fmtBytes(r.sent)} sent; daemon peak RSS ${r.hwm.toFixed(0)} MiB; deltas missing at some viewer: ${r.incomplete}`);
-  console.log('iter  delta bytes   p50 ms   p99 ms  spread ms   (arrival at a viewer - first arrival)');
-  for (const x of r.rows) {
-    console.log(`${String(x.iteration).padStart(4)}  ${fmtBytes(x.bytes).padStart(11)}  ${fmtMs(x.p50).padStart(7)}  ${fmtMs(x.p99).padStart(7)}  ${fmtMs(x.spread).padStart(9)}`);
+  if (r.dropped.length) {
+    const why = [...new Set(r.dropped.map((x) => `${x[1]} ${x[2]}`))].join('; ');
+    console.log(`viewers closed by the daemon before the end: ${r.dropped.length} (${why}); the figures below are of the deltas that arrived`);
   }
-  console.log(`all deltas x viewers: p50 ${fmtMs(quantile(r.rel, 0.5))} ms, p99 ${fmtMs(quantile(r.rel, 0.99))} ms; spread per delta: p50 ${fmtMs(quantile(r.spreads, 0.5))} ms, p99 ${fmtMs(quantile(r.spreads, 0.99))} ms, max ${fmtMs(r.spreads[r.spreads.length - 1])} ms`);
+  console.log(`by the end of growth: daemon CPU ${r.cpuAll.toFixed(1)} s, of which the loop thread ${r.cpuLoop.toFixed(1)} s for ${fmtBytes(r.deltaBytes)} of deltas (${(r.cpuLoop / (r.deltaBytes / 2 ** 30)).toFixed(2)} s per GiB); the viewers ${r.cpuViewers.toFixed(1)} s`);
+  console.log('                   the daemon: store + encode + loop       a viewer since the end    since the first arrival');
+  console.log('iter  delta bytes   share ms  store ms encode ms  wait ms        p50 ms  last ms          p50 ms   p99 ms  spread ms');
+  const col = (x, w) => fmtMs(x).padStart(w);
+  for (const x of r.rows) {
+    console.log(`${String(x.iteration).padStart(4)}  ${fmtBytes(x.bytes).padStart(11)}  ${col(x.share, 9)} ${col(x.store, 9)} ${col(x.encode, 9)} ${col(x.wait, 8)}     ${col(x.absP50, 9)} ${col(x.worst, 8)}        ${col(x.p50, 8)} ${col(x.p99, 8)} ${col(x.spread, 10)}`);
+  }
+  const max = (a) => a[a.length - 1];
+  console.log(`receipt - iteration end, all deltas x viewers: p50 ${fmtMs(quantile(r.abs, 0.5))} ms, p99 ${fmtMs(quantile(r.abs, 0.99))} ms, max ${fmtMs(max(r.abs))} ms; the last viewer per delta: p50 ${fmtMs(quantile(r.worst, 0.5))} ms, max ${fmtMs(max(r.worst))} ms`);
+  const med = (k) => fmtMs(quantile(r.rows.map((x) => x[k]).sort((a, b) => a - b), 0.5));
+  console.log(`the daemon's share (delta handed out - iteration end): p50 ${fmtMs(quantile(r.shares, 0.5))} ms, max ${fmtMs(max(r.shares))} ms; medians: storing ${med('store')} ms, encoding ${med('encode')} ms, the loop's wait ${med('wait')} ms`);
+  console.log(`arrival - first arrival, all deltas x viewers: p50 ${fmtMs(quantile(r.rel, 0.5))} ms, p99 ${fmtMs(quantile(r.rel, 0.99))} ms; spread per delta: p50 ${fmtMs(quantile(r.spreads, 0.5))} ms, p99 ${fmtMs(quantile(r.spreads, 0.99))} ms, max ${fmtMs(max(r.spreads))} ms`);
   console.log('final world, fresh client: kind       iteration  nodes      bytes        arrived ms  parsed ms');
   for (const s of r.snaps) {
     console.log(`                           ${s.kind.padEnd(10)} ${String(s.iteration).padStart(9)}  ${String(s.nodes).padEnd(9)}  ${fmtBytes(s.bytes).padStart(11)}  ${fmtMs(s.arrive).padStart(10)}  ${fmtMs(s.parsed).padStart(9)}`);
@@ -243,6 +305,15 @@ async function main() {
   }
   if (!only || only === '100') {
     report(await bench('100-tree stand (igm-fig17b, 10 x 10, 2 m)', { ...stand100(), iterations: Number(arg('iterations100', '24')) }, opts), opts.viewers);
+  }
+  if (!only || only === 'hectare') {
+    const years = Number(arg('years', '15'));
+    for (const n of arg('serve-threads', '').split(',')) {
+      // its worlds' estimate (400 stems) passes the default budget of 4096 MiB
+      const daemonArgs = ['--memory-budget', '8192', ...(n ? ['--threads', n] : [])];
+      report(await bench(`growing hectare (400 utdb:NoEast:TICO, 5 m apart), ${years} years, daemon --threads ${n || 'default'}`,
+        hectare(years), { ...opts, daemonArgs }), opts.viewers);
+    }
   }
 }
 

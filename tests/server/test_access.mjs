@@ -206,7 +206,8 @@ test('the token from --token-file or SYLVA_TOKEN stays out of the command line',
       delete process.env.SYLVA_TOKEN;
     }
     for (const [args, want] of [[['--token-file', join(dir, 'missing')], /--token-file: cannot read/],
-      [['--public-read'], /--public-read: there is no token/], [['--allow-host', 'a.example:80'], /--allow-host: expected a host name/]]) {
+      [['--public-read'], /--public-read: there is no token/], [['--allow-host', 'a.example:80'], /--allow-host: expected a host name/],
+      [['--trace-iterations', join(dir, 'missing', 'trace')], /--trace-iterations: cannot write/]]) {
       const r = spawnSync(SYLVA, ['serve', '--db', join(dir, 'x.db'), ...args], { encoding: 'utf8', env: { ...process.env, SYLVA_TOKEN: '' } });
       assert.equal(r.status, 2, args.join(' '));
       assert.match(r.stderr, want);

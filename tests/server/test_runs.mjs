@@ -925,3 +925,34 @@ test('errors found while parsing a message still echo its id as ref', async () =
     cleanup(d.dir);
   }
 });
+
+test('--trace-iterations: a line per grown iteration, on the clock its viewers read', async () => {
+  const dir = tempDir();
+  const trace = join(dir, 'iterations.trace');
+  const d = await startDaemon({ dir, args: ['--trace-iterations', trace] });
+  try {
+    const c = await connect(d.url);
+    const received = new Map(); // iteration -> CLOCK_MONOTONIC seconds at receipt
+    c.ws.on('message', (data) => {
+      const m = /^\{"type":"delta","run":\d+,"seq":\d+,"iteration":(\d+)/.exec(data.toString('latin1', 0, 80));
+      if (m) received.set(Number(m[1]), Number(process.hrtime.bigint()) / 1e9);
+    });
+    c.send({ type: 'create', name: 'traced', start: false, scenario: scenario('stand.json', { iterations: 4 }) });
+    const run = (await c.type('created')).run;
+    c.send({ type: 'subscribe', run });
+    await c.type('snapshot');
+    c.send({ type: 'control', run, action: 'start' });
+    await c.next((m) => m.type === 'status' && m.status === 'finished');
+    const lines = readFileSync(trace, 'utf8').trim().split('\n').map((l) => l.split(' ').map(Number));
+    assert.deepEqual(lines.map((l) => l.slice(0, 2)), [[run, 1], [run, 2], [run, 3], [run, 4]]);
+    for (const [, it, ...times] of lines) {
+      times.push(received.get(it));
+      assert.deepEqual(times, [...times].sort((a, b) => a - b), `iteration ${it}: in order`);
+    }
+    c.close();
+    await stopClean(d);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
