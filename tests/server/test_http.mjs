@@ -14,9 +14,13 @@ import { withDaemon, connect, scenario, exportBytes, rawGet, askOnly, cleanup, R
 // Creates run `name` of a scenario file, grows it to the end and returns its id.
 async function grown(d, file, name, iterations) {
   const c = await connect(d.url);
-  c.send({ type: 'create', name, start: true, scenario: scenario(file, { iterations }) });
+  // started once subscribed: a run that finished before the subscription would send
+  // no status to it (docs/protocol.md, "subscribe")
+  c.send({ type: 'create', name, start: false, scenario: scenario(file, { iterations }) });
   const { run } = await c.type('created');
   c.send({ type: 'subscribe', run });
+  await c.type('snapshot');
+  c.send({ type: 'control', run, action: 'start' });
   await c.next((m) => m.type === 'status' && m.status === 'finished', 300000);
   c.close();
   return run;

@@ -379,9 +379,13 @@ test('a daemon with a token for reading too: the page asks for it first, then li
     const c = await connect(d.url);
     c.send({ type: 'hello', token: 's3cret' });
     await c.type('welcome');
-    c.send({ type: 'create', scenario: scenario('wall.json', { iterations: 3 }), name: 'guarded', start: true, id: 'c' });
+    // started once subscribed: a run that finished before the subscription would
+    // send no status to it (docs/protocol.md, "subscribe")
+    c.send({ type: 'create', scenario: scenario('wall.json', { iterations: 3 }), name: 'guarded', start: false, id: 'c' });
     const { run } = await c.type('created');
     c.send({ type: 'subscribe', run });
+    await c.type('snapshot');
+    c.send({ type: 'control', run, action: 'start' });
     await c.next((m) => m.type === 'status' && m.status === 'finished', 120000);
     c.close();
     const { page, errors } = await openViewer(browser, d.http);
