@@ -93,10 +93,10 @@ def main():
         c.close()
 
         t0 = time.monotonic()
-        p = must(sylva(exe, 'sweep', plan_path, '--db', db, '--jobs', '2'),
+        p = must(sylva(exe, 'sweep', plan_path, '--db', db, '--jobs', '2', '--threads', '1'),
                  'sylva sweep after the kill')
         print(f'started again: {time.monotonic() - t0:.1f} s: {p.stderr.strip().splitlines()[0]}')
-        expect = f': {6 - len(done_before)} runs to grow in 2 processes (the finished ones kept)'
+        expect = f': {6 - len(done_before)} runs to grow in 2 processes (1 thread each) (the finished ones kept)'
         if expect not in p.stderr:
             failures.append(f'started again: no "{expect}" on stderr: {p.stderr.strip()}')
         after = sweep_runs(db)
