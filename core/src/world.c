@@ -1015,9 +1015,13 @@ static int grow_scratch(void **data, size_t n, size_t elem) {
 }
 
 static int reserve_scratch(sylva_world *w) {
+  /* the live slots grouped by stem (radii, conflicts): its stems' firsts, and the
+   * slots below with the rest */
+  if (SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
   size_t n = w->nodes.cap;
   if (n <= w->scratch_cap) return SYLVA_OK;
-  if (grow_scratch((void **)&w->light, n, sizeof *w->light) ||
+  if (SYLVA__VEC_RESERVE(w->stem_nodes, n) ||
+      grow_scratch((void **)&w->light, n, sizeof *w->light) ||
       grow_scratch((void **)&w->q, n, sizeof *w->q) ||
       grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
       grow_scratch((void **)&w->sap, n, sizeof *w->sap) ||
@@ -1032,7 +1036,8 @@ static int reserve_scratch(sylva_world *w) {
 int sylva__reserve_scratch(sylva_world *w) { return reserve_scratch(w); }
 
 /* Room for everything the phases after the shoots write, so that from there on a
- * step cannot fail: per-slot scratch for the grown skeleton, radius changes (at most
+ * step cannot fail: per-slot scratch for the grown skeleton (with the grouping of
+ * its slots by stem that radii and conflicts use), radius changes (at most
  * one per node born before T), shed roots (at most every node), the nodes added and
  * the stats. (Shedding can do without its removal order, sylva__shed.) */
 static int reserve_rest(sylva_world *w) {
@@ -1043,8 +1048,6 @@ static int reserve_rest(sylva_world *w) {
       SYLVA__VEC_RESERVE(w->leaf_changes, count) ||
       SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) ||
       SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
-      SYLVA__VEC_RESERVE(w->stem_nodes, count) ||
-      SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1) ||
       sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
   return SYLVA_OK;

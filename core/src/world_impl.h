@@ -181,8 +181,10 @@ struct sylva_world {
   SYLVA__VEC(double) work_light; /* light of each bud's stretch of one axis */
   SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */
   SYLVA__VEC(sylva__box) stem_box;        /* conflicts: each stem's nodes' box */
-  SYLVA__VEC(int32_t) stem_nodes;         /* radii, conflicts: live slots grouped by stem */
-  SYLVA__VEC(int32_t) stem_nodes_first;   /* each stem's first, stem_count + 1 */
+  SYLVA__VEC(int32_t) stem_nodes;         /* radii, conflicts: live slots grouped by stem
+                                             (room: scratch_cap, sylva__reserve_scratch) */
+  SYLVA__VEC(int32_t) stem_nodes_first;   /* each stem's first, stem_count + 1 (room: the
+                                             same) */
   SYLVA__VEC(sylva__candidate) candidates; /* conflicts: obstacles near each stem */
   int conflicts_from;                      /* conflicts: the first stem of the reserve */
   SYLVA__VEC(int32_t) pruned_ids;          /* sylva_world_prune: the subtrees' roots */
