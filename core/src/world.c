@@ -301,13 +301,12 @@ int sylva__species_shade_reserve(sylva__species *sp, int t) {
 }
 
 const sylva__pyramid *sylva__species_shade_at(const sylva__species *sp, int t) {
+  SYLVA_ASSERT(shade_entry(sp, t) < sp->shades_n);
   return &sp->shades[shade_entry(sp, t)];
 }
 
 const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
-  if (!sylva__species_shade_reserve(sp, t)) return sylva__species_shade_at(sp, t);
-  make_shade(sp, t, &sp->shade); /* no room for the table: this one, the same */
-  return &sp->shade;
+  return sylva__species_shade_reserve(sp, t) ? NULL : sylva__species_shade_at(sp, t);
 }
 
 double sylva__species_age_pow(sylva__species *sp, int age) {
