@@ -31,9 +31,10 @@ void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
   /* Shade sums are exact integers, so the removals may run in any order and on any
    * number of threads: take them chunk by chunk (z, y, x of 16-voxel chunks) so that
    * neighbouring pyramids share the cache. Without memory for that order they run
-   * one by one in slot order, to the same grid, so this never fails for want of it.
-   * Each node's pyramid is in its species' table already, as it cast its shade
-   * through it. */
+   * one by one in slot order, and without memory for the lists of the stamps each
+   * thread takes, on the caller's thread alone: to the same grid, so this never
+   * fails for want of it. Each node's pyramid is in its species' table already, as
+   * it cast its shade through it. */
   if (SYLVA__VEC_RESERVE(w->cells, doomed) || SYLVA__VEC_RESERVE(w->stamps, doomed)) {
     for (size_t i = 0; i < s->count; i++) {
       if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
@@ -60,7 +61,10 @@ void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
     sylva__node_voxel(w, i, it->v);
     it->p = sylva__species_shade_at(&w->species[st->species], s->birth[i] - st->born);
   }
-  sylva__grid_stamp_many(&w->grid, w->pool, w->stamps.data, w->stamps.len, -1);
+  sylva__pool *pool = w->pool;
+  size_t lists = sylva__grid_stamp_scratch(&w->grid, pool, w->stamps.data, w->stamps.len);
+  if (SYLVA__VEC_RESERVE(w->stamp_lists, lists)) pool = NULL;
+  sylva__grid_stamp_many(&w->grid, pool, w->stamps.data, w->stamps.len, -1, w->stamp_lists.data);
   for (size_t k = 0; k < w->cells.len; k++) remove_rest(w, w->cells.data[k].item, pruned);
 }
 

@@ -134,6 +134,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->crown_bins.data);
   sylva__free(w->cells.data);
   sylva__free(w->stamps.data);
+  sylva__free(w->stamp_lists.data);
   sylva__free(w->cell_first.data);
   sylva__free(w->cell_items.data);
   sylva__free(w->cell_pos.data);
@@ -1368,7 +1369,8 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +
-               w->cells.cap * sizeof(sylva__keyed) +
+               w->cells.cap * sizeof(sylva__keyed) + w->stamps.cap * sizeof(sylva__stamp) +
+               w->stamp_lists.cap * sizeof(size_t) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
                 w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_top.cap) *
                    sizeof(int32_t) +

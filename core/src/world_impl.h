@@ -194,6 +194,7 @@ struct sylva_world {
   SYLVA__VEC(sylva_stem_stats) stats;
   SYLVA__VEC(sylva__keyed) cells;   /* shed nodes sorted by chunk */
   SYLVA__VEC(sylva__stamp) stamps;  /* their shade, in that order */
+  SYLVA__VEC(size_t) stamp_lists;   /* the stamps each thread takes (sylva__grid_stamp_scratch) */
   SYLVA__VEC(int32_t) cell_first;    /* competition index: first item of each cell */
   SYLVA__VEC(int32_t) cell_items;    /* sprout indices, cell by cell */
   SYLVA__VEC(float) cell_pos;        /* their positions, x y z */
