@@ -132,9 +132,10 @@ void sylva__check_world(const sylva_world *w, sylva__boundary at) {
   check_stems(w);
   check_skeleton(w, at);
   if (at == SYLVA__BETWEEN_STEPS) return;
-  /* inside a step: the per-slot scratch covers the skeleton, and the step's mark
-   * lies below what it has grown */
-  SYLVA_ASSERT(w->scratch_cap >= w->nodes.cap);
+  /* inside a step: the per-slot scratch (the grouping by stem too) covers the
+   * skeleton, and the step's mark lies below what it has grown */
+  SYLVA_ASSERT(w->scratch_cap >= w->nodes.cap && w->stem_nodes.cap >= w->scratch_cap &&
+               w->stem_nodes_first.cap >= (size_t)w->stem_count + 1);
   SYLVA_ASSERT(w->mark.count <= w->nodes.count && w->mark.iteration == w->iteration - 1);
   if (at == SYLVA__AFTER_ALLOCATION) check_sprouts(w);
   if (at == SYLVA__AFTER_SHOOTS) {

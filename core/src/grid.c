@@ -539,42 +539,102 @@ bool sylva__grid_stamp_touches(const int v[3], const sylva__pyramid *p, const in
   return m[0] >= v[0] - h && (m[0] >> 4) <= ((v[0] + h) >> 4);
 }
 
+/* A batch is written in parts, each a range of chunk columns along x that one thread
+ * writes alone: one part on one thread, else four per thread (a part over the
+ * crowns takes longer than one beside them), at most one per chunk column. */
+static int stamp_part_count(const sylva__grid *g, const sylva__pool *pool) {
+  int threads = sylva__pool_threads(pool);
+  int parts = threads == 1 ? 1 : 4 * threads;
+  return parts > g->c[0] ? g->c[0] : parts;
+}
+
+/* The first chunk column of part k. */
+static int part_column(const sylva__grid *g, int parts, int k) {
+  return (int)((int64_t)k * g->c[0] / parts);
+}
+
+/* The parts k0..k1 whose columns a stamp writes: those of its widest layer and the
+ * column below it, clipped to the grid. part_column(k) <= cx holds for every k up
+ * to ((cx + 1) parts - 1) / columns, so that is the part of column cx. */
+static void stamp_span(const sylva__grid *g, int parts, const sylva__stamp *it, int *k0, int *k1) {
+  int h = it->p->half[it->p->depth - 1];
+  int cx0 = clip_lo(it->v[0] - h, 0) >> 4, cx1 = clip_hi(it->v[0] + h, g->n[0] - 1) >> 4;
+  *k0 = (int)((((int64_t)cx0 + 1) * parts - 1) / g->c[0]);
+  *k1 = (int)((((int64_t)cx1 + 1) * parts - 1) / g->c[0]);
+}
+
+/* How many times the n items are listed under the parts they write in; per part
+ * too, into count[k + 1] (count NULL: the total alone). */
+static size_t count_listings(const sylva__grid *g, int parts, const sylva__stamp *items, size_t n,
+                             size_t *count) {
+  size_t total = 0;
+  for (size_t i = 0; i < n; i++) {
+    int k0, k1;
+    stamp_span(g, parts, &items[i], &k0, &k1);
+    total += (size_t)(k1 - k0 + 1);
+    for (int k = k0; count && k <= k1; k++) count[k + 1]++;
+  }
+  return total;
+}
+
+size_t sylva__grid_stamp_scratch(const sylva__grid *g, const sylva__pool *pool,
+                                 const sylva__stamp *items, size_t n) {
+  int parts = stamp_part_count(g, pool);
+  return parts == 1 ? 0 : (size_t)parts + 1 + count_listings(g, parts, items, n, NULL);
+}
+
 typedef struct stamp_many_ctx {
   sylva__grid *g;
   const sylva__stamp *items;
   size_t n;
   int sign, parts;
+  /* With more than one part: part k's items are list[first[k]] .. list[first[k + 1] - 1],
+   * in the batch's order. */
+  const size_t *first, *list;
 } stamp_many_ctx;
 
 /* Parts [begin, end) of a batch: part k writes the chunk columns of its own range of
- * cx, every stamp's share of them. */
+ * cx, the share of them of every stamp listed under it. */
 static void stamp_parts(void *arg, size_t begin, size_t end) {
   const stamp_many_ctx *c = arg;
-  int cols = c->g->c[0];
   for (size_t k = begin; k < end; k++) {
-    int cx_min = (int)((int64_t)k * cols / c->parts);
-    int cx_max = (int)((int64_t)(k + 1) * cols / c->parts) - 1;
-    for (size_t i = 0; i < c->n; i++) {
-      const sylva__stamp *it = &c->items[i];
-      int h = it->p->half[it->p->depth - 1];
-      if ((it->v[0] + h) >> 4 < cx_min || (it->v[0] - h < 0 ? 0 : (it->v[0] - h) >> 4) > cx_max)
-        continue;
+    int cx_min = part_column(c->g, c->parts, (int)k);
+    int cx_max = part_column(c->g, c->parts, (int)k + 1) - 1;
+    size_t from = c->first ? c->first[k] : 0, to = c->first ? c->first[k + 1] : c->n;
+    for (size_t j = from; j < to; j++) {
+      const sylva__stamp *it = &c->items[c->list ? c->list[j] : j];
       stamp(c->g, it->v, it->p, c->sign, cx_min, cx_max); /* its blocks exist: no failure */
     }
   }
 }
 
 int sylva__grid_stamp_many(sylva__grid *g, sylva__pool *pool, const sylva__stamp *items, size_t n,
-                           int sign) {
+                           int sign, size_t *scratch) {
   if (sign > 0)
     for (size_t i = 0; i < n; i++) {
       int rc = stamp(g, items[i].v, items[i].p, 0, 0, g->c[0] - 1);
       if (rc) return rc; /* the blocks made so far hold zeros: the shade is as it was */
     }
-  int threads = sylva__pool_threads(pool);
-  int parts = threads == 1 ? 1 : 4 * threads;
-  if (parts > g->c[0]) parts = g->c[0];
-  stamp_many_ctx c = {g, items, n, sign, parts};
+  int parts = stamp_part_count(g, pool);
+  stamp_many_ctx c = {g, items, n, sign, parts, NULL, NULL};
+  if (parts > 1) {
+    /* Each item listed under every part it writes in (a counting sort, in the
+     * batch's order within a part): a part takes only its own items, and the
+     * batch costs its items and what each part writes, not items times parts. */
+    size_t *first = scratch, *list = scratch + parts + 1;
+    for (int k = 0; k <= parts; k++) first[k] = 0;
+    count_listings(g, parts, items, n, first);
+    for (int k = 0; k < parts; k++) first[k + 1] += first[k];
+    for (size_t i = 0; i < n; i++) {
+      int k0, k1;
+      stamp_span(g, parts, &items[i], &k0, &k1);
+      for (int k = k0; k <= k1; k++) list[first[k]++] = i;
+    }
+    for (int k = parts; k > 0; k--) first[k] = first[k - 1]; /* the fill moved each up one part */
+    first[0] = 0;
+    c.first = first;
+    c.list = list;
+  }
   sylva__pool_for(pool, (size_t)parts, 1, stamp_parts, &c);
   return SYLVA_OK;
 }

@@ -204,14 +204,20 @@ typedef struct sylva__stamp {
   const sylva__pyramid *p;
 } sylva__stamp;
 
+/** The entries of scratch that sylva__grid_stamp_many() needs for these n items on
+ *  this pool: the lists of the items each thread's columns take; 0 on one thread. */
+size_t sylva__grid_stamp_scratch(const sylva__grid *g, const sylva__pool *pool,
+                                 const sylva__stamp *items, size_t n);
 /** Adds (+1) or removes (-1) the shade of n nodes on the pool's threads (NULL: the
  *  caller's alone). Each thread writes the chunk columns of its own range of x, and
  *  the sums are exact integers, so the grid is the one the stamps give one by one in
- *  any order, on any number of threads. Adding makes every chunk first, on the
- *  caller's thread: SYLVA_ENOMEM leaves the shade as it was. Removing never fails:
- *  the chunks of a stamp added before exist (chunks live as long as the grid). */
+ *  any order, on any number of threads. scratch holds sylva__grid_stamp_scratch()
+ *  entries (NULL for none), made by the caller, so that this allocates nothing but
+ *  chunks. Adding makes every chunk first, on the caller's thread: SYLVA_ENOMEM
+ *  leaves the shade as it was. Removing never fails: the chunks of a stamp added
+ *  before exist (chunks live as long as the grid). */
 int sylva__grid_stamp_many(sylva__grid *g, sylva__pool *pool, const sylva__stamp *items,
-                           size_t n, int sign);
+                           size_t n, int sign, size_t *scratch);
 
 /** Adds a solid box with the next id; returns the id, SYLVA_EINVAL for a bad box or
  *  label or a label in use, SYLVA_ENOMEM leaving the grid as it was. */

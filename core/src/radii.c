@@ -74,11 +74,11 @@ int sylva__radii(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   memset(w->pipe, 0, s->count * sizeof *w->pipe);
   memset(w->sap, 0, s->count * sizeof *w->sap);
-  /* Stems share no node: each grows its radii on its own, on the world's threads
-   * (room for the grouping was reserved with the step's). */
-  if (SYLVA__VEC_RESERVE(w->stem_nodes, s->count) ||
-      SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1))
-    return SYLVA_ENOMEM;
+  /* Stems share no node: each grows its radii on its own, on the world's threads.
+   * The grouping's room is the per-slot scratch's (sylva__reserve_scratch), made
+   * before the step could no longer fail. */
+  SYLVA_ASSERT(w->stem_nodes.cap >= s->count &&
+               w->stem_nodes_first.cap >= (size_t)w->stem_count + 1);
   sylva__group_by_stem(w);
   radii_ctx c = {w, iteration};
   sylva__pool_for(w->pool, (size_t)w->stem_count, 1, radii_stems, &c);

@@ -30,33 +30,12 @@ void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
   sylva__skeleton *s = &w->nodes;
   /* Shade sums are exact integers, so the removals may run in any order and on any
    * number of threads: take them chunk by chunk (z, y, x of 16-voxel chunks) so that
-   * neighbouring pyramids share the cache. Without memory for that, or for a
-   * pyramid's table, they run one by one in slot order, to the same grid, so this
-   * never fails for want of it. */
-  bool batch = !SYLVA__VEC_RESERVE(w->cells, doomed) && !SYLVA__VEC_RESERVE(w->stamps, doomed);
-  if (batch) {
-    w->cells.len = 0;
-    for (size_t i = 0; i < s->count; i++) {
-      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-      int v[3];
-      sylva__node_voxel(w, (int32_t)i, v);
-      int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
-      w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
-    }
-    qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
-    w->stamps.len = 0;
-    for (size_t k = 0; k < w->cells.len && batch; k++) {
-      int32_t i = w->cells.data[k].item;
-      const sylva__stem *st = &w->stems[s->stem[i]];
-      sylva__species *sp = &w->species[st->species];
-      int t = s->birth[i] - st->born;
-      batch = !sylva__species_shade_reserve(sp, t);
-      sylva__stamp *it = &w->stamps.data[w->stamps.len++];
-      sylva__node_voxel(w, i, it->v);
-      it->p = batch ? sylva__species_shade_at(sp, t) : NULL;
-    }
-  }
-  if (!batch) {
+   * neighbouring pyramids share the cache. Without memory for that order they run
+   * one by one in slot order, and without memory for the lists of the stamps each
+   * thread takes, on the caller's thread alone: to the same grid, so this never
+   * fails for want of it. Each node's pyramid is in its species' table already, as
+   * it cast its shade through it. */
+  if (SYLVA__VEC_RESERVE(w->cells, doomed) || SYLVA__VEC_RESERVE(w->stamps, doomed)) {
     for (size_t i = 0; i < s->count; i++) {
       if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
       int rc = sylva__remove_node(w, (int32_t)i, pruned);
@@ -65,7 +44,27 @@ void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
     }
     return;
   }
-  sylva__grid_stamp_many(&w->grid, w->pool, w->stamps.data, w->stamps.len, -1);
+  w->cells.len = 0;
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
+    w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
+  }
+  qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
+  w->stamps.len = 0;
+  for (size_t k = 0; k < w->cells.len; k++) {
+    int32_t i = w->cells.data[k].item;
+    const sylva__stem *st = &w->stems[s->stem[i]];
+    sylva__stamp *it = &w->stamps.data[w->stamps.len++];
+    sylva__node_voxel(w, i, it->v);
+    it->p = sylva__species_shade_at(&w->species[st->species], s->birth[i] - st->born);
+  }
+  sylva__pool *pool = w->pool;
+  size_t lists = sylva__grid_stamp_scratch(&w->grid, pool, w->stamps.data, w->stamps.len);
+  if (SYLVA__VEC_RESERVE(w->stamp_lists, lists)) pool = NULL;
+  sylva__grid_stamp_many(&w->grid, pool, w->stamps.data, w->stamps.len, -1, w->stamp_lists.data);
   for (size_t k = 0; k < w->cells.len; k++) remove_rest(w, w->cells.data[k].item, pruned);
 }
 

@@ -134,6 +134,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->crown_bins.data);
   sylva__free(w->cells.data);
   sylva__free(w->stamps.data);
+  sylva__free(w->stamp_lists.data);
   sylva__free(w->cell_first.data);
   sylva__free(w->cell_items.data);
   sylva__free(w->cell_pos.data);
@@ -301,13 +302,12 @@ int sylva__species_shade_reserve(sylva__species *sp, int t) {
 }
 
 const sylva__pyramid *sylva__species_shade_at(const sylva__species *sp, int t) {
+  SYLVA_ASSERT(shade_entry(sp, t) < sp->shades_n);
   return &sp->shades[shade_entry(sp, t)];
 }
 
 const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t) {
-  if (!sylva__species_shade_reserve(sp, t)) return sylva__species_shade_at(sp, t);
-  make_shade(sp, t, &sp->shade); /* no room for the table: this one, the same */
-  return &sp->shade;
+  return sylva__species_shade_reserve(sp, t) ? NULL : sylva__species_shade_at(sp, t);
 }
 
 double sylva__species_age_pow(sylva__species *sp, int age) {
@@ -1015,9 +1015,13 @@ static int grow_scratch(void **data, size_t n, size_t elem) {
 }
 
 static int reserve_scratch(sylva_world *w) {
+  /* the live slots grouped by stem (radii, conflicts): its stems' firsts, and the
+   * slots below with the rest */
+  if (SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
   size_t n = w->nodes.cap;
   if (n <= w->scratch_cap) return SYLVA_OK;
-  if (grow_scratch((void **)&w->light, n, sizeof *w->light) ||
+  if (SYLVA__VEC_RESERVE(w->stem_nodes, n) ||
+      grow_scratch((void **)&w->light, n, sizeof *w->light) ||
       grow_scratch((void **)&w->q, n, sizeof *w->q) ||
       grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
       grow_scratch((void **)&w->sap, n, sizeof *w->sap) ||
@@ -1032,7 +1036,8 @@ static int reserve_scratch(sylva_world *w) {
 int sylva__reserve_scratch(sylva_world *w) { return reserve_scratch(w); }
 
 /* Room for everything the phases after the shoots write, so that from there on a
- * step cannot fail: per-slot scratch for the grown skeleton, radius changes (at most
+ * step cannot fail: per-slot scratch for the grown skeleton (with the grouping of
+ * its slots by stem that radii and conflicts use), radius changes (at most
  * one per node born before T), shed roots (at most every node), the nodes added and
  * the stats. (Shedding can do without its removal order, sylva__shed.) */
 static int reserve_rest(sylva_world *w) {
@@ -1043,8 +1048,6 @@ static int reserve_rest(sylva_world *w) {
       SYLVA__VEC_RESERVE(w->leaf_changes, count) ||
       SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) ||
       SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
-      SYLVA__VEC_RESERVE(w->stem_nodes, count) ||
-      SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1) ||
       sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
   return SYLVA_OK;
@@ -1366,7 +1369,8 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +
-               w->cells.cap * sizeof(sylva__keyed) +
+               w->cells.cap * sizeof(sylva__keyed) + w->stamps.cap * sizeof(sylva__stamp) +
+               w->stamp_lists.cap * sizeof(size_t) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
                 w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_top.cap) *
                    sizeof(int32_t) +

@@ -28,7 +28,6 @@ typedef struct sylva__species {
    * (once made) every t >= t95. */
   sylva__pyramid *shades;
   int shades_n;
-  sylva__pyramid shade; /* scratch: the one pyramid asked for when the table could not grow */
 } sylva__species;
 
 typedef struct sylva__plant {
@@ -181,8 +180,10 @@ struct sylva_world {
   SYLVA__VEC(double) work_light; /* light of each bud's stretch of one axis */
   SYLVA__VEC(int32_t) shoot;     /* slots grown by the current shoot */
   SYLVA__VEC(sylva__box) stem_box;        /* conflicts: each stem's nodes' box */
-  SYLVA__VEC(int32_t) stem_nodes;         /* radii, conflicts: live slots grouped by stem */
-  SYLVA__VEC(int32_t) stem_nodes_first;   /* each stem's first, stem_count + 1 */
+  SYLVA__VEC(int32_t) stem_nodes;         /* radii, conflicts: live slots grouped by stem
+                                             (room: scratch_cap, sylva__reserve_scratch) */
+  SYLVA__VEC(int32_t) stem_nodes_first;   /* each stem's first, stem_count + 1 (room: the
+                                             same) */
   SYLVA__VEC(sylva__candidate) candidates; /* conflicts: obstacles near each stem */
   int conflicts_from;                      /* conflicts: the first stem of the reserve */
   SYLVA__VEC(int32_t) pruned_ids;          /* sylva_world_prune: the subtrees' roots */
@@ -193,6 +194,7 @@ struct sylva_world {
   SYLVA__VEC(sylva_stem_stats) stats;
   SYLVA__VEC(sylva__keyed) cells;   /* shed nodes sorted by chunk */
   SYLVA__VEC(sylva__stamp) stamps;  /* their shade, in that order */
+  SYLVA__VEC(size_t) stamp_lists;   /* the stamps each thread takes (sylva__grid_stamp_scratch) */
   SYLVA__VEC(int32_t) cell_first;    /* competition index: first item of each cell */
   SYLVA__VEC(int32_t) cell_items;    /* sprout indices, cell by cell */
   SYLVA__VEC(float) cell_pos;        /* their positions, x y z */
@@ -303,7 +305,10 @@ static inline bool sylva__bears_leaves(const sylva_species_def *d, int32_t birth
 
 /** Shade base b of a node born at a stem's local iteration t. */
 double sylva__species_b(const sylva__species *sp, int t);
-/** The shade cast by a node born at local iteration t. */
+/** The shade cast by a node born at local iteration t, its table made up to t
+ *  (sylva__species_shade_reserve); NULL when the table could not grow. Never NULL
+ *  for a node whose shade was cast already: the table never shrinks, so taking a
+ *  shade away needs no memory. */
 const sylva__pyramid *sylva__species_shade(sylva__species *sp, int t);
 /** age^sigma, cached. NaN on allocation failure is avoided by computing directly. */
 double sylva__species_age_pow(sylva__species *sp, int age);
@@ -354,7 +359,8 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light);
 int sylva__allocate(sylva_world *w, int iteration);
 /** Phases 4-5: grows the sprouts stem by stem in w->order, shading after each shoot. */
 int sylva__shoots(sylva_world *w, int iteration);
-/** Adds (sign +1) or removes (-1) the shade of one node. */
+/** Adds (sign +1) or removes (-1) the shade of one node. Adding may fail
+ *  (SYLVA_ENOMEM, the shade as it was); removing the shade a node cast never does. */
 int sylva__shade_node(sylva_world *w, int32_t slot, int sign);
 /** Pipe-model radii; records changes of nodes born before T. */
 int sylva__radii(sylva_world *w, int iteration);

@@ -1,6 +1,7 @@
 /* The voxel environment: pyramid and column shade on a small grid, light, exact
- * removal, occupancy, obstacles, and a 500-million-voxel site that costs memory only
- * where something is. */
+ * removal (one by one and in batches on threads), occupancy and its memory given
+ * back, obstacles, and a 500-million-voxel site that costs memory only where
+ * something is. */
 #include <string.h>
 
 #include "../check.h"
@@ -73,6 +74,15 @@ static int grids_equal(const sylva__grid *a, const sylva__grid *b) {
         if (sylva__grid_shade_raw(a, v) != sylva__grid_shade_raw(b, v)) return 0;
       }
   return 1;
+}
+
+/* The voxels of g with any shade. */
+static long shaded_voxels(const sylva__grid *g) {
+  long n = 0;
+  for (int z = 0; z < g->n[2]; z++)
+    for (int y = 0; y < g->n[1]; y++)
+      for (int x = 0; x < g->n[0]; x++) n += sylva__grid_shade_raw(g, (int[3]){x, y, z}) != 0;
+  return n;
 }
 
 static void test_exact_removal(void) {
@@ -157,6 +167,147 @@ static void test_occupancy(void) {
   sylva__grid_free(&g);
 }
 
+/* The occupancy table of voxel v's chunk (NULL: none). */
+static const sylva__occ *occ_of(const sylva__grid *g, const int v[3]) {
+  size_t cx = (size_t)(v[0] >> 4), cy = (size_t)(v[1] >> 4), cz = (size_t)(v[2] >> 4);
+  return g->occ[(cz * (size_t)g->c[1] + cy) * (size_t)g->c[0] + cx];
+}
+
+/* A chunk's occupancy table lives while a node is in it: made with the first,
+ * grown as nodes come, freed with the last (not before, whatever leaves first), and
+ * another chunk's table is left alone. */
+static void test_occupancy_freed(void) {
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {2, 2, 2};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  int a[40][3], b[3] = {35, 35, 35};
+  for (int i = 0; i < 40; i++) { /* 40 voxels of chunk (0, 0, 0): the table grows twice */
+    a[i][0] = i % 16;
+    a[i][1] = (i * 7) % 16;
+    a[i][2] = i / 16;
+    CHECK_INT(sylva__grid_occupy(&g, a[i], 3), 0);
+  }
+  CHECK_INT(sylva__grid_occupy(&g, a[0], 3), 0); /* a second node of stem 3 in a voxel */
+  CHECK_INT(sylva__grid_occupy(&g, b, 4), 0);
+  CHECK(occ_of(&g, a[0]) != NULL && occ_of(&g, b) != NULL && occ_of(&g, a[0]) != occ_of(&g, b));
+  CHECK_INT(g.occ_count, 2);
+  CHECK(occ_of(&g, a[0])->cap >= 64);
+  for (int i = 39; i >= 0; i--) sylva__grid_vacate(&g, a[i]);
+  CHECK(occ_of(&g, a[0]) != NULL); /* voxel a[0] still holds a node */
+  CHECK_INT(sylva__grid_occupant(&g, a[0]), 3);
+  CHECK_INT(sylva__grid_occupant(&g, a[1]), -1);
+  sylva__grid_vacate(&g, a[0]);
+  CHECK(occ_of(&g, a[0]) == NULL); /* the last node left: the table is gone */
+  CHECK_INT(g.occ_count, 1);
+  CHECK(occ_of(&g, b) != NULL);
+  CHECK_INT(sylva__grid_occupant(&g, b), 4);
+  sylva__grid_vacate(&g, b);
+  CHECK(occ_of(&g, b) == NULL);
+  CHECK_INT(g.occ_count, 0);
+  CHECK_INT(g.occ_bytes, 0);
+  CHECK_INT(sylva__grid_occupy(&g, a[5], 9), 0); /* a table again for a new node */
+  CHECK_INT(sylva__grid_occupant(&g, a[5]), 9);
+  sylva__grid_free(&g);
+}
+
+/* What the grid reports of its memory falls back as nodes leave and their chunks'
+ * tables empty; the shade of nodes stamped and unstamped is zero everywhere again
+ * (the chunks it made stay: they live as long as the grid). */
+static void test_memory_falls(void) {
+  sylva__grid g;
+  double mn[3] = {0, 0, 0}, mx[3] = {3, 3, 3};
+  CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+  size_t empty = sylva__grid_bytes(&g);
+  enum { N = 200 };
+  int vox[N][3];
+  int64_t w[12];
+  for (int q = 1; q <= 12; q++) w[q - 1] = fixed(pow(1.9, -q));
+  sylva__rng r;
+  sylva__rng_seed(&r, 5);
+  int placed = 0;
+  for (int i = 0; i < N; i++) {
+    for (int a = 0; a < 3; a++) vox[placed][a] = (int)sylva__rng_below(&r, (uint32_t)g.n[a]);
+    int rc = sylva__grid_occupy(&g, vox[placed], i % 3); /* three stems */
+    if (rc == SYLVA_EOCCUPIED) continue; /* another stem's voxel */
+    CHECK_INT(rc, 0);
+    placed++;
+  }
+  CHECK(placed > N / 2);
+  size_t occupied = sylva__grid_bytes(&g);
+  CHECK(occupied > empty);
+  for (int i = 0; i < placed; i++) CHECK_INT(stamp(&g, vox[i], 12, w, +1), 0);
+  size_t shaded = sylva__grid_bytes(&g);
+  CHECK(shaded > occupied);
+  /* the first half leaves: the bytes fall as whole tables go, never rise */
+  size_t before = shaded;
+  for (int i = 0; i < placed / 2; i++) {
+    CHECK_INT(stamp(&g, vox[i], 12, w, -1), 0);
+    sylva__grid_vacate(&g, vox[i]);
+    size_t now = sylva__grid_bytes(&g);
+    CHECK(now <= before);
+    before = now;
+  }
+  for (int i = placed / 2; i < placed; i++) {
+    CHECK_INT(stamp(&g, vox[i], 12, w, -1), 0);
+    sylva__grid_vacate(&g, vox[i]);
+  }
+  CHECK_INT(g.occ_count, 0);
+  CHECK_INT(g.occ_bytes, 0);
+  CHECK_INT(sylva__grid_bytes(&g), shaded - (occupied - empty)); /* every table's bytes back */
+  CHECK_INT(shaded_voxels(&g), 0);
+  sylva__grid_free(&g);
+}
+
+/* A batch on several threads adds the shade the stamps give one by one, and taking
+ * it away leaves none: on 1 thread (one part), 2 (8 parts over the 10 chunk
+ * columns, of one or two each) and 8 (a part per column), with the scratch each asks
+ * for, and stamps wide enough to span up to four columns, at the grid's edges too. */
+static void test_stamp_many(void) {
+  double mn[3] = {0, 0, 0}, mx[3] = {8, 1.5, 2.5};
+  enum { N = 150 };
+  sylva__pyramid pyr[3];
+  for (int k = 0; k < 3; k++) { /* half-widths up to 6, 15 and 24 voxels */
+    sylva__pyramid *p = &pyr[k];
+    p->depth = 12 + 4 * k;
+    p->column = fixed(0.001 * (k + 1));
+    for (int q = 1; q <= p->depth; q++) {
+      p->w[q - 1] = fixed(pow(1.8 + 0.1 * k, -q));
+      p->half[q - 1] = q * (k + 1) / 2;
+    }
+  }
+  sylva__stamp items[N];
+  sylva__rng r;
+  sylva__rng_seed(&r, 17);
+  sylva__grid one;
+  CHECK_INT(sylva__grid_init(&one, mn, mx, 0.05), 0);
+  for (int i = 0; i < N; i++) {
+    for (int a = 0; a < 3; a++) items[i].v[a] = (int)sylva__rng_below(&r, (uint32_t)one.n[a]);
+    if (i % 10 == 0) items[i].v[0] = i % 20 ? 0 : one.n[0] - 1; /* at either edge */
+    items[i].p = &pyr[i % 3];
+    CHECK_INT(sylva__grid_stamp(&one, items[i].v, items[i].p, +1), 0);
+  }
+  CHECK_INT(one.c[0], 10);
+  const int threads[] = {1, 2, 8};
+  for (int t = 0; t < 3; t++) {
+    sylva__pool *pool = NULL;
+    CHECK_INT(sylva__pool_create(threads[t], &pool), 0);
+    size_t need = sylva__grid_stamp_scratch(&one, pool, items, N);
+    /* the parts' firsts and every item once at least, some in several parts */
+    CHECK(threads[t] == 1 ? need == 0 : need > (threads[t] == 2 ? 9 : 11) + (size_t)N);
+    size_t *scratch = need ? malloc(need * sizeof *scratch) : NULL;
+    sylva__grid g;
+    CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+    CHECK_INT(sylva__grid_stamp_many(&g, pool, items, N, +1, scratch), 0);
+    CHECK(grids_equal(&g, &one));
+    CHECK_INT(sylva__grid_stamp_many(&g, pool, items, N, -1, scratch), 0);
+    CHECK_INT(shaded_voxels(&g), 0);
+    free(scratch);
+    sylva__grid_free(&g);
+    sylva__pool_destroy(pool);
+  }
+  sylva__grid_free(&one);
+}
+
 static void test_obstacles(void) {
   sylva__grid g;
   double mn[3] = {-1, -1, 0}, mx[3] = {1, 1, 2};
@@ -232,7 +383,8 @@ static void test_wide_pyramid(void) {
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(wide_pyramid), CHECK_TEST(pyramid_and_column), CHECK_TEST(against_definition),
-      CHECK_TEST(exact_removal), CHECK_TEST(occupancy), CHECK_TEST(obstacles),
+      CHECK_TEST(exact_removal), CHECK_TEST(occupancy), CHECK_TEST(occupancy_freed),
+      CHECK_TEST(memory_falls), CHECK_TEST(stamp_many), CHECK_TEST(obstacles),
       CHECK_TEST(sparse_site)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("grid");
