@@ -10,7 +10,6 @@
 #include <sys/mman.h>
 
 #include "alloc.h"
-#include "debug.h"
 #include "site.h"
 
 int sylva__grid_init(sylva__grid *g, const double min[3], const double max[3], double voxel) {
@@ -490,17 +489,15 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
         sum = colsum_get(g, cx, cy, bz);
         if (!sum) return SYLVA_ENOMEM;
       }
-      if (!sign) {
-        /* raised with the blocks, before a write: a block sum read early holds zeros,
-         * and the writes touch nothing but shade entries */
-        int32_t *top = &g->colsum_top[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
-        if (sum && bz > *top) *top = bz;
-        continue;
-      }
+      if (!sign) continue;
       int y0 = clip_lo(ylo, cy << 4) & 15, y1 = clip_hi(yhi, (cy << 4) + 15) & 15;
       int x0 = clip_lo(xlo, cx << 4) & 15, x1 = clip_hi(xhi, (cx << 4) + 15) & 15;
       for (int z = 0; z <= zl; z++) row_runs(c->shade + (z << 8), x0, x1, y0, y1, value);
-      if (sum) row_runs(sum, x0, x1, y0, y1, value);
+      if (sum) {
+        row_runs(sum, x0, x1, y0, y1, value);
+        int32_t *top = &g->colsum_top[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+        if (bz > *top) *top = bz;
+      }
     }
   return SYLVA_OK;
 }
@@ -508,35 +505,8 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
   /* Every block first, then the writes: a stamp that runs out of memory has written
    * nothing, and the blocks it made hold zeros, so the shade is as it was. */
-  int rc = sylva__grid_stamp_prepare(g, v, p);
-  if (!rc) sylva__grid_stamp_prepared(g, v, p, sign);
-  return rc;
-}
-
-int sylva__grid_stamp_prepare(sylva__grid *g, const int v[3], const sylva__pyramid *p) {
-  return stamp(g, v, p, 0, 0, g->c[0] - 1);
-}
-
-void sylva__grid_stamp_prepared(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign) {
-  int rc = stamp(g, v, p, sign, 0, g->c[0] - 1);
-  SYLVA_ASSERT(rc == SYLVA_OK); /* its blocks exist: nothing to make */
-  (void)rc;
-}
-
-bool sylva__grid_stamp_touches(const int v[3], const sylva__pyramid *p, const int m[3]) {
-  /* Reading m sums the entries 0..m.x of its row (m.y, m.z) in its chunk, and of
-   * row m.y in the block sums above; a stamp writes, in each row it covers, the
-   * entries at its first x and one past its last, in each chunk it crosses. */
-  if (m[2] >= v[2]) return false; /* shade falls below the node */
-  int q = v[2] - m[2], h;
-  if (q <= p->depth) {
-    h = p->half[q - 1];
-  } else {
-    if (p->column == 0) return false;
-    h = p->half[p->depth - 1]; /* the column, and the block sums that carry it */
-  }
-  if (m[1] < v[1] - h || m[1] > v[1] + h) return false;
-  return m[0] >= v[0] - h && (m[0] >> 4) <= ((v[0] + h) >> 4);
+  int rc = stamp(g, v, p, 0, 0, g->c[0] - 1);
+  return rc ? rc : stamp(g, v, p, sign, 0, g->c[0] - 1);
 }
 
 /* A batch is written in parts, each a range of chunk columns along x that one thread

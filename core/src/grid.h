@@ -187,16 +187,6 @@ typedef struct sylva__pyramid {
 /** Adds (sign +1) or removes (-1) the shade of one node at voxel v. SYLVA_ENOMEM
  *  leaves the shade as it was. */
 int sylva__grid_stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
-/** The blocks a stamp of p at v writes, made (and the block sums' tops raised)
- *  before any write: SYLVA_ENOMEM leaves the shade as it was. */
-int sylva__grid_stamp_prepare(sylva__grid *g, const int v[3], const sylva__pyramid *p);
-/** Writes a stamp whose blocks sylva__grid_stamp_prepare made: never fails, and
- *  writes shade entries only, so another thread may read, meanwhile, every voxel
- *  sylva__grid_stamp_touches says it does not touch. */
-void sylva__grid_stamp_prepared(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign);
-/** Whether a stamp of p at v writes an entry that the shade of voxel m sums
- *  (conservative: true for some entries that cancel). */
-bool sylva__grid_stamp_touches(const int v[3], const sylva__pyramid *p, const int m[3]);
 
 /** One node's shade in a batch: its voxel and its pyramid. */
 typedef struct sylva__stamp {

@@ -1,10 +1,6 @@
 #include "shoot.h"
 
 #include <math.h>
-#include <pthread.h>
-#include <sched.h>
-#include <stdalign.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -162,142 +158,14 @@ static bool contested(const sylva_world *w, const index_ctx *ix, const double p[
   return false;
 }
 
-/* ---- the shoots' shade on a second thread ----------------------------------------
-
-   With two threads or more, each shoot's shade is stamped on a second thread while
-   the next shoots grow (docs/model.md, "Determinism"). The growing thread makes the
-   stamp's blocks (so a stamp allocates nothing and cannot fail) and queues it;
-   before it reads the shade of a voxel it waits for every queued stamp that writes
-   an entry the voxel sums. Every read therefore sees the grid the one-thread order
-   gives, and the stamps are exact integer sums: the same world on any number of
-   threads.
-
-   The stamps are written one at a time, in their order, by whichever thread holds
-   the pen: the stamper while the queue has work, the growing thread when it must
-   wait for a stamp (it writes the stamps up to it itself, so a stamper the system
-   has not scheduled never stalls the growth). An idle stamper sleeps. */
-
-#define SHADE_QUEUE 128 /* a power of two */
-#define SHADE_SPINS 4096
-
-typedef struct shade_queue {
-  sylva_world *w;
-  sylva__stamp item[SHADE_QUEUE];
-  alignas(64) atomic_size_t head; /* stamps queued (the growing thread) */
-  atomic_bool closed;             /* no stamp will be queued any more */
-  alignas(64) atomic_size_t done; /* stamps written (whoever holds the pen) */
-  atomic_bool pen;                /* held while a stamp is written */
-  alignas(64) atomic_bool asleep; /* the stamper waits on wake */
-  pthread_mutex_t lock;
-  pthread_cond_t wake;
-  int rc;          /* the growing thread's result */
-  double waited; /* seconds the growing thread spent on the stamps */
-} shade_queue;
-
-static double clock_of(const sylva_world *w) {
-  return w->def.clock ? w->def.clock(w->def.clock_ctx) : 0.0;
-}
-
-static void relax(unsigned spins) {
-  if (spins % SHADE_SPINS == SHADE_SPINS - 1) sched_yield();
-}
-
-/* With the pen: writes the queued stamps while fewer than n are written. Returns
- * false when another thread holds the pen. */
-static bool write_stamps(shade_queue *q, size_t n) {
-  if (atomic_exchange_explicit(&q->pen, true, memory_order_acquire)) return false;
-  size_t done = atomic_load_explicit(&q->done, memory_order_relaxed);
-  size_t head = atomic_load_explicit(&q->head, memory_order_acquire);
-  for (; done < n && done < head; done++) {
-    const sylva__stamp *it = &q->item[done & (SHADE_QUEUE - 1)];
-    sylva__grid_stamp_prepared(&q->w->grid, it->v, it->p, +1);
-    atomic_store_explicit(&q->done, done + 1, memory_order_release);
-  }
-  atomic_store_explicit(&q->pen, false, memory_order_release);
-  return true;
-}
-
-/* The growing thread: returns once at least n stamps (all queued) are written. */
-static void queue_wait(shade_queue *q, size_t n) {
-  if (atomic_load_explicit(&q->done, memory_order_acquire) >= n) return;
-  double t0 = clock_of(q->w);
-  for (unsigned spins = 0; atomic_load_explicit(&q->done, memory_order_acquire) < n; spins++)
-    if (!write_stamps(q, n)) relax(spins);
-  q->waited += clock_of(q->w) - t0;
-}
-
-/* Before the shade of voxel v is read: the stamps queued that touch it written. */
-static void queue_settle(shade_queue *q, const int v[3]) {
-  if (!q) return;
-  size_t head = atomic_load_explicit(&q->head, memory_order_relaxed);
-  size_t done = atomic_load_explicit(&q->done, memory_order_acquire);
-  for (size_t i = head; i-- > done;) {
-    const sylva__stamp *it = &q->item[i & (SHADE_QUEUE - 1)];
-    if (sylva__grid_stamp_touches(it->v, it->p, v)) {
-      queue_wait(q, i + 1);
-      return;
-    }
-  }
-}
-
-static void wake_stamper(shade_queue *q) {
-  if (!atomic_load(&q->asleep)) return; /* sequentially consistent with the stamper's */
-  pthread_mutex_lock(&q->lock);
-  pthread_cond_signal(&q->wake);
-  pthread_mutex_unlock(&q->lock);
-}
-
-/* Queues the shade of a grown node, its blocks made; SYLVA_ENOMEM queues nothing. */
-static int queue_push(shade_queue *q, const int v[3], const sylva__pyramid *p) {
-  int rc = sylva__grid_stamp_prepare(&q->w->grid, v, p);
-  if (rc) return rc;
-  size_t head = atomic_load_explicit(&q->head, memory_order_relaxed);
-  queue_wait(q, head + 1 > SHADE_QUEUE ? head + 1 - SHADE_QUEUE : 0); /* a free place */
-  sylva__stamp *it = &q->item[head & (SHADE_QUEUE - 1)];
-  memcpy(it->v, v, sizeof it->v);
-  it->p = p;
-  atomic_store(&q->head, head + 1);
-  wake_stamper(q);
-  return SYLVA_OK;
-}
-
-/* The growing thread, done: the rest written (by the stamper or itself). */
-static void queue_close(shade_queue *q) {
-  queue_wait(q, atomic_load_explicit(&q->head, memory_order_relaxed));
-  atomic_store(&q->closed, true);
-  wake_stamper(q);
-}
-
-/* The stamper: writes the queued stamps until the queue is closed. */
-static void queue_drain(shade_queue *q) {
-  for (unsigned spins = 0;;) {
-    size_t done = atomic_load_explicit(&q->done, memory_order_acquire);
-    if (done < atomic_load_explicit(&q->head, memory_order_acquire)) {
-      if (write_stamps(q, done + 1)) spins = 0;
-      continue;
-    }
-    if (atomic_load_explicit(&q->closed, memory_order_acquire)) return;
-    if (++spins < SHADE_SPINS) continue;
-    /* idle: sleep until a stamp is queued or the queue closes; asleep is set before
-     * head is looked at, and the growing thread sets head before it looks at asleep */
-    pthread_mutex_lock(&q->lock);
-    atomic_store(&q->asleep, true);
-    while (atomic_load(&q->head) == done && !atomic_load(&q->closed))
-      pthread_cond_wait(&q->wake, &q->lock);
-    atomic_store(&q->asleep, false);
-    pthread_mutex_unlock(&q->lock);
-    spins = 0;
-  }
-}
-
 /* ---- one shoot ----------------------------------------------------------------- */
 
 /* Optimal direction Vo = normalise(sum of l_j v_j): unit vectors to the usable marker
  * points, drawn uniformly in the cone (spherical sector) around vd, weighted by their
  * light. */
-static void optimal_direction(sylva_world *w, shade_queue *q, const index_ctx *ix,
-                              const sylva_species_def *d, int markers, const double tip[3],
-                              const double vd[3], int32_t self, double vo[3]) {
+static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_species_def *d,
+                              int markers, const double tip[3], const double vd[3],
+                              int32_t self, double vo[3]) {
   vo[0] = vo[1] = vo[2] = 0.0;
   if (markers <= 0) return;
   double e1[3], e2[3];
@@ -317,7 +185,6 @@ static void optimal_direction(sylva_world *w, shade_queue *q, const index_ctx *i
     int v[3];
     if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) continue;
     if (w->grid.obstacle_count && sylva__grid_blocked(&w->grid, v)) continue;
-    queue_settle(q, v);
     double l = sylva__grid_free_light(&w->grid, v);
     if (l < 0.0) continue; /* occupied */
     if (contested(w, ix, p, r * r, self)) continue;
@@ -328,8 +195,7 @@ static void optimal_direction(sylva_world *w, shade_queue *q, const index_ctx *i
   if (!normalize(vo)) vo[0] = vo[1] = vo[2] = 0.0;
 }
 
-static int grow_shoot(sylva_world *w, shade_queue *q, const index_ctx *ix, int32_t item,
-                      int iteration) {
+static int grow_shoot(sylva_world *w, const index_ctx *ix, int32_t item, int iteration) {
   const sylva__sprout *sp = &w->sprouts.data[item];
   sylva__skeleton *s = &w->nodes;
   sylva__stem *st = &w->stems[sp->stem];
@@ -357,7 +223,7 @@ static int grow_shoot(sylva_world *w, shade_queue *q, const index_ctx *ix, int32
     }
     double p0[3] = {s->x[tip], s->y[tip], s->z[tip]};
     double vo[3];
-    optimal_direction(w, q, ix, d, markers, p0, vd, item, vo);
+    optimal_direction(w, ix, d, markers, p0, vd, item, vo);
     double vu[3];
     for (int i = 0; i < 3; i++) vu[i] = vd[i] + d->mu * vo[i] + d->gamma * d->tropism[i];
     if (!normalize(vu)) memcpy(vu, vd, sizeof vu);
@@ -374,94 +240,29 @@ static int grow_shoot(sylva_world *w, shade_queue *q, const index_ctx *ix, int32
   return SYLVA_OK;
 }
 
-/* The shade of a node the current iteration grew: its species' pyramid is made. */
-static const sylva__pyramid *new_shade(const sylva_world *w, int32_t slot) {
-  const sylva__stem *st = &w->stems[w->nodes.stem[slot]];
-  return sylva__species_shade_at(&w->species[st->species], w->nodes.birth[slot] - st->born);
-}
-
-/* The shoots in the iteration's stem order, each shoot's shade stamped before the
- * next shoot grows (on the stamper's thread when q is not NULL). */
-static int grow_all(sylva_world *w, shade_queue *q, const index_ctx *ix, int iteration,
-                    double *shade_time) {
-  for (size_t o = 0; o < w->order.len; o++) {
-    int32_t stem = w->order.data[o];
-    for (int32_t i = w->stem_first.data[stem]; i < w->stem_first.data[stem + 1]; i++) {
-      int rc = grow_shoot(w, q, ix, i, iteration);
-      if (rc) return rc;
-      double t0 = q ? 0.0 : clock_of(w);
-      for (size_t k = 0; k < w->shoot.len; k++) {
-        int32_t slot = w->shoot.data[k];
-        int v[3];
-        sylva__node_voxel(w, slot, v);
-        rc = q ? queue_push(q, v, new_shade(w, slot))
-               : sylva__grid_stamp(&w->grid, v, new_shade(w, slot), +1);
-        if (rc) return rc;
-        w->mark.shaded = (size_t)slot + 1; /* queued: written before the phase returns */
-      }
-      if (!q) *shade_time += clock_of(w) - t0;
-    }
-  }
-  return SYLVA_OK;
-}
-
-typedef struct pipeline {
-  shade_queue *q;
-  const index_ctx *ix;
-  int iteration;
-} pipeline;
-
-/* The pool's two pieces: 0 grows the shoots, 1 stamps their shade. Whichever thread
- * takes a piece, the other piece runs beside it or after it: the growing thread
- * waits only for stamps already queued, and the stamper only for the queue. */
-static void grow_or_stamp(void *ctx, size_t begin, size_t end) {
-  pipeline *pl = ctx;
-  for (size_t k = begin; k < end; k++) {
-    if (k == 1) {
-      queue_drain(pl->q);
-      continue;
-    }
-    double unused = 0.0;
-    pl->q->rc = grow_all(pl->q->w, pl->q, pl->ix, pl->iteration, &unused);
-    queue_close(pl->q);
-  }
-}
-
 int sylva__shoots(sylva_world *w, int iteration) {
   index_ctx ix;
   int rc = build_index(w, &ix);
   if (rc) return rc;
   if (SYLVA__VEC_RESERVE(w->order, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
-  /* the pyramids of this iteration's nodes, made before any shoot grows */
-  for (int k = 0; k < w->stem_count; k++) {
-    const sylva__stem *st = &w->stems[k];
-    rc = sylva__species_shade_reserve(&w->species[st->species], iteration - st->born);
-    if (rc) return rc;
-  }
   sylva__rng_permutation(&w->rng, w->order.data, w->stem_count);
   w->order.len = (size_t)w->stem_count;
   double shade_time = 0.0;
-  if (sylva__pool_threads(w->pool) < 2) {
-    rc = grow_all(w, NULL, &ix, iteration, &shade_time);
-  } else {
-    shade_queue queue, *q = &queue;
-    q->w = w;
-    atomic_init(&q->head, 0);
-    atomic_init(&q->done, 0);
-    atomic_init(&q->closed, false);
-    atomic_init(&q->pen, false);
-    atomic_init(&q->asleep, false);
-    pthread_mutex_init(&q->lock, NULL);
-    pthread_cond_init(&q->wake, NULL);
-    q->rc = SYLVA_OK;
-    q->waited = 0.0;
-    pipeline pl = {q, &ix, iteration};
-    sylva__pool_for(w->pool, 2, 1, grow_or_stamp, &pl);
-    rc = q->rc;
-    shade_time = q->waited; /* the shade's share of the phase: the shoots' waits */
-    pthread_cond_destroy(&q->wake);
-    pthread_mutex_destroy(&q->lock);
+  for (size_t o = 0; o < w->order.len; o++) {
+    int32_t stem = w->order.data[o];
+    for (int32_t i = w->stem_first.data[stem]; i < w->stem_first.data[stem + 1]; i++) {
+      rc = grow_shoot(w, &ix, i, iteration);
+      if (rc) return rc;
+      /* the shoot's nodes shade the world before the next shoot grows */
+      double t0 = w->def.clock ? w->def.clock(w->def.clock_ctx) : 0.0;
+      for (size_t k = 0; k < w->shoot.len; k++) {
+        rc = sylva__shade_node(w, w->shoot.data[k], +1);
+        if (rc) return rc;
+        w->mark.shaded = (size_t)w->shoot.data[k] + 1;
+      }
+      if (w->def.clock) shade_time += w->def.clock(w->def.clock_ctx) - t0;
+    }
   }
   w->journal.phase_seconds[SYLVA_PHASE_SHADE] = shade_time;
-  return rc;
+  return SYLVA_OK;
 }
