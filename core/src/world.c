@@ -106,10 +106,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->light);
   sylva__free(w->q);
   sylva__free(w->pipe);
-  sylva__free(w->sap);
-  sylva__free(w->leaves);
   sylva__free(w->remap);
-  sylva__free(w->canopy);
   sylva__free(w->cols);
   sylva__free(w->foot);
   sylva__free(w->sprouts.data);
@@ -1024,11 +1021,15 @@ static int reserve_scratch(sylva_world *w) {
       grow_scratch((void **)&w->light, n, sizeof *w->light) ||
       grow_scratch((void **)&w->q, n, sizeof *w->q) ||
       grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
-      grow_scratch((void **)&w->sap, n, sizeof *w->sap) ||
-      grow_scratch((void **)&w->leaves, n, sizeof *w->leaves) ||
-      grow_scratch((void **)&w->remap, n, sizeof *w->remap) ||
-      grow_scratch((void **)&w->canopy, 2 * n, sizeof *w->canopy))
+      grow_scratch((void **)&w->remap, n, sizeof *w->remap))
     return SYLVA_ENOMEM;
+  /* the later phases' views of light's block (world_impl.h) */
+  _Static_assert(sizeof *w->light >= sizeof *w->sap && sizeof *w->light >= sizeof *w->leaves &&
+                     sizeof *w->light >= 2 * sizeof *w->canopy,
+                 "sap, leaves and the canopy's two lists fit in light's block");
+  w->sap = w->light;
+  w->leaves = (int32_t *)(void *)w->light;
+  w->canopy = (int32_t *)(void *)w->light;
   w->scratch_cap = n;
   return SYLVA_OK;
 }
@@ -1363,7 +1364,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->site = sylva__grid_site_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (4 * sizeof(double) + 4 * sizeof(int32_t)) +
+  out->other = w->scratch_cap * (3 * sizeof(double) + sizeof(int32_t)) +
                (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof(uint32_t) +
                ((size_t)w->col_n[0] * (size_t)w->col_n[1] + 7) / 8 +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
