@@ -30,7 +30,7 @@ typedef struct radii_ctx {
 
 /* Stems [begin, end): each stem's nodes apex to root (its slots downwards, as its
  * children sit above their parents), writing only that stem's radii and pipes; a
- * radius reported this iteration is marked in w->remap. */
+ * radius reported this iteration is marked SYLVA__NODE_THICKER. */
 static void radii_stems(void *arg, size_t begin, size_t end) {
   const radii_ctx *c = arg;
   sylva_world *w = c->w;
@@ -53,11 +53,10 @@ static void radii_stems(void *arg, size_t begin, size_t end) {
         double kept = pow(pow((double)s->radius[i], v) + heartwood * sap[i], inv_v);
         if (kept > r) r = kept;
       }
-      w->remap[i] = 0;
       if (r > (double)s->radius[i]) {
         float old = s->radius[i];
         s->radius[i] = (float)r;
-        w->remap[i] = s->radius[i] != old && s->birth[i] != c->iteration;
+        if (s->radius[i] != old && s->birth[i] != c->iteration) s->flags[i] |= SYLVA__NODE_THICKER;
       }
       if (s->parent[i] >= 0) {
         /* a tip's pipes are functional; a cut end (a terminal wider than a tip) has none */
@@ -84,7 +83,8 @@ int sylva__radii(sylva_world *w, int iteration) {
   sylva__pool_for(w->pool, (size_t)w->stem_count, 1, radii_stems, &c);
   /* the radii that changed, in id order (slot order) */
   for (size_t i = 0; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE) || !w->remap[i]) continue;
+    if (!(s->flags[i] & SYLVA__NODE_THICKER)) continue;
+    s->flags[i] &= (uint8_t)~SYLVA__NODE_THICKER;
     if (SYLVA__VEC_RESERVE(w->radii, w->radii.len + 1)) return SYLVA_ENOMEM;
     w->radii.data[w->radii.len++] = (sylva_radius_change){s->id[i], s->radius[i]};
   }

@@ -95,7 +95,8 @@ static int doom_branch(sylva_world *w, size_t i, int iteration) {
  * stem's height is doomed unless it reaches the top tenth of the height (a
  * codominant stem is no low branch), so the leader is never cut whichever axis
  * carries it. One pass finds every stem's highest node, one backward pass every
- * subtree's reach. Uses w->remap and w->pipe as scratch. Returns the number doomed,
+ * subtree's reach. Uses w->pipe and the second half of light's block (the first
+ * holds the leaf counts, world_impl.h) as scratch. Returns the number doomed,
  * or SYLVA_ENOMEM. */
 static int64_t lift_crowns(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
@@ -116,7 +117,7 @@ static int64_t lift_crowns(sylva_world *w, int iteration) {
     if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0 && reach[i] > reach[s->parent[i]])
       reach[s->parent[i]] = reach[i];
   int64_t doomed = 0;
-  int32_t *next = w->remap; /* on the main path: the path's next node */
+  int32_t *next = w->leaves + w->scratch_cap; /* on the main path: the path's next node */
   for (int k = 0; k < w->stem_count; k++) {
     double lift = w->species[w->stems[k].species].def.lift;
     int32_t root = w->stems[k].root_slot, tk = top[k];

@@ -18,6 +18,8 @@ enum {
   SYLVA__NODE_SCAR = 4,    /* its lateral branch was shed: the bud does not sprout again */
   SYLVA__NODE_DOOMED = 8,  /* shedding: removed at the end of this phase */
   SYLVA__NODE_BARE = 16,   /* its stem is dead: it bears no leaves (docs/model.md, "Stands") */
+  SYLVA__NODE_THICKER = 32, /* radii: its radius grew and is reported; set and cleared
+                               inside the radii phase, as DOOMED inside shedding */
   /* the bits a live node carries between phases (and in a snapshot) */
   SYLVA__NODE_STATE = SYLVA__NODE_ALIVE | SYLVA__NODE_LATERAL | SYLVA__NODE_SCAR | SYLVA__NODE_BARE
 };

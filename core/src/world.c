@@ -106,7 +106,6 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->light);
   sylva__free(w->q);
   sylva__free(w->pipe);
-  sylva__free(w->remap);
   sylva__free(w->cols);
   sylva__free(w->foot);
   sylva__free(w->sprouts.data);
@@ -1020,16 +1019,13 @@ static int reserve_scratch(sylva_world *w) {
   if (SYLVA__VEC_RESERVE(w->stem_nodes, n) ||
       grow_scratch((void **)&w->light, n, sizeof *w->light) ||
       grow_scratch((void **)&w->q, n, sizeof *w->q) ||
-      grow_scratch((void **)&w->pipe, n, sizeof *w->pipe) ||
-      grow_scratch((void **)&w->remap, n, sizeof *w->remap))
+      grow_scratch((void **)&w->pipe, n, sizeof *w->pipe))
     return SYLVA_ENOMEM;
   /* the later phases' views of light's block (world_impl.h) */
-  _Static_assert(sizeof *w->light >= sizeof *w->sap && sizeof *w->light >= sizeof *w->leaves &&
-                     sizeof *w->light >= 2 * sizeof *w->canopy,
-                 "sap, leaves and the canopy's two lists fit in light's block");
+  _Static_assert(sizeof *w->light == sizeof *w->sap && sizeof *w->light == 2 * sizeof(int32_t),
+                 "light's block holds a double or two int32s a slot");
   w->sap = w->light;
-  w->leaves = (int32_t *)(void *)w->light;
-  w->canopy = (int32_t *)(void *)w->light;
+  w->leaves = w->canopy = w->remap = (int32_t *)(void *)w->light;
   w->scratch_cap = n;
   return SYLVA_OK;
 }
@@ -1364,7 +1360,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
   out->voxels = sylva__grid_bytes(&w->grid);
   out->site = sylva__grid_site_bytes(&w->grid);
   out->skeleton = sylva__skeleton_bytes(&w->nodes);
-  out->other = w->scratch_cap * (3 * sizeof(double) + sizeof(int32_t)) +
+  out->other = w->scratch_cap * 3 * sizeof(double) +
                (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof(uint32_t) +
                ((size_t)w->col_n[0] * (size_t)w->col_n[1] + 7) / 8 +
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +

@@ -146,9 +146,11 @@ struct sylva_world {
   /* Per-step scratch, reused across steps. Each buffer has one meaning, named by the
    * phase that fills it; none is reused by a later phase for something else. */
   /* by slot, sized to the skeleton's capacity (sylva__reserve_scratch). light's
-   * block is free once allocation has read it, so sap, leaves and canopy, whose
-   * phases come later and never overlap, are views of it: 8 bytes a slot instead of
-   * 24 (docs/performance.md, "Memory"). */
+   * block (a double, or two int32s, a slot) is free once allocation has read it, so
+   * the scratch of the later phases, which never overlap, are views of it: sap
+   * (radii), leaves and the crown lift's path (shedding: the block's two halves),
+   * canopy (stats) and remap (compaction). 24 bytes a slot instead of 52
+   * (docs/performance.md, "Memory"). */
   double *light;         /* light: L_i of the pass at T, read by allocation (owns the block) */
   double *q;             /* light: Q_i, the light of the node and its subtree, of the
                             last light pass (T for allocation, T + 1 after shoots) */
@@ -156,8 +158,9 @@ struct sylva_world {
   double *sap;           /* radii: the functional pipes of the node's tips, sum of r_tip^v
                             (light's block) */
   int32_t *leaves;       /* shedding: leaf-bearing nodes of the node's subtree (light's
+                            block, its first half) */
+  int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped (light's
                             block) */
-  int32_t *remap;        /* compaction: each old slot's new slot, -1 if dropped */
   int32_t *canopy;       /* canopy: leaf-bearing slots grouped by stem, then (from
                             scratch_cap) the same in slot order (2 x scratch_cap int32s:
                             light's block) */

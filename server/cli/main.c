@@ -1,4 +1,5 @@
 /* sylva: the command-line entry point; dispatches to the subcommands. */
+#include <malloc.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -53,6 +54,12 @@ static void usage(FILE *f) {
 }
 
 int main(int argc, char **argv) {
+  /* Blocks of 1 MB and more (a world's voxel slabs, skeleton and per-slot scratch)
+   * straight from the system: grown in place by mremap and given back whole when
+   * freed. Left to glibc's sliding threshold they sat in the heap below 32 MB, and
+   * every growth left the old copy behind as a hole: 94 MB of a 1.17 GB hectare
+   * (docs/performance.md, "Memory"). */
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
   if (argc < 2) {
     usage(stderr);
     return CLI_EXIT_USAGE;

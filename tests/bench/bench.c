@@ -18,6 +18,7 @@
  *   bench [all|fig17b|stand5|stand100|shade|floor|store5|store100|obstacles|years|street10|thinning]
  *         [--scenarios DIR]
  *         [--edits N] [--threads N] */
+#include <malloc.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -584,6 +585,7 @@ static void grow_stored(const char *name, sylva_world *w, int limit, size_t targ
 }
 
 int main(int argc, char **argv) {
+  mallopt(M_MMAP_THRESHOLD, 1 << 20); /* as the sylva program does (server/cli/main.c) */
   const char *what = "all", *dir = SOURCE_ROOT "/scenarios";
   int edits = 100000;
   for (int i = 1; i < argc; i++) {
