@@ -145,7 +145,8 @@ void sylva__check_world(const sylva_world *w, sylva__boundary at) {
       SYLVA_ASSERT(w->order.data[o] >= 0 && w->order.data[o] < w->stem_count);
     /* room for the rest of the step (reserve_rest) */
     SYLVA_ASSERT(w->radii.cap >= w->mark.count && w->shed.cap >= w->nodes.count &&
-                 w->stats.cap >= (size_t)w->stem_count);
+                 w->stats.cap >= (size_t)w->stem_count && w->cells.cap >= w->nodes.live &&
+                 w->stamps.cap >= w->nodes.live);
   }
 }
 #endif

@@ -238,7 +238,7 @@ static size_t cut(sylva_world *w, bool (*hit)(const sylva_world *w, size_t i, co
     if (!announced_only || s->birth[i] != T) roots[(*root_count)++] = s->id[i];
   }
   if (!doomed) return 0;
-  sylva__remove_doomed(w, doomed, true);
+  sylva__remove_doomed(w, true);
   return doomed;
 }
 

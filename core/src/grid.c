@@ -553,6 +553,20 @@ size_t sylva__grid_stamp_scratch(const sylva__grid *g, const sylva__pool *pool,
   return parts == 1 ? 0 : (size_t)parts + 1 + count_listings(g, parts, items, n, NULL);
 }
 
+size_t sylva__grid_stamp_scratch_max(const sylva__grid *g, const sylva__pool *pool, size_t n,
+                                     int half) {
+  int parts = stamp_part_count(g, pool);
+  if (parts == 1) return 0;
+  /* A stamp writes the columns of 2 half + 1 voxels (stamp_span): at most
+   * ceil(2 half / 16) + 1. Every part has at least columns / parts of them: p > 1
+   * parts written hold the p - 2 between the first and the last whole, and one
+   * column at least of each of those two. */
+  int64_t columns = (((int64_t)2 * half + 15) >> 4) + 1, least = g->c[0] / parts;
+  int64_t per = columns == 1 ? 1 : (columns - 2) / least + 2;
+  if (per > parts) per = parts;
+  return (size_t)parts + 1 + n * (size_t)per;
+}
+
 typedef struct stamp_many_ctx {
   sylva__grid *g;
   const sylva__stamp *items;

@@ -198,6 +198,10 @@ typedef struct sylva__stamp {
  *  this pool: the lists of the items each thread's columns take; 0 on one thread. */
 size_t sylva__grid_stamp_scratch(const sylva__grid *g, const sylva__pool *pool,
                                  const sylva__stamp *items, size_t n);
+/** The most entries sylva__grid_stamp_scratch() can ask for n items whose pyramids'
+ *  widest layers are at most half voxels wide on either side, wherever they are. */
+size_t sylva__grid_stamp_scratch_max(const sylva__grid *g, const sylva__pool *pool, size_t n,
+                                     int half);
 /** Adds (+1) or removes (-1) the shade of n nodes on the pool's threads (NULL: the
  *  caller's alone). Each thread writes the chunk columns of its own range of x, and
  *  the sums are exact integers, so the grid is the one the stamps give one by one in

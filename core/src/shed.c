@@ -5,51 +5,32 @@
 
 #include "world_impl.h"
 
-/* A removed node's voxel, slot and count; its shade is gone already. */
-static void remove_rest(sylva_world *w, int32_t i, bool pruned) {
-  sylva__skeleton *s = &w->nodes;
-  int v[3];
-  sylva__node_voxel(w, i, v);
-  sylva__grid_vacate(&w->grid, v);
-  s->flags[i] = 0;
-  s->live--;
-  if (pruned)
-    w->stems[s->stem[i]].stats.pruned++;
-  else
-    w->stems[s->stem[i]].stats.shed++;
-}
-
-int sylva__remove_node(sylva_world *w, int32_t i, bool pruned) {
-  int rc = sylva__shade_node(w, i, -1);
-  if (rc) return rc;
-  remove_rest(w, i, pruned);
+int sylva__reserve_removal(sylva_world *w) {
+  int half = 0;
+  for (int k = 0; k < w->species_count; k++) {
+    int h = sylva__species_shade_reach(&w->species[k]);
+    if (h > half) half = h;
+  }
+  size_t n = w->nodes.live;
+  if (SYLVA__VEC_RESERVE(w->cells, n) || SYLVA__VEC_RESERVE(w->stamps, n) ||
+      SYLVA__VEC_RESERVE(w->stamp_lists, sylva__grid_stamp_scratch_max(&w->grid, w->pool, n, half)))
+    return SYLVA_ENOMEM;
   return SYLVA_OK;
 }
 
-void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
+void sylva__remove_doomed(sylva_world *w, bool pruned) {
   sylva__skeleton *s = &w->nodes;
   /* Shade sums are exact integers, so the removals may run in any order and on any
    * number of threads: take them chunk by chunk (z, y, x of 16-voxel chunks) so that
-   * neighbouring pyramids share the cache. Without memory for that order they run
-   * one by one in slot order, and without memory for the lists of the stamps each
-   * thread takes, on the caller's thread alone: to the same grid, so this never
-   * fails for want of it. Each node's pyramid is in its species' table already, as
-   * it cast its shade through it. */
-  if (SYLVA__VEC_RESERVE(w->cells, doomed) || SYLVA__VEC_RESERVE(w->stamps, doomed)) {
-    for (size_t i = 0; i < s->count; i++) {
-      if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
-      int rc = sylva__remove_node(w, (int32_t)i, pruned);
-      SYLVA_ASSERT(rc == SYLVA_OK); /* its blocks exist: removing allocates nothing */
-      (void)rc;
-    }
-    return;
-  }
+   * neighbouring pyramids share the cache. Each node's pyramid is in its species'
+   * table already, as it cast its shade through it. */
   w->cells.len = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
     int v[3];
     sylva__node_voxel(w, (int32_t)i, v);
     int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
+    SYLVA_ASSERT(w->cells.len < w->cells.cap);
     w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
   }
   qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
@@ -61,11 +42,22 @@ void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned) {
     sylva__node_voxel(w, i, it->v);
     it->p = sylva__species_shade_at(&w->species[st->species], s->birth[i] - st->born);
   }
-  sylva__pool *pool = w->pool;
-  size_t lists = sylva__grid_stamp_scratch(&w->grid, pool, w->stamps.data, w->stamps.len);
-  if (SYLVA__VEC_RESERVE(w->stamp_lists, lists)) pool = NULL;
-  sylva__grid_stamp_many(&w->grid, pool, w->stamps.data, w->stamps.len, -1, w->stamp_lists.data);
-  for (size_t k = 0; k < w->cells.len; k++) remove_rest(w, w->cells.data[k].item, pruned);
+  SYLVA_ASSERT(sylva__grid_stamp_scratch(&w->grid, w->pool, w->stamps.data, w->stamps.len) <=
+               w->stamp_lists.cap);
+  sylva__grid_stamp_many(&w->grid, w->pool, w->stamps.data, w->stamps.len, -1, w->stamp_lists.data);
+  /* then their voxels, slots and counts */
+  for (size_t k = 0; k < w->cells.len; k++) {
+    int32_t i = w->cells.data[k].item;
+    int v[3];
+    sylva__node_voxel(w, i, v);
+    sylva__grid_vacate(&w->grid, v);
+    s->flags[i] = 0;
+    s->live--;
+    if (pruned)
+      w->stems[s->stem[i]].stats.pruned++;
+    else
+      w->stems[s->stem[i]].stats.shed++;
+  }
 }
 
 /* Dooms the branch that starts at node i, born before or at `iteration`: a lateral
@@ -273,7 +265,7 @@ int sylva__shed(sylva_world *w, int iteration) {
     }
   }
   if (!doomed) return SYLVA_OK;
-  sylva__remove_doomed(w, doomed, false);
+  sylva__remove_doomed(w, false);
   /* the removed subtrees no longer send light to their parents */
   sylva__light_collect(w, iteration + 1, NULL);
   return SYLVA_OK;

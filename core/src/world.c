@@ -128,6 +128,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->stem_first.data);
   sylva__free(w->stem_top.data);
   sylva__free(w->crown_bins.data);
+  sylva__free(w->lit.data);
   sylva__free(w->cells.data);
   sylva__free(w->stamps.data);
   sylva__free(w->stamp_lists.data);
@@ -264,13 +265,22 @@ static double chain_weight(const sylva__species *sp, double b) {
   return (x / (1.0 - x)) / (y / (1.0 - y));
 }
 
+/* The half-width of layer q of every pyramid of the species. */
+static int shade_half(const sylva__species *sp, int q) {
+  return (int)floor((double)q * sp->def.shade_spread);
+}
+
+int sylva__species_shade_reach(const sylva__species *sp) {
+  return shade_half(sp, sp->def.pyramid_depth);
+}
+
 static void make_shade(const sylva__species *sp, int t, sylva__pyramid *p) {
   double b = sylva__species_b(sp, t);
   p->depth = sp->def.pyramid_depth;
   double weight = sp->def.shade_weight * chain_weight(sp, b);
   for (int q = 1; q <= p->depth; q++) {
     p->w[q - 1] = (int64_t)floor(pow(b, -(double)q) * weight * SYLVA__SHADE_ONE + 0.5);
-    p->half[q - 1] = (int)floor((double)q * sp->def.shade_spread);
+    p->half[q - 1] = shade_half(sp, q);
   }
   /* the column: a point below a crown sums the nodes above it in its voxel column,
    * s times as many per metre of shoot in a voxel s^2 times smaller: weighted s, the
@@ -491,7 +501,7 @@ static void compact_nodes(sylva_world *w);
 
 /* Cuts the branches of other stems in a new trunk's voxels, each with what it carries,
  * as a prune would (docs/model.md, "Species in years", nursery); room was reserved (pruned_ids,
- * scratch). Never fails. */
+ * scratch, the removal). Never fails. */
 static void clear_trunks(sylva_world *w, int (*cuts)[3], int ncuts) {
   int T = w->iteration;
   w->pruned_ids.len = 0;
@@ -845,7 +855,7 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
       reserve_plant_index(w, (size_t)w->plant_count + 1) ||
       SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + def->root_count) + 1) ||
       (ncuts && SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count)) ||
-      (ncuts && reserve_scratch(w)))
+      (ncuts && (reserve_scratch(w) || sylva__reserve_removal(w))))
     rc = SYLVA_ENOMEM;
   int pid = w->plant_count;
   double stock, vigour;
@@ -958,7 +968,8 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   /* a world that prunes reports conflicts from now on: room for them first */
   bool reports = w->reports;
   w->reports = true;
-  if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count) ||
+  if (reserve_scratch(w) || sylva__reserve_removal(w) ||
+      SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count) ||
       SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
       sylva__conflicts_reserve(w, 0)) {
     w->reports = reports;
@@ -1015,6 +1026,8 @@ static int reserve_scratch(sylva_world *w) {
    * slots below with the rest */
   if (SYLVA__VEC_RESERVE(w->stem_nodes_first, (size_t)w->stem_count + 1)) return SYLVA_ENOMEM;
   size_t n = w->nodes.cap;
+  /* the lit slots of a light pass under a site sky (sylva__light_collect) */
+  if (w->grid.sky_count && SYLVA__VEC_RESERVE(w->lit, n)) return SYLVA_ENOMEM;
   if (n <= w->scratch_cap) return SYLVA_OK;
   if (SYLVA__VEC_RESERVE(w->stem_nodes, n) ||
       grow_scratch((void **)&w->light, n, sizeof *w->light) ||
@@ -1035,11 +1048,12 @@ int sylva__reserve_scratch(sylva_world *w) { return reserve_scratch(w); }
 /* Room for everything the phases after the shoots write, so that from there on a
  * step cannot fail: per-slot scratch for the grown skeleton (with the grouping of
  * its slots by stem that radii and conflicts use), radius changes (at most
- * one per node born before T), shed roots (at most every node), the nodes added and
- * the stats. (Shedding can do without its removal order, sylva__shed.) */
+ * one per node born before T), shed roots (at most every node), the removal of
+ * shed and pruned nodes (at most every node), the nodes added and the stats. */
 static int reserve_rest(sylva_world *w) {
   size_t count = w->nodes.count;
-  if (reserve_scratch(w) || SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
+  if (reserve_scratch(w) || sylva__reserve_removal(w) ||
+      SYLVA__VEC_RESERVE(w->radii, w->mark.count) ||
       SYLVA__VEC_RESERVE(w->shed, count) ||
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
       SYLVA__VEC_RESERVE(w->leaf_changes, count) ||
@@ -1366,6 +1380,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->sprouts.cap * sizeof(sylva__sprout) + w->added.cap * sizeof(sylva_node_info) +
                w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +
+               w->lit.cap * sizeof(sylva__lit) +
                w->cells.cap * sizeof(sylva__keyed) + w->stamps.cap * sizeof(sylva__stamp) +
                w->stamp_lists.cap * sizeof(size_t) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +

@@ -74,6 +74,13 @@ typedef struct sylva__keyed {
   int32_t item;
 } sylva__keyed;
 
+/** A node that collects light in a pass under a site sky, with the age it collects
+ *  at (sylva__light_collect). */
+typedef struct sylva__lit {
+  int32_t slot;
+  int32_t age;
+} sylva__lit;
+
 /** Orders keyed items by key, then item. */
 int sylva__keyed_cmp(const void *a, const void *b);
 
@@ -165,6 +172,8 @@ struct sylva_world {
                             scratch_cap) the same in slot order (2 x scratch_cap int32s:
                             light's block) */
   size_t scratch_cap;
+  SYLVA__VEC(sylva__lit) lit; /* light: the lit slots of a pass under a site sky, in slot
+                                 order (room: the skeleton's capacity with a sky) */
   /* by stem */
   SYLVA__VEC(double) clock_next;  /* allocation: each stem's clock after this season,
                                      committed once the step cannot fail */
@@ -327,6 +336,8 @@ int sylva__species_shade_reserve(sylva__species *sp, int t);
 /** The shade of local birth iteration t, made already (sylva__species_shade_reserve):
  *  safe on several threads at once. */
 const sylva__pyramid *sylva__species_shade_at(const sylva__species *sp, int t);
+/** The half-width of the widest (deepest) layer of each of the species' pyramids. */
+int sylva__species_shade_reach(const sylva__species *sp);
 
 /** Rounds p to the stored float position f and finds its voxel; false if outside. */
 bool sylva__voxel_of(const sylva_world *w, const double p[3], float f[3], int v[3]);
@@ -375,12 +386,15 @@ int sylva__shade_node(sylva_world *w, int32_t slot, int sign);
 int sylva__radii(sylva_world *w, int iteration);
 /** Shedding of dark lateral branches (needs a fresh light pass in q). */
 int sylva__shed(sylva_world *w, int iteration);
-/** Removes a node marked for removal: its shade, its voxel, its slot; counted in
- *  its stem's stats.pruned or stats.shed. */
-int sylva__remove_node(sylva_world *w, int32_t slot, bool pruned);
-/** Removes the doomed nodes, the count given, as sylva__remove_node does one by
- *  one: their shade on the world's threads, at once. Never fails. */
-void sylva__remove_doomed(sylva_world *w, size_t doomed, bool pruned);
+/** Room for sylva__remove_doomed to remove every live node: its order (cells), their
+ *  shade (stamps) and the lists of each thread's stamps on the world's pool. Made
+ *  before the point after which a call cannot fail (reserve_rest, a prune, a new
+ *  trunk's cuts); the skeleton and the pool must not grow before the removal. */
+int sylva__reserve_removal(sylva_world *w);
+/** Removes the doomed nodes: their shade on the world's threads,
+ *  at once, then their voxels and slots, each counted in its stem's stats.pruned or
+ *  stats.shed. Never fails: its room was reserved (sylva__reserve_removal). */
+void sylva__remove_doomed(sylva_world *w, bool pruned);
 /** Groups the live slots by stem, in slot order, into stem_nodes (stem k's from
  *  stem_nodes_first[k] to [k + 1]); room for both was reserved. */
 void sylva__group_by_stem(sylva_world *w);

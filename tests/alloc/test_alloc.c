@@ -15,6 +15,9 @@
  * A failure the library absorbs (a cache or a shrink it can do without) lets the
  * call succeed; the transient run must still end with the same bytes.
  *
+ * With ALLOC_THREADS=n in the environment, the worlds grow on n threads (a world
+ * whose pool could not be made grows on one: the same bytes).
+ *
  *   test_alloc SCENARIO_DIR SCENARIO ITERATIONS_BEFORE_SAVE ITERATIONS_AFTER_LOAD [TEST] */
 #include <stdint.h>
 #include <string.h>
@@ -49,6 +52,15 @@ static void f_free(void *p, void *ctx) {
   (void)ctx;
   free(p);
 }
+
+/* The run of every test (main sets it from the command line and
+ * ALLOC_THREADS). */
+static struct {
+  const char *name;
+  sylva_scenario *sc;
+  int before_save, after_load;
+  int threads;
+} cfg;
 
 /* ---- what a run produced -------------------------------------------------------- */
 
@@ -205,6 +217,7 @@ static void run(const sylva_scenario *sc, int before_save, int after_load, fault
     CHECK(strstr(err, "out of memory") != NULL);
     if (!out_of_memory(rc, f, o) || f->persistent) goto stopped;
   }
+  (void)sylva_world_set_threads(w, cfg.threads);
   if (!grow(&w, before_save, f, o) || !save(w, &image, &size, f, o)) goto stopped;
   while ((rc = sylva_snapshot_load(image, size, &loaded)) != 0) {
     CHECK(loaded == NULL);
@@ -214,6 +227,7 @@ static void run(const sylva_scenario *sc, int before_save, int after_load, fault
   sylva_world_destroy(w);
   w = loaded;
   loaded = NULL;
+  (void)sylva_world_set_threads(w, cfg.threads);
   if (!edit(w, f, o) || !grow(&w, after_load, f, o)) goto stopped;
   for (int k = 0; k < sylva_world_stem_count(w); k++) {
     sylva_stem_stats st;
@@ -280,13 +294,6 @@ static long sweep(const sylva_scenario *sc, int before_save, int after_load, boo
 }
 
 /* ---- the tests ----------------------------------------------------------------- */
-
-/* The run of every test (main sets it from the command line). */
-static struct {
-  const char *name;
-  sylva_scenario *sc;
-  int before_save, after_load;
-} cfg;
 
 /* The reference run: the failing allocator, nothing refused; made once. */
 static outcome ref;
@@ -355,6 +362,8 @@ int main(int argc, char **argv) {
   cfg.name = argv[2];
   cfg.sc = scenario_file(argv[1], argv[2]);
   cfg.before_save = atoi(argv[3]), cfg.after_load = atoi(argv[4]);
+  const char *threads = getenv("ALLOC_THREADS");
+  cfg.threads = threads ? atoi(threads) : 1;
   static const check_test tests[] = {
       CHECK_TEST(partial_allocator), CHECK_TEST(reference), CHECK_TEST(transient),
       CHECK_TEST(persistent)};

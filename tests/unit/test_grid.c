@@ -308,6 +308,48 @@ static void test_stamp_many(void) {
   sylva__grid_free(&one);
 }
 
+/* The room reserved ahead of a removal holds what any batch asks for: a stamp of
+ * every half-width up to the bound's, at every x of the grid (its edges too), on
+ * parts of one to four columns (10 or 26 columns over 8, 10, 12 or 26 parts), takes
+ * no more than its share of sylva__grid_stamp_scratch_max. */
+static void test_stamp_scratch_max(void) {
+  const double widths[] = {8.0, 20.8};
+  const int threads[] = {2, 3, 8};
+  sylva__pyramid p = {.depth = 1, .w = {1}};
+  for (int wi = 0; wi < 2; wi++) {
+    double mn[3] = {0, 0, 0}, mx[3] = {widths[wi], 0.8, 0.8};
+    sylva__grid g;
+    CHECK_INT(sylva__grid_init(&g, mn, mx, 0.05), 0);
+    CHECK_INT(g.c[0], wi ? 26 : 10);
+    for (int t = 0; t < 3; t++) {
+      sylva__pool *pool = NULL;
+      CHECK_INT(sylva__pool_create(threads[t], &pool), 0);
+      for (int half = 0; half <= 50; half++) {
+        size_t max1 = sylva__grid_stamp_scratch_max(&g, pool, 1, half);
+        bool fits = true, tight = false;
+        for (int h = 0; h <= half; h++) {
+          p.half[0] = h;
+          for (int x = 0; x < g.n[0]; x++) {
+            sylva__stamp it = {{x, 5, 5}, &p};
+            size_t need = sylva__grid_stamp_scratch(&g, pool, &it, 1);
+            fits &= need <= max1;
+            tight |= need == max1;
+          }
+        }
+        CHECK(fits);
+        /* and some stamp needs it all, but where parts of one and two columns mix
+         * (8 parts over 10 columns) under stamps of six columns or more */
+        CHECK(tight || (wi == 0 && threads[t] == 2 && half > 32));
+        /* n stamps: the parts' firsts once, each stamp's share n times */
+        size_t per = max1 - sylva__grid_stamp_scratch_max(&g, pool, 0, half);
+        CHECK_INT(sylva__grid_stamp_scratch_max(&g, pool, 7, half), max1 + 6 * per);
+      }
+      sylva__pool_destroy(pool);
+    }
+    sylva__grid_free(&g);
+  }
+}
+
 static void test_obstacles(void) {
   sylva__grid g;
   double mn[3] = {-1, -1, 0}, mx[3] = {1, 1, 2};
@@ -384,7 +426,8 @@ int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(wide_pyramid), CHECK_TEST(pyramid_and_column), CHECK_TEST(against_definition),
       CHECK_TEST(exact_removal), CHECK_TEST(occupancy), CHECK_TEST(occupancy_freed),
-      CHECK_TEST(memory_falls), CHECK_TEST(stamp_many), CHECK_TEST(obstacles),
+      CHECK_TEST(memory_falls), CHECK_TEST(stamp_many), CHECK_TEST(stamp_scratch_max),
+      CHECK_TEST(obstacles),
       CHECK_TEST(sparse_site)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("grid");
