@@ -153,6 +153,12 @@ size_t sylva__grid_bytes(const sylva__grid *g);
 
 /** Voxel of a point; false when outside the grid. */
 bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v[3]);
+/** The index of voxel v's chunk (z, then y, then x of the 16-voxel chunks). */
+static inline size_t sylva__grid_chunk_of(const sylva__grid *g, const int v[3]) {
+  return ((size_t)(v[2] >> SYLVA__CHUNK_BITS) * (size_t)g->c[1] + (size_t)(v[1] >> SYLVA__CHUNK_BITS)) *
+             (size_t)g->c[0] +
+         (size_t)(v[0] >> SYLVA__CHUNK_BITS);
+}
 /** True when voxel v is inside a live obstacle. */
 bool sylva__grid_blocked(const sylva__grid *g, const int v[3]);
 /** True when some live obstacle is at or above voxel v in its column (full shadow). */

@@ -2,6 +2,7 @@
  * is below r_s (after Takenaka 1994). */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "world_impl.h"
 
@@ -12,7 +13,10 @@ int sylva__reserve_removal(sylva_world *w) {
     if (h > half) half = h;
   }
   size_t n = w->nodes.live;
-  if (SYLVA__VEC_RESERVE(w->cells, n) || SYLVA__VEC_RESERVE(w->stamps, n) ||
+  const sylva__grid *g = &w->grid;
+  size_t chunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+  if (SYLVA__VEC_RESERVE(w->cells, n) || SYLVA__VEC_RESERVE(w->cell_start, chunks + 1) ||
+      SYLVA__VEC_RESERVE(w->stamps, n) ||
       SYLVA__VEC_RESERVE(w->stamp_lists, sylva__grid_stamp_scratch_max(&w->grid, w->pool, n, half)))
     return SYLVA_ENOMEM;
   return SYLVA_OK;
@@ -24,19 +28,33 @@ void sylva__remove_doomed(sylva_world *w, bool pruned) {
    * number of threads: take them chunk by chunk (z, y, x of 16-voxel chunks) so that
    * neighbouring pyramids share the cache. Each node's pyramid is in its species'
    * table already, as it cast its shade through it. */
-  w->cells.len = 0;
+  const sylva__grid *g = &w->grid;
+  size_t chunks = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2];
+  SYLVA_ASSERT(w->cell_start.cap > chunks);
+  /* A counting sort by chunk, stable (slots ascending within a chunk): start[c] counts
+   * chunk c's doomed nodes, then (summed) marks where they go. */
+  int32_t *start = w->cell_start.data;
+  memset(start, 0, (chunks + 1) * sizeof *start);
+  size_t doomed = 0;
   for (size_t i = 0; i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
     int v[3];
     sylva__node_voxel(w, (int32_t)i, v);
-    int64_t key = ((int64_t)(v[2] >> 4) << 42) | ((int64_t)(v[1] >> 4) << 21) | (v[0] >> 4);
-    SYLVA_ASSERT(w->cells.len < w->cells.cap);
-    w->cells.data[w->cells.len++] = (sylva__keyed){key, (int32_t)i};
+    start[sylva__grid_chunk_of(g, v) + 1]++;
+    doomed++;
   }
-  qsort(w->cells.data, w->cells.len, sizeof *w->cells.data, sylva__keyed_cmp);
+  SYLVA_ASSERT(doomed <= w->cells.cap);
+  for (size_t c = 1; c <= chunks; c++) start[c] += start[c - 1];
+  for (size_t i = 0; i < s->count; i++) {
+    if (!(s->flags[i] & SYLVA__NODE_DOOMED)) continue;
+    int v[3];
+    sylva__node_voxel(w, (int32_t)i, v);
+    w->cells.data[start[sylva__grid_chunk_of(g, v)]++] = (int32_t)i;
+  }
+  w->cells.len = doomed;
   w->stamps.len = 0;
   for (size_t k = 0; k < w->cells.len; k++) {
-    int32_t i = w->cells.data[k].item;
+    int32_t i = w->cells.data[k];
     const sylva__stem *st = &w->stems[s->stem[i]];
     sylva__stamp *it = &w->stamps.data[w->stamps.len++];
     sylva__node_voxel(w, i, it->v);
@@ -47,7 +65,7 @@ void sylva__remove_doomed(sylva_world *w, bool pruned) {
   sylva__grid_stamp_many(&w->grid, w->pool, w->stamps.data, w->stamps.len, -1, w->stamp_lists.data);
   /* then their voxels, slots and counts */
   for (size_t k = 0; k < w->cells.len; k++) {
-    int32_t i = w->cells.data[k].item;
+    int32_t i = w->cells.data[k];
     int v[3];
     sylva__node_voxel(w, i, v);
     sylva__grid_vacate(&w->grid, v);

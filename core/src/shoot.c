@@ -64,12 +64,6 @@ typedef struct index_ctx {
   int64_t dims[3];
 } index_ctx;
 
-int sylva__keyed_cmp(const void *a, const void *b) {
-  const sylva__keyed *x = a, *y = b;
-  if (x->key != y->key) return (x->key > y->key) - (x->key < y->key);
-  return (x->item > y->item) - (x->item < y->item);
-}
-
 static int64_t cell_of(const index_ctx *ix, int a, double v) {
   double f = floor((v - ix->min[a]) / ix->cell);
   if (f < 0.0) return 0;

@@ -130,6 +130,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->crown_bins.data);
   sylva__free(w->lit.data);
   sylva__free(w->cells.data);
+  sylva__free(w->cell_start.data);
   sylva__free(w->stamps.data);
   sylva__free(w->stamp_lists.data);
   sylva__free(w->cell_first.data);
@@ -1381,7 +1382,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->leaf_changes.cap * sizeof(sylva_leaf_change) +
                w->radii.cap * sizeof(sylva_radius_change) +
                w->lit.cap * sizeof(sylva__lit) +
-               w->cells.cap * sizeof(sylva__keyed) + w->stamps.cap * sizeof(sylva__stamp) +
+               (w->cells.cap + w->cell_start.cap) * sizeof(int32_t) + w->stamps.cap * sizeof(sylva__stamp) +
                w->stamp_lists.cap * sizeof(size_t) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
                 w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_top.cap) *

@@ -68,21 +68,12 @@ typedef struct sylva__ranked {
   int32_t pos;     /* position along the axis, base = 0 */
 } sylva__ranked;
 
-/** A sprout filed under its cell of the competition index. */
-typedef struct sylva__keyed {
-  int64_t key;
-  int32_t item;
-} sylva__keyed;
-
 /** A node that collects light in a pass under a site sky, with the age it collects
  *  at (sylva__light_collect). */
 typedef struct sylva__lit {
   int32_t slot;
   int32_t age;
 } sylva__lit;
-
-/** Orders keyed items by key, then item. */
-int sylva__keyed_cmp(const void *a, const void *b);
 
 /** A box in metres. */
 typedef struct sylva__box {
@@ -210,7 +201,9 @@ struct sylva_world {
   SYLVA__VEC(sylva_radius_change) radii;
   SYLVA__VEC(int32_t) shed;
   SYLVA__VEC(sylva_stem_stats) stats;
-  SYLVA__VEC(sylva__keyed) cells;   /* shed nodes sorted by chunk */
+  SYLVA__VEC(int32_t) cells;        /* removal: the doomed slots, chunk by chunk */
+  SYLVA__VEC(int32_t) cell_start;   /* removal: where each chunk's start in cells (the
+                                       grid's chunks + 1) */
   SYLVA__VEC(sylva__stamp) stamps;  /* their shade, in that order */
   SYLVA__VEC(size_t) stamp_lists;   /* the stamps each thread takes (sylva__grid_stamp_scratch) */
   SYLVA__VEC(int32_t) cell_first;    /* competition index: first item of each cell */
