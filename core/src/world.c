@@ -1111,10 +1111,15 @@ static void collect_journal(sylva_world *w, int T) {
     SYLVA_ASSERT(w->added.len < w->added.cap);
     node_info(w, i, &w->added.data[w->added.len++]);
   }
-  /* radii changes of nodes shed later in the same iteration are dropped */
-  size_t k = 0;
-  for (size_t i = 0; i < w->radii.len; i++)
-    if (sylva__skeleton_find(s, w->radii.data[i].id) >= 0) w->radii.data[k++] = w->radii.data[i];
+  /* radii changes of nodes shed later in the same iteration are dropped: both lists
+   * are in id order (ids increase with slots), so one walk finds each change's slot */
+  size_t k = 0, slot = 0;
+  for (size_t i = 0; i < w->radii.len; i++) {
+    int32_t id = w->radii.data[i].id;
+    while (slot < s->count && s->id[slot] < id) slot++;
+    if (slot < s->count && s->id[slot] == id && (s->flags[slot] & SYLVA__NODE_ALIVE))
+      w->radii.data[k++] = w->radii.data[i];
+  }
   w->radii.len = k;
 }
 
