@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "world_impl.h"
 
@@ -24,10 +25,22 @@ static int cmp_ranked(const void *a, const void *b) {
   return (x->pos > y->pos) - (x->pos < y->pos);
 }
 
-static int push_sprout(sylva_world *w, int32_t slot, int32_t stem, int32_t n, double r, bool apex) {
-  if (SYLVA__VEC_RESERVE(w->sprouts, w->sprouts.len + 1)) return SYLVA_ENOMEM;
-  w->sprouts.data[w->sprouts.len++] = (sylva__sprout){slot, stem, n, r, apex};
-  return SYLVA_OK;
+/* One piece of the parallel allocation (sylva__allocate): its stems' scratch, each
+ * of room the largest stem's live nodes (an axis, its ranking and the stack of
+ * pending laterals never hold more), and where the stem being allocated writes its
+ * sprouts (room: its live nodes, as a node sprouts at most once). */
+typedef struct axis_scratch {
+  int32_t *axis, *work;
+  double *light, *work_r;
+  sylva__ranked *ranked;
+  size_t axis_len, work_len, room;
+  sylva__sprout *out;
+  size_t out_len, out_room;
+} axis_scratch;
+
+static void push_sprout(axis_scratch *sc, int32_t slot, int32_t stem, int32_t n, double r, bool apex) {
+  SYLVA_ASSERT(sc->out_len < sc->out_room);
+  sc->out[sc->out_len++] = (sylva__sprout){slot, stem, n, r, apex};
 }
 
 /* The cap of a shoot off the trunk from node n: the reach graded by the node's depth
@@ -49,57 +62,53 @@ static int32_t graded_cap(const sylva_world *w, int32_t stem, int32_t n, int32_t
 }
 
 /* Distributes r_b over the axis starting at slot first; laterals go on the stack. */
-static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b, bool trunk,
-                         int local, int cap) {
-  sylva__skeleton *s = &w->nodes;
+static void allocate_axis(const sylva_world *w, axis_scratch *sc, int32_t stem, int32_t first,
+                          double r_b, bool trunk, int local, int cap) {
+  const sylva__skeleton *s = &w->nodes;
   const sylva__species *sp = &w->species[w->stems[stem].species];
   const sylva_species_def *d = &sp->def;
   /* The axis's nodes that carry a bud (every node, but with ref_rho one per ref_rho
    * of axis) and its apex; each stands for itself and the bud-less nodes below it
    * down to the previous one, whose light its free bud collects as its own
    * (docs/model.md, "Species in years"). */
-  w->axis.len = 0;
-  w->work_light.len = 0;
+  sc->axis_len = 0;
   double segment = 0.0;
   for (int32_t n = first; n >= 0; n = s->axis_child[n]) {
     segment += w->light[n];
     if (s->axis_child[n] >= 0 && s->lateral_child[n] < 0 && !sylva__has_bud(sp, s->depth[n]))
       continue;
-    if (SYLVA__VEC_RESERVE(w->axis, w->axis.len + 1) ||
-        SYLVA__VEC_RESERVE(w->work_light, w->work_light.len + 1))
-      return SYLVA_ENOMEM;
-    w->axis.data[w->axis.len++] = n;
-    w->work_light.data[w->work_light.len++] = segment;
+    SYLVA_ASSERT(sc->axis_len < sc->room);
+    sc->axis[sc->axis_len] = n;
+    sc->light[sc->axis_len++] = segment;
     segment = 0.0;
   }
-  int nb = (int)w->axis.len;
-  if (SYLVA__VEC_RESERVE(w->ranked, (size_t)nb)) return SYLVA_ENOMEM;
-  int32_t apex_depth = s->depth[w->axis.data[nb - 1]];
+  int nb = (int)sc->axis_len;
+  int32_t apex_depth = s->depth[sc->axis[nb - 1]];
   for (int i = 0; i < nb; i++) {
-    int32_t n = w->axis.data[i];
+    int32_t n = sc->axis[i];
     double lm = s->axis_child[n] >= 0 ? w->q[s->axis_child[n]] : 0.0;
-    double ll = s->lateral_child[n] >= 0 ? w->q[s->lateral_child[n]] : w->work_light.data[i];
+    double ll = s->lateral_child[n] >= 0 ? w->q[s->lateral_child[n]] : sc->light[i];
     /* a scar (shed branch) has no bud left to feed */
     double rbh = (s->flags[n] & SYLVA__NODE_SCAR) ? 0.0 : sylva__bh_share(lm, ll, d->lambda);
     /* Apical dominance: a free bud fewer than apical_zone internodes below the
      * axis's apex stays dormant and takes no share (docs/model.md, "Allocation"). */
     if (s->lateral_child[n] < 0 && i < nb - 1 && apex_depth - s->depth[n] < d->apical_zone)
       rbh = 0.0;
-    w->ranked.data[i] = (sylva__ranked){rbh, 0.0, i};
+    sc->ranked[i] = (sylva__ranked){rbh, 0.0, i};
   }
   /* The trunk's apex continues the main flow: besides its own light it takes the
    * share apical_flow of what the BH shares of the other nodes leave of the axis's
    * light (docs/model.md, "Allocation"). */
-  int32_t apex_node = w->axis.data[nb - 1];
+  int32_t apex_node = sc->axis[nb - 1];
   if (trunk && s->lateral_child[apex_node] < 0 && d->apical_flow > 0.0) {
     double laterals = 0.0;
-    for (int i = 0; i < nb - 1; i++) laterals += w->ranked.data[i].rbh;
-    double own = w->ranked.data[nb - 1].rbh, rest = w->q[first] - laterals - own;
-    if (rest > 0.0) w->ranked.data[nb - 1].rbh = own + d->apical_flow * rest;
+    for (int i = 0; i < nb - 1; i++) laterals += sc->ranked[i].rbh;
+    double own = sc->ranked[nb - 1].rbh, rest = w->q[first] - laterals - own;
+    if (rest > 0.0) sc->ranked[nb - 1].rbh = own + d->apical_flow * rest;
   }
   /* Apical control: the trunk's apex is ranked first while T <= tau. */
   bool apical = trunk && local <= d->tau;
-  sylva__ranked *items = w->ranked.data;
+  sylva__ranked *items = sc->ranked;
   int from = 0;
   if (apical) {
     sylva__ranked apex = items[nb - 1];
@@ -115,40 +124,34 @@ static int allocate_axis(sylva_world *w, int32_t stem, int32_t first, double r_b
     sum += items[rank].weighted;
   }
   for (int rank = 0; rank < nb; rank++) {
-    int32_t n = w->axis.data[items[rank].pos];
+    int32_t n = sc->axis[items[rank].pos];
     double r_i = sum > 0.0 ? r_b * items[rank].weighted / sum : 0.0;
     bool apex = s->axis_child[n] < 0;
     if (s->lateral_child[n] >= 0) {
-      if (SYLVA__VEC_RESERVE(w->work, w->work.len + 1) ||
-          SYLVA__VEC_RESERVE(w->work_r, w->work_r.len + 1))
-        return SYLVA_ENOMEM;
-      w->work.data[w->work.len++] = s->lateral_child[n];
-      w->work_r.data[w->work_r.len++] = r_i;
+      SYLVA_ASSERT(sc->work_len < sc->room);
+      sc->work[sc->work_len] = s->lateral_child[n];
+      sc->work_r[sc->work_len++] = r_i;
     } else if (apex || !(s->flags[n] & SYLVA__NODE_SCAR)) {
       double y = floor(r_i / d->node_cost);
       int32_t c = trunk ? cap : graded_cap(w, stem, n, cap);
       int32_t grow = y < (double)c ? (int32_t)y : c;
-      if (grow >= 1) {
-        int rc = push_sprout(w, n, stem, grow, r_i, apex);
-        if (rc) return rc;
-      }
+      if (grow >= 1) push_sprout(sc, n, stem, grow, r_i, apex);
     }
   }
-  return SYLVA_OK;
 }
 
-static int allocate_lgtm(sylva_world *w, int32_t stem, int local, int cap, int lateral_cap) {
-  sylva__skeleton *s = &w->nodes;
+static void allocate_lgtm(const sylva_world *w, axis_scratch *sc, int32_t stem, int local, int cap,
+                          int lateral_cap) {
+  const sylva__skeleton *s = &w->nodes;
   int32_t root = w->stems[stem].root_slot;
-  w->work.len = w->work_r.len = 0;
-  if (s->axis_child[root] < 0) return SYLVA_OK; /* pruned down to its root: a stump */
-  int rc = allocate_axis(w, stem, s->axis_child[root], w->q[root], true, local, cap);
-  while (!rc && w->work.len) {
-    int32_t first = w->work.data[--w->work.len];
-    double r = w->work_r.data[--w->work_r.len];
-    rc = allocate_axis(w, stem, first, r, false, local, lateral_cap);
+  sc->work_len = 0;
+  if (s->axis_child[root] < 0) return; /* pruned down to its root: a stump */
+  allocate_axis(w, sc, stem, s->axis_child[root], w->q[root], true, local, cap);
+  while (sc->work_len) {
+    sc->work_len--;
+    allocate_axis(w, sc, stem, sc->work[sc->work_len], sc->work_r[sc->work_len], false, local,
+                  lateral_cap);
   }
-  return rc;
 }
 
 static int cmp_sprout(const void *a, const void *b) {
@@ -203,13 +206,79 @@ static int season_clocks(sylva_world *w) {
   return SYLVA_OK;
 }
 
+/* The parallel allocation: pieces of consecutive stems, each with its own scratch. */
+typedef struct alloc_ctx {
+  sylva_world *w;
+  int iteration;
+  size_t pieces, room;
+} alloc_ctx;
+
+/* Pieces [begin, end): each LGTM stem that grows distributes its resource alone
+ * (reading the light, the skeleton and the caps, writing only its scratch and its
+ * own stretch of sprouts, stem_first[k] on: room for its live nodes), and sorts its
+ * sprouts; every stem's count goes to stem_sprouts. */
+static void allocate_pieces(void *arg, size_t begin, size_t end) {
+  const alloc_ctx *c = arg;
+  sylva_world *w = c->w;
+  size_t stems = (size_t)w->stem_count;
+  const int32_t *caps = w->caps.data, *lateral = caps + stems, *first = w->stem_first.data;
+  for (size_t piece = begin; piece < end; piece++) {
+    size_t at = piece * c->room;
+    axis_scratch sc = {.axis = w->axis.data + at, .work = w->work.data + at,
+                       .light = w->work_light.data + at, .work_r = w->work_r.data + at,
+                       .ranked = w->ranked.data + at, .room = c->room};
+    for (size_t k = piece * stems / c->pieces; k < (piece + 1) * stems / c->pieces; k++) {
+      const sylva__stem *st = &w->stems[k];
+      sc.out = w->sprouts.data + first[k];
+      sc.out_len = 0;
+      sc.out_room = (size_t)(first[k + 1] - first[k]);
+      if ((caps[k] > 0 || lateral[k] > 0) &&
+          w->species[st->species].def.allocation == SYLVA_ALLOC_LGTM) {
+        allocate_lgtm(w, &sc, (int32_t)k, sylva__stem_local(st, c->iteration), caps[k], lateral[k]);
+        /* a stem's shoots grow in decreasing R_i (slot breaks ties) */
+        if (sc.out_len > 1) qsort(sc.out, sc.out_len, sizeof *sc.out, cmp_sprout);
+      }
+      w->stem_sprouts.data[k] = (int32_t)sc.out_len;
+    }
+  }
+}
+
+/* Room for the parallel allocation: stem_first holds where each stem's stretch of
+ * sprouts starts (its live nodes' share of the sprouts' room), and each piece has
+ * scratch of room the most live nodes of a stem. */
+static int reserve_pieces(sylva_world *w, alloc_ctx *c) {
+  const sylva__skeleton *s = &w->nodes;
+  size_t stems = (size_t)w->stem_count;
+  if (SYLVA__VEC_RESERVE(w->stem_first, stems + 1) || SYLVA__VEC_RESERVE(w->stem_sprouts, stems + 1) ||
+      SYLVA__VEC_RESERVE(w->sprouts, s->live + 1))
+    return SYLVA_ENOMEM;
+  int32_t *first = w->stem_first.data;
+  for (size_t k = 0; k <= stems; k++) first[k] = 0;
+  for (size_t i = 0; i < s->count; i++)
+    if (s->flags[i] & SYLVA__NODE_ALIVE) first[s->stem[i] + 1]++;
+  size_t room = 1;
+  for (size_t k = 0; k < stems; k++) {
+    if ((size_t)first[k + 1] > room) room = (size_t)first[k + 1];
+    first[k + 1] += first[k];
+  }
+  size_t pieces = 8 * (size_t)sylva__pool_threads(w->pool);
+  c->pieces = pieces < stems ? pieces : stems;
+  c->room = room;
+  size_t n = c->pieces * room;
+  if (SYLVA__VEC_RESERVE(w->axis, n) || SYLVA__VEC_RESERVE(w->work, n) ||
+      SYLVA__VEC_RESERVE(w->work_light, n) || SYLVA__VEC_RESERVE(w->work_r, n) ||
+      SYLVA__VEC_RESERVE(w->ranked, n))
+    return SYLVA_ENOMEM;
+  return SYLVA_OK;
+}
+
 int sylva__allocate(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   w->sprouts.len = 0;
   /* the leaders' caps c(T) of the stems that grow this iteration (0: does not grow),
    * then their laterals' (docs/model.md, "Species in years": lateral_reach) */
-  if (SYLVA__VEC_RESERVE(w->caps, 2 * (size_t)w->stem_count) ||
-      SYLVA__VEC_RESERVE(w->stem_first, (size_t)w->stem_count + 1))
+  alloc_ctx c = {w, iteration, 0, 0};
+  if (SYLVA__VEC_RESERVE(w->caps, 2 * (size_t)w->stem_count) || reserve_pieces(w, &c))
     return SYLVA_ENOMEM;
   int32_t *caps = w->caps.data, *lateral = caps + w->stem_count;
   bool any_none = false;
@@ -231,55 +300,45 @@ int sylva__allocate(sylva_world *w, int iteration) {
   for (int k = 0; k < w->stem_count; k++)
     if (caps[k] > 0 && w->species[w->stems[k].species].def.allocation == SYLVA_ALLOC_NONE)
       any_none = true;
+  /* Stems share no node: each distributes its resource on its own, on the world's
+   * threads (docs/model.md, "Determinism"); then their sprouts close up in stem order. */
+  sylva__pool_for(w->pool, c.pieces, 1, allocate_pieces, &c);
+  sylva__sprout *sp = w->sprouts.data;
+  size_t j = 0;
   for (int k = 0; k < w->stem_count; k++) {
-    const sylva__stem *st = &w->stems[k];
-    if ((caps[k] <= 0 && lateral[k] <= 0) ||
-        w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM)
-      continue;
-    rc = allocate_lgtm(w, k, sylva__stem_local(st, iteration), caps[k], lateral[k]);
-    if (rc) return rc;
+    size_t from = (size_t)w->stem_first.data[k], n = (size_t)w->stem_sprouts.data[k];
+    if (n && from != j) memmove(sp + j, sp + from, n * sizeof *sp); /* j <= from */
+    j += n;
   }
+  w->sprouts.len = j;
   if (any_none) {
     /* Simplified IGM: every apex, and every free bud with enough light, grows c(T). */
     for (size_t i = 0; i < s->count; i++) {
       if (!(s->flags[i] & SYLVA__NODE_ALIVE) || s->parent[i] < 0) continue;
       int32_t k = s->stem[i];
-      const sylva__species *sp = &w->species[w->stems[k].species];
-      const sylva_species_def *d = &sp->def;
+      const sylva__species *spc = &w->species[w->stems[k].species];
+      const sylva_species_def *d = &spc->def;
       if (caps[k] <= 0 || d->allocation != SYLVA_ALLOC_NONE) continue;
       bool apex = s->axis_child[i] < 0;
       if (!apex && (s->lateral_child[i] >= 0 || (s->flags[i] & SYLVA__NODE_SCAR) ||
-                    !sylva__has_bud(sp, s->depth[i]) ||
+                    !sylva__has_bud(spc, s->depth[i]) ||
                     !sylva__bears_leaves(d, s->birth[i], iteration)))
         continue;
       int v[3];
       sylva__node_voxel(w, (int32_t)i, v);
       double l = sylva__grid_light(&w->grid, v);
       if (!apex && l < d->sprout_light) continue;
-      int rc = push_sprout(w, (int32_t)i, k, caps[k], l, apex);
-      if (rc) return rc;
+      SYLVA_ASSERT(w->sprouts.len < w->sprouts.cap); /* a node sprouts at most once */
+      sp[w->sprouts.len++] = (sylva__sprout){(int32_t)i, k, caps[k], l, apex};
     }
+    /* Shoots of a stem are appended in decreasing R_i (slot breaks ties): cmp_sprout
+     * is a total order, so this is the list the stems' own sorts give, with these. */
+    qsort(sp, w->sprouts.len, sizeof *sp, cmp_sprout);
   }
-  /* Shoots of a stem are appended in decreasing R_i (slot breaks ties). cmp_sprout is
-   * a total order, so sorting each stem's run alone, when the runs are already in stem
-   * order (the allocation above makes them so unless a stem grows without it), gives
-   * the same list as sorting it whole, in fewer comparisons. */
-  size_t n = w->sprouts.len;
-  sylva__sprout *sp = w->sprouts.data;
-  bool by_stem = true;
-  for (size_t i = 1; i < n && by_stem; i++) by_stem = sp[i - 1].stem <= sp[i].stem;
-  if (!by_stem) {
-    qsort(sp, n, sizeof *sp, cmp_sprout);
-  } else {
-    for (size_t a = 0, b; a < n; a = b) {
-      for (b = a + 1; b < n && sp[b].stem == sp[a].stem;) b++;
-      if (b - a > 1) qsort(sp + a, b - a, sizeof *sp, cmp_sprout);
-    }
-  }
-  size_t j = 0;
+  size_t at = 0;
   for (int k = 0; k <= w->stem_count; k++) {
-    while (j < w->sprouts.len && w->sprouts.data[j].stem < k) j++;
-    w->stem_first.data[k] = (int32_t)j;
+    while (at < w->sprouts.len && sp[at].stem < k) at++;
+    w->stem_first.data[k] = (int32_t)at;
   }
   return SYLVA_OK;
 }

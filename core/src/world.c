@@ -126,6 +126,7 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->stem_high.data);
   sylva__free(w->caps.data);
   sylva__free(w->stem_first.data);
+  sylva__free(w->stem_sprouts.data);
   sylva__free(w->stem_top.data);
   sylva__free(w->crown_bins.data);
   sylva__free(w->lit.data);
@@ -1390,9 +1391,11 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                (w->cells.cap + w->cell_start.cap) * sizeof(int32_t) + w->stamps.cap * sizeof(sylva__stamp) +
                w->stamp_lists.cap * sizeof(size_t) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
-                w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_top.cap) *
+                w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_sprouts.cap +
+                w->stem_top.cap + w->axis.cap + w->work.cap) *
                    sizeof(int32_t) +
-               w->crown_bins.cap * sizeof(double) +
+               (w->crown_bins.cap + w->work_r.cap + w->work_light.cap) * sizeof(double) +
+               w->ranked.cap * sizeof(sylva__ranked) +
                w->cell_pos.cap * sizeof(float) +
                (size_t)w->stem_cap * sizeof(sylva__stem) +
                w->entered.cap * sizeof(sylva__entered) + w->prunes.cap * sizeof(sylva_prune_def) +

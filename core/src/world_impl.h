@@ -174,7 +174,9 @@ struct sylva_world {
                                      step can no longer fail */
   SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0; then
                                    * the laterals' caps (stem_count + k) */
-  SYLVA__VEC(int32_t) stem_first; /* allocation: first sprout of each stem, stem_count + 1 */
+  SYLVA__VEC(int32_t) stem_first; /* allocation: where each stem's sprouts are written (its
+                                     live nodes' share), then its first sprout, stem_count + 1 */
+  SYLVA__VEC(int32_t) stem_sprouts; /* allocation: each stem's sprouts */
   SYLVA__VEC(int32_t) stem_top;   /* shedding: each stem's highest live node; stats: its
                                      leaf-bearing nodes (stem_count + 1, kept reserved) */
   SYLVA__VEC(double) crown_bins;  /* stats: the lowest and highest leaves of each height
@@ -182,6 +184,7 @@ struct sylva_world {
   /* the rest as the phases need them */
   SYLVA__VEC(sylva__sprout) sprouts;
   SYLVA__VEC(int32_t) order;
+  /* allocation, one stretch for each piece of stems (allocate.c, axis_scratch) */
   SYLVA__VEC(int32_t) axis;      /* nodes of one axis */
   SYLVA__VEC(sylva__ranked) ranked; /* ranking of one axis */
   SYLVA__VEC(int32_t) work;      /* pending (slot) stack for axes */
