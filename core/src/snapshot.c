@@ -739,7 +739,8 @@ static int read_world(reader *r, uint32_t flags, sylva_world **out) {
   rc = sylva__conflicts_update(w, 0); /* the zone lines and clearances, as saved */
   if (rc) SYLVA__FAIL(rc);
   /* the canopy's scratch: slots and stems */
-  if (sylva__reserve_scratch(w) || SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1))
+  if (sylva__reserve_scratch(w) ||
+      SYLVA__VEC_RESERVE(w->stem_top, sylva__canopy_room(w->stem_count)))
     SYLVA__FAIL(SYLVA_ENOMEM);
   SYLVA__CHECK_WORLD(w, SYLVA__BETWEEN_STEPS);
   sylva__stats_leaf_area(w);

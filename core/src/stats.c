@@ -105,57 +105,71 @@ static void extend(sylva__stem *st, const sylva__skeleton *s, size_t i) {
   if (z > st->ext[4]) st->ext[4] = z;
 }
 
+/* Counts live node i in its stem's measures: nodes, extents, wood. */
+static void measure_node(sylva__stem *st, const sylva__skeleton *s, size_t i) {
+  st->stats.nodes++;
+  extend(st, s, i);
+  add_wood(st, s, i);
+}
+
 /* Is node i of a stem of species d leaf-bearing as the next season carries it (as
  * shedding judges it)? */
 static bool leafy(const sylva__skeleton *s, const sylva_species_def *d, size_t i, int iteration) {
   return sylva__leaf_age(s, d, i, iteration + 1) >= 0;
 }
 
-void sylva__stats(sylva_world *w, int iteration) {
+typedef struct stats_ctx {
+  sylva_world *w;
+  int iteration;
+  size_t grain, bins; /* stems a piece; doubles of a piece's crown bins */
+} stats_ctx;
+
+/* Stems [begin, end), one piece: each live stem's nodes in slot order (the grouping by
+ * stem), its leaf heights into its own part of w->pipe, its crown base with the
+ * piece's own bins. Writes only these stems' measures. */
+static void stats_stems(void *arg, size_t begin, size_t end) {
+  const stats_ctx *c = arg;
+  sylva_world *w = c->w;
   const sylva__skeleton *s = &w->nodes;
-  /* first[k]: where stem k's leaf heights start in the scratch w->pipe */
-  int32_t *first = w->stem_top.data;
-  for (int k = 0; k <= w->stem_count; k++) first[k] = 0;
-  /* a dead stem keeps the measures of its last season alive (docs/model.md, "Stands") */
-  for (int k = 0; k < w->stem_count; k++)
-    if (!sylva__stem_dead(&w->stems[k])) stats_reset(&w->stems[k]);
-  const sylva_species_def *d = NULL;
-  for (size_t i = 0, stem = SIZE_MAX; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
-    sylva__stem *st = &w->stems[s->stem[i]];
+  const int32_t *first = w->stem_nodes_first.data, *nodes = w->stem_nodes.data;
+  double *bins = w->crown_bins.data + begin / c->grain * c->bins;
+  for (size_t k = begin; k < end; k++) {
+    sylva__stem *st = &w->stems[k];
+    /* a dead stem keeps the measures of its last season alive (docs/model.md, "Stands") */
     if (sylva__stem_dead(st)) continue;
-    if ((size_t)s->stem[i] != stem) { /* looked up again only when the stem changes */
-      stem = (size_t)s->stem[i];
-      d = &w->species[st->species].def;
+    const sylva_species_def *d = &w->species[st->species].def;
+    double *z = w->pipe + first[k];
+    size_t leaves = 0;
+    stats_reset(st);
+    for (int32_t at = first[k]; at < first[k + 1]; at++) {
+      size_t i = (size_t)nodes[at];
+      measure_node(st, s, i);
+      if (leafy(s, d, i, c->iteration)) z[leaves++] = s->z[i];
     }
-    st->stats.nodes++;
-    extend(st, s, i);
-    add_wood(st, s, i);
-    if (leafy(s, d, i, iteration)) first[s->stem[i] + 1]++;
+    stats_shape(w, st);
+    set_crown_base(st, crown_base_of(z, leaves, s->z[st->root_slot], st->ext[4], bins));
+    st->stats.leaf_area = (double)leaves * sylva__node_leaf_area(d);
   }
-  for (int k = 0; k < w->stem_count; k++) first[k + 1] += first[k];
-  double *z = w->pipe;
-  for (size_t i = 0, stem = SIZE_MAX; i < s->count; i++) {
-    if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
-    if ((size_t)s->stem[i] != stem) {
-      stem = (size_t)s->stem[i];
-      d = &w->species[w->stems[stem].species].def;
-    }
-    if (leafy(s, d, i, iteration)) z[first[s->stem[i]]++] = s->z[i];
-  }
-  /* each first[k] now ends stem k's heights: they start at first[k - 1] */
+}
+
+void sylva__stats(sylva_world *w, int iteration) {
+  /* Stems share no node: each is measured on its own, on the world's threads, in at
+   * most SYLVA__STATS_PIECES pieces (the crown bins' room, from creation). The
+   * grouping's room is the per-slot scratch's, made before the step could fail. */
+  SYLVA_ASSERT(w->stem_nodes.cap >= w->nodes.count &&
+               w->stem_nodes_first.cap >= (size_t)w->stem_count + 1);
+  sylva__group_by_stem(w);
+  size_t n = (size_t)w->stem_count;
+  stats_ctx c = {w, iteration, (n + SYLVA__STATS_PIECES - 1) / SYLVA__STATS_PIECES,
+                 w->crown_bins.cap / SYLVA__STATS_PIECES};
+  if (n) sylva__pool_for(w->pool, n, c.grain, stats_stems, &c);
   for (int k = 0; k < w->stem_count; k++) {
     sylva__stem *st = &w->stems[k];
-    size_t from = k ? (size_t)first[k - 1] : 0, to = (size_t)first[k];
     if (sylva__stem_dead(st)) {
       st->stats.co2_sequestered = isnan(st->stats.co2) ? NAN : 0.0;
       continue;
     }
-    stats_shape(w, st);
-    set_crown_base(st, crown_base_of(z + from, to - from, s->z[st->root_slot], st->ext[4],
-                                     w->crown_bins.data));
     st->stats.age = stem_age(w, st, iteration);
-    st->stats.leaf_area = (double)(to - from) * sylva__node_leaf_area(&w->species[st->species].def);
     st->stats.light = w->q[st->root_slot];
     st->stats.cap = sylva__clock_cap(&w->species[st->species], st->clock_prev, st->clock, 1.0);
     sylva__stats_carbon(w, k, st->stats.co2); /* the co2 before this pass */
@@ -178,9 +192,7 @@ void sylva__stats_planted(sylva_world *w, int stem) {
   size_t leaves = 0;
   for (size_t n = (size_t)st->root_slot; n < s->count; n++) {
     if (s->stem[n] != stem || !(s->flags[n] & SYLVA__NODE_ALIVE)) continue;
-    st->stats.nodes++;
-    extend(st, s, n);
-    add_wood(st, s, n);
+    measure_node(st, s, n);
     int age = sylva__leaf_age(s, &sp->def, n, next);
     if (age < 0) continue;
     z[leaves++] = s->z[n];
@@ -362,13 +374,16 @@ static void internode_xy(const sylva__skeleton *s, int32_t n, double a[2], doubl
   a[1] = p >= 0 ? s->y[p] : b[1];
 }
 
-/* Counts the cells within r of the segment a-b (x, y) not yet stamped by this stem's
- * pass (stamp); the first stamp of the whole pass is first. */
+/* Counts the cells within r of the segment a-b (x, y) in rows [rows[0], rows[1]) not
+ * yet stamped by this stem's pass (stamp); the first stamp of the whole pass is first. */
 static void cover_segment(sylva_world *w, const double a[2], const double b[2], double r,
-                          uint32_t stamp, uint32_t first, int64_t *area, int64_t *cover) {
+                          const int rows[2], uint32_t stamp, uint32_t first, int64_t *area,
+                          int64_t *cover) {
   const double e = w->col_edge;
   cover_reach reach = reach_of(w, a, b, r);
-  for (int y = reach.lo[1]; y <= reach.hi[1]; y++) {
+  int y0 = reach.lo[1] > rows[0] ? reach.lo[1] : rows[0];
+  int y1 = reach.hi[1] < rows[1] - 1 ? reach.hi[1] : rows[1] - 1;
+  for (int y = y0; y <= y1; y++) {
     double cy = w->def.min[1] + (y + 0.5) * e;
     size_t row = (size_t)y * (size_t)w->col_n[0];
     for (int x = reach.lo[0]; x <= reach.hi[0]; x++) {
@@ -382,11 +397,84 @@ static void cover_segment(sylva_world *w, const double a[2], const double b[2], 
   }
 }
 
+/* The canopy pass on the world's threads: the floor's rows in CANOPY_BANDS bands, each
+ * counted by one piece that passes every stem in stem order over its own rows only,
+ * so its cells see the stamps one thread gives them. The counts are integers, summed
+ * in band order after the loop: the same for any number of threads. */
+#define CANOPY_BANDS 8
+
+size_t sylva__canopy_room(int stems) { return ((size_t)stems + 1) * (3 + CANOPY_BANDS); }
+
+typedef struct canopy_ctx {
+  sylva_world *w;
+  const int32_t *first; /* first[k] ends stem k's leaf-bearing slots in w->canopy */
+  int32_t *bands;       /* the bands each of those can cover: lowest | highest << 8 */
+  int32_t *stem_bands;  /* stem k's lowest and highest of those: 2 k, 2 k + 1 */
+  int32_t *counts;      /* band b's: each stem's cells, then the cover, at b (stems + 1) */
+  uint32_t pass;        /* the pass's first stamp: stem k's is pass + k */
+} canopy_ctx;
+
+/* The band holding row y of the floor's n rows (band b: rows n b / BANDS to n (b + 1)
+ * / BANDS). */
+static int32_t band_of(int y, int n) {
+  return (int32_t)((CANOPY_BANDS * ((size_t)y + 1) - 1) / (size_t)n);
+}
+
+/* The bands that stems [begin, end)'s internodes can cover, as cover_segment finds
+ * their rows. */
+static void canopy_reach(void *arg, size_t begin, size_t end) {
+  const canopy_ctx *c = arg;
+  const sylva_world *w = c->w;
+  for (size_t k = begin; k < end; k++) {
+    double r = leaf_reach(w, (int)k);
+    int32_t lo = CANOPY_BANDS, hi = -1; /* none without leaves */
+    for (int32_t j = k ? c->first[k - 1] : 0; j < c->first[k]; j++) {
+      double a[2], b[2];
+      internode_xy(&w->nodes, w->canopy[j], a, b);
+      int32_t blo = band_of(col_of(w, 1, fmin(a[1], b[1]) - r), w->col_n[1]);
+      int32_t bhi = band_of(col_of(w, 1, fmax(a[1], b[1]) + r), w->col_n[1]);
+      c->bands[j] = blo | bhi << 8;
+      if (blo < lo) lo = blo;
+      if (bhi > hi) hi = bhi;
+    }
+    c->stem_bands[2 * k] = lo;
+    c->stem_bands[2 * k + 1] = hi;
+  }
+}
+
+static void canopy_bands(void *arg, size_t begin, size_t end) {
+  const canopy_ctx *c = arg;
+  sylva_world *w = c->w;
+  size_t stems = (size_t)w->stem_count;
+  for (size_t band = begin; band < end; band++) {
+    const int rows[2] = {(int)((size_t)w->col_n[1] * band / CANOPY_BANDS),
+                         (int)((size_t)w->col_n[1] * (band + 1) / CANOPY_BANDS)};
+    const int32_t at = (int32_t)band;
+    int32_t *count = c->counts + band * (stems + 1);
+    int64_t cover = 0;
+    for (size_t k = 0; k < stems; k++) {
+      int64_t area = 0;
+      if (c->stem_bands[2 * k] <= at && c->stem_bands[2 * k + 1] >= at) {
+        double r = leaf_reach(w, (int)k);
+        for (int32_t j = k ? c->first[k - 1] : 0; j < c->first[k]; j++) {
+          if ((c->bands[j] & 0xff) > at || c->bands[j] >> 8 < at) continue;
+          double a[2], b[2];
+          internode_xy(&w->nodes, w->canopy[j], a, b);
+          cover_segment(w, a, b, r, rows, c->pass + (uint32_t)k, c->pass, &area, &cover);
+        }
+      }
+      count[k] = (int32_t)area;
+    }
+    count[stems] = (int32_t)cover;
+  }
+}
+
 void sylva__canopy(sylva_world *w) {
   const sylva__skeleton *s = &w->nodes;
   if (w->foot_dirty) canopy_foot(w);
   /* the leaf-bearing slots grouped by stem: first[k] .. first[k + 1] */
   int32_t *first = w->stem_top.data;
+  SYLVA_ASSERT(w->stem_top.cap >= sylva__canopy_room(w->stem_count));
   for (int k = 0; k <= w->stem_count; k++) first[k] = 0;
   size_t leafy = 0; /* the leaf-bearing slots, in slot order, then grouped */
   for (size_t i = 0; i < s->count; i++)
@@ -402,17 +490,18 @@ void sylva__canopy(sylva_world *w) {
     memset(w->cols, 0, (size_t)w->col_n[0] * (size_t)w->col_n[1] * sizeof *w->cols);
     w->col_stamp = 0;
   }
-  uint32_t pass = w->col_stamp + 1;
+  size_t stems = (size_t)w->stem_count;
+  /* the second half of w->canopy is free once the slots are grouped */
+  canopy_ctx c = {w, first, w->canopy + w->scratch_cap, first + stems + 1,
+                  first + 3 * (stems + 1), w->col_stamp + 1};
+  if (stems) sylva__pool_for(w->pool, stems, 1, canopy_reach, &c);
+  sylva__pool_for(w->pool, CANOPY_BANDS, 1, canopy_bands, &c);
+  w->col_stamp += (uint32_t)stems;
   int64_t cover = 0;
-  for (int k = 0; k < w->stem_count; k++) {
-    double r = leaf_reach(w, k);
-    uint32_t stamp = ++w->col_stamp;
+  for (size_t band = 0; band < CANOPY_BANDS; band++) cover += c.counts[band * (stems + 1) + stems];
+  for (size_t k = 0; k < stems; k++) {
     int64_t area = 0;
-    for (int32_t j = k ? first[k - 1] : 0; j < first[k]; j++) {
-      double a[2], b[2];
-      internode_xy(s, w->canopy[j], a, b);
-      cover_segment(w, a, b, r, stamp, pass, &area, &cover);
-    }
+    for (size_t band = 0; band < CANOPY_BANDS; band++) area += c.counts[band * (stems + 1) + k];
     /* a dead stem has no leaves to cover the ground; it keeps its last measures */
     if (!sylva__stem_dead(&w->stems[k]))
       w->stems[k].stats.crown_area = (double)area * w->col_edge * w->col_edge;

@@ -67,7 +67,8 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
   }
   w->def.sky = w->grid.sky; /* the world's own copy */
   w->def.sky_count = w->grid.sky_count;
-  if (SYLVA__VEC_RESERVE(w->crown_bins, 2 * sylva__crown_bins(def->max[2] - def->min[2])) ||
+  if (SYLVA__VEC_RESERVE(w->crown_bins, SYLVA__STATS_PIECES * 2 *
+                                          sylva__crown_bins(def->max[2] - def->min[2])) ||
       sylva__canopy_init(w)) {
     sylva_world_destroy(w);
     return SYLVA_ENOMEM;
@@ -781,7 +782,7 @@ static int add_measured(sylva_world *w, const sylva_plant_def *def, int *bad) {
   if (!map) return SYLVA_ENOMEM;
   if (sylva__skeleton_reserve(&w->nodes, (size_t)def->node_count) ||
       reserve_plant_index(w, (size_t)w->plant_count + 1) ||
-      SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + roots) + 1)) {
+      SYLVA__VEC_RESERVE(w->stem_top, sylva__canopy_room(w->stem_count + roots))) {
     sylva__free(map);
     return SYLVA_ENOMEM;
   }
@@ -855,7 +856,7 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
   if (reserve_plant_room(w, def->root_count) ||
       sylva__skeleton_reserve(&w->nodes, (size_t)def->root_count * per) ||
       reserve_plant_index(w, (size_t)w->plant_count + 1) ||
-      SYLVA__VEC_RESERVE(w->stem_top, (size_t)(w->stem_count + def->root_count) + 1) ||
+      SYLVA__VEC_RESERVE(w->stem_top, sylva__canopy_room(w->stem_count + def->root_count)) ||
       (ncuts && SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count)) ||
       (ncuts && (reserve_scratch(w) || sylva__reserve_removal(w))))
     rc = SYLVA_ENOMEM;
@@ -972,7 +973,7 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   w->reports = true;
   if (reserve_scratch(w) || sylva__reserve_removal(w) ||
       SYLVA__VEC_RESERVE(w->pruned_ids, w->nodes.count) ||
-      SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
+      SYLVA__VEC_RESERVE(w->stem_top, sylva__canopy_room(w->stem_count)) ||
       sylva__conflicts_reserve(w, 0)) {
     w->reports = reports;
     return SYLVA_ENOMEM;
@@ -1060,7 +1061,7 @@ static int reserve_rest(sylva_world *w) {
       SYLVA__VEC_RESERVE(w->added, count - w->mark.count) ||
       SYLVA__VEC_RESERVE(w->leaf_changes, count) ||
       SYLVA__VEC_RESERVE(w->stats, (size_t)w->stem_count) ||
-      SYLVA__VEC_RESERVE(w->stem_top, (size_t)w->stem_count + 1) ||
+      SYLVA__VEC_RESERVE(w->stem_top, sylva__canopy_room(w->stem_count)) ||
       sylva__conflicts_reserve(w, 0))
     return SYLVA_ENOMEM;
   return SYLVA_OK;

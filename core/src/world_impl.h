@@ -177,10 +177,12 @@ struct sylva_world {
   SYLVA__VEC(int32_t) stem_first; /* allocation: where each stem's sprouts are written (its
                                      live nodes' share), then its first sprout, stem_count + 1 */
   SYLVA__VEC(int32_t) stem_sprouts; /* allocation: each stem's sprouts */
-  SYLVA__VEC(int32_t) stem_top;   /* shedding: each stem's highest live node; stats: its
-                                     leaf-bearing nodes (stem_count + 1, kept reserved) */
+  SYLVA__VEC(int32_t) stem_top;   /* shedding: each stem's highest live node; canopy: its
+                                     leaf-bearing nodes, rows and counts by band
+                                     (sylva__canopy_room, kept reserved) */
   SYLVA__VEC(double) crown_bins;  /* stats: the lowest and highest leaves of each height
-                                     bin of one stem (sylva__crown_bins, from creation) */
+                                     bin of one stem, one stem per piece of the pool's
+                                     loop (SYLVA__STATS_PIECES, from creation) */
   /* the rest as the phases need them */
   SYLVA__VEC(sylva__sprout) sprouts;
   SYLVA__VEC(int32_t) order;
@@ -243,6 +245,8 @@ void sylva__stand_stale(sylva_world *w);
 
 /** Most cells of the canopy's floor grid. */
 #define SYLVA__CANOPY_MAX_COLS (1 << 22)
+/** The room in w->stem_top (int32s) the canopy pass needs for this many stems. */
+size_t sylva__canopy_room(int stems);
 /** Sets up the canopy's floor grid of a new world; 0 or SYLVA_ENOMEM. */
 int sylva__canopy_init(sylva_world *w);
 /** Every stem's crown_area and the world's canopy cover, from the leaf-bearing nodes
@@ -281,6 +285,8 @@ static inline bool sylva__stem_dead(const sylva__stem *st) { return st->stats.di
 bool sylva__species_stops(const sylva__species *sp, int local);
 /** Height bins of the crown base's measure for a world of this height (stats.c). */
 size_t sylva__crown_bins(double height);
+/** Most pieces of the stats' parallel loop over stems, each with its crown bins. */
+#define SYLVA__STATS_PIECES 64
 /** Does the node at this depth carry a lateral bud? */
 static inline bool sylva__has_bud(const sylva__species *sp, int32_t depth) {
   return depth % sp->bud_every == 0;
