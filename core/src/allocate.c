@@ -27,8 +27,8 @@ static int cmp_ranked(const void *a, const void *b) {
 
 /* One piece of the parallel allocation (sylva__allocate): its stems' scratch, each
  * of room the largest stem's live nodes (an axis, its ranking and the stack of
- * pending laterals never hold more), and where the stem being allocated writes its
- * sprouts (room: its live nodes, as a node sprouts at most once). */
+ * pending laterals never hold more), and the piece's own list of sprouts (room: its
+ * stems' live nodes, as a node sprouts at most once). */
 typedef struct axis_scratch {
   int32_t *axis, *work;
   double *light, *work_r;
@@ -213,46 +213,47 @@ typedef struct alloc_ctx {
   size_t pieces, room;
 } alloc_ctx;
 
+/* Piece p's stems: [p S / pieces, (p + 1) S / pieces). */
+static size_t piece_stem(const alloc_ctx *c, size_t p) {
+  return p * (size_t)c->w->stem_count / c->pieces;
+}
+
 /* Pieces [begin, end): each LGTM stem that grows distributes its resource alone
- * (reading the light, the skeleton and the caps, writing only its scratch and its
- * own stretch of sprouts, stem_first[k] on: room for its live nodes), and sorts its
- * sprouts; every stem's count goes to stem_sprouts. */
+ * (reading the light, the skeleton and the caps, writing only its piece's scratch and
+ * list), and sorts its sprouts. */
 static void allocate_pieces(void *arg, size_t begin, size_t end) {
   const alloc_ctx *c = arg;
   sylva_world *w = c->w;
-  size_t stems = (size_t)w->stem_count;
-  const int32_t *caps = w->caps.data, *lateral = caps + stems, *first = w->stem_first.data;
+  const int32_t *caps = w->caps.data, *lateral = caps + w->stem_count;
   for (size_t piece = begin; piece < end; piece++) {
     size_t at = piece * c->room;
+    sylva__piece_sprouts *list = &w->piece_sprouts.data[piece];
     axis_scratch sc = {.axis = w->axis.data + at, .work = w->work.data + at,
                        .light = w->work_light.data + at, .work_r = w->work_r.data + at,
-                       .ranked = w->ranked.data + at, .room = c->room};
-    for (size_t k = piece * stems / c->pieces; k < (piece + 1) * stems / c->pieces; k++) {
+                       .ranked = w->ranked.data + at, .room = c->room,
+                       .out = list->data, .out_room = list->cap};
+    for (size_t k = piece_stem(c, piece); k < piece_stem(c, piece + 1); k++) {
       const sylva__stem *st = &w->stems[k];
-      sc.out = w->sprouts.data + first[k];
-      sc.out_len = 0;
-      sc.out_room = (size_t)(first[k + 1] - first[k]);
-      if ((caps[k] > 0 || lateral[k] > 0) &&
-          w->species[st->species].def.allocation == SYLVA_ALLOC_LGTM) {
-        allocate_lgtm(w, &sc, (int32_t)k, sylva__stem_local(st, c->iteration), caps[k], lateral[k]);
-        /* a stem's shoots grow in decreasing R_i (slot breaks ties) */
-        if (sc.out_len > 1) qsort(sc.out, sc.out_len, sizeof *sc.out, cmp_sprout);
-      }
-      w->stem_sprouts.data[k] = (int32_t)sc.out_len;
+      if ((caps[k] <= 0 && lateral[k] <= 0) ||
+          w->species[st->species].def.allocation != SYLVA_ALLOC_LGTM)
+        continue;
+      size_t from = sc.out_len;
+      allocate_lgtm(w, &sc, (int32_t)k, sylva__stem_local(st, c->iteration), caps[k], lateral[k]);
+      /* a stem's shoots grow in decreasing R_i (slot breaks ties) */
+      if (sc.out_len - from > 1) qsort(sc.out + from, sc.out_len - from, sizeof *sc.out, cmp_sprout);
     }
+    list->len = sc.out_len;
   }
 }
 
-/* Room for the parallel allocation: stem_first holds where each stem's stretch of
- * sprouts starts (its live nodes' share of the sprouts' room), and each piece has
- * scratch of room the most live nodes of a stem. */
+/* Room for the parallel allocation: each piece's list of sprouts (its stems' live
+ * nodes) and scratch of room the most live nodes of a stem. Each piece keeps its own
+ * block from step to step, so only the sprouts it writes are ever touched. */
 static int reserve_pieces(sylva_world *w, alloc_ctx *c) {
   const sylva__skeleton *s = &w->nodes;
   size_t stems = (size_t)w->stem_count;
-  if (SYLVA__VEC_RESERVE(w->stem_first, stems + 1) || SYLVA__VEC_RESERVE(w->stem_sprouts, stems + 1) ||
-      SYLVA__VEC_RESERVE(w->sprouts, s->live + 1))
-    return SYLVA_ENOMEM;
-  int32_t *first = w->stem_first.data;
+  if (SYLVA__VEC_RESERVE(w->stem_first, stems + 1)) return SYLVA_ENOMEM;
+  int32_t *first = w->stem_first.data; /* the stems' live nodes, summed */
   for (size_t k = 0; k <= stems; k++) first[k] = 0;
   for (size_t i = 0; i < s->count; i++)
     if (s->flags[i] & SYLVA__NODE_ALIVE) first[s->stem[i] + 1]++;
@@ -261,10 +262,24 @@ static int reserve_pieces(sylva_world *w, alloc_ctx *c) {
     if ((size_t)first[k + 1] > room) room = (size_t)first[k + 1];
     first[k + 1] += first[k];
   }
+  /* a power of two, so that the pieces' stretches seldom move: each is touched only
+   * as far as its longest axis and stack reach */
+  size_t pow2 = 64;
+  while (pow2 < room) pow2 *= 2;
   size_t pieces = 8 * (size_t)sylva__pool_threads(w->pool);
   c->pieces = pieces < stems ? pieces : stems;
-  c->room = room;
-  size_t n = c->pieces * room;
+  c->room = pow2;
+  size_t had = w->piece_sprouts.cap;
+  if (SYLVA__VEC_RESERVE(w->piece_sprouts, c->pieces)) return SYLVA_ENOMEM;
+  for (size_t p = had; p < w->piece_sprouts.cap; p++)
+    w->piece_sprouts.data[p] = (sylva__piece_sprouts){NULL, 0, 0};
+  for (size_t p = 0; p < c->pieces; p++) {
+    sylva__piece_sprouts *list = &w->piece_sprouts.data[p];
+    list->len = 0;
+    if (SYLVA__VEC_RESERVE(*list, (size_t)(first[piece_stem(c, p + 1)] - first[piece_stem(c, p)])))
+      return SYLVA_ENOMEM;
+  }
+  size_t n = c->pieces * c->room;
   if (SYLVA__VEC_RESERVE(w->axis, n) || SYLVA__VEC_RESERVE(w->work, n) ||
       SYLVA__VEC_RESERVE(w->work_light, n) || SYLVA__VEC_RESERVE(w->work_r, n) ||
       SYLVA__VEC_RESERVE(w->ranked, n))
@@ -301,16 +316,16 @@ int sylva__allocate(sylva_world *w, int iteration) {
     if (caps[k] > 0 && w->species[w->stems[k].species].def.allocation == SYLVA_ALLOC_NONE)
       any_none = true;
   /* Stems share no node: each distributes its resource on its own, on the world's
-   * threads (docs/model.md, "Determinism"); then their sprouts close up in stem order. */
+   * threads (docs/model.md, "Determinism"); then the pieces' lists join in stem order. */
   sylva__pool_for(w->pool, c.pieces, 1, allocate_pieces, &c);
-  sylva__sprout *sp = w->sprouts.data;
-  size_t j = 0;
-  for (int k = 0; k < w->stem_count; k++) {
-    size_t from = (size_t)w->stem_first.data[k], n = (size_t)w->stem_sprouts.data[k];
-    if (n && from != j) memmove(sp + j, sp + from, n * sizeof *sp); /* j <= from */
-    j += n;
+  size_t total = 0;
+  for (size_t p = 0; p < c.pieces; p++) total += w->piece_sprouts.data[p].len;
+  if (SYLVA__VEC_RESERVE(w->sprouts, total + 1)) return SYLVA_ENOMEM;
+  for (size_t p = 0; p < c.pieces; p++) {
+    const sylva__piece_sprouts *list = &w->piece_sprouts.data[p];
+    if (list->len) memcpy(w->sprouts.data + w->sprouts.len, list->data, list->len * sizeof *list->data);
+    w->sprouts.len += list->len;
   }
-  w->sprouts.len = j;
   if (any_none) {
     /* Simplified IGM: every apex, and every free bud with enough light, grows c(T). */
     for (size_t i = 0; i < s->count; i++) {
@@ -328,13 +343,14 @@ int sylva__allocate(sylva_world *w, int iteration) {
       sylva__node_voxel(w, (int32_t)i, v);
       double l = sylva__grid_light(&w->grid, v);
       if (!apex && l < d->sprout_light) continue;
-      SYLVA_ASSERT(w->sprouts.len < w->sprouts.cap); /* a node sprouts at most once */
-      sp[w->sprouts.len++] = (sylva__sprout){(int32_t)i, k, caps[k], l, apex};
+      if (SYLVA__VEC_RESERVE(w->sprouts, w->sprouts.len + 1)) return SYLVA_ENOMEM;
+      w->sprouts.data[w->sprouts.len++] = (sylva__sprout){(int32_t)i, k, caps[k], l, apex};
     }
     /* Shoots of a stem are appended in decreasing R_i (slot breaks ties): cmp_sprout
      * is a total order, so this is the list the stems' own sorts give, with these. */
-    qsort(sp, w->sprouts.len, sizeof *sp, cmp_sprout);
+    qsort(w->sprouts.data, w->sprouts.len, sizeof *w->sprouts.data, cmp_sprout);
   }
+  const sylva__sprout *sp = w->sprouts.data;
   size_t at = 0;
   for (int k = 0; k <= w->stem_count; k++) {
     while (at < w->sprouts.len && sp[at].stem < k) at++;

@@ -420,6 +420,17 @@ void sylva__grid_vacate(sylva__grid *g, const int v[3]) {
     k = j;
   }
   o->slot[k] = 0;
+  /* A table a quarter full (shedding empties crowns' chunks) is rebuilt at half its
+   * size, at most half full again: the tables stay between a quarter and three
+   * quarters full instead of keeping the size of the most nodes a chunk ever held.
+   * Without memory it stays as it is: a lookup is the same either way. */
+  if (o->cap > 16 && 4 * o->count < o->cap) {
+    sylva__occ *t = occ_table(g, o, o->cap / 2);
+    if (t) {
+      occ_free(g, o);
+      *table = t;
+    }
+  }
 }
 
 static int clip_lo(int v, int lo) { return v > lo ? v : lo; }

@@ -127,7 +127,8 @@ void sylva_world_destroy(sylva_world *w) {
   sylva__free(w->stem_high.data);
   sylva__free(w->caps.data);
   sylva__free(w->stem_first.data);
-  sylva__free(w->stem_sprouts.data);
+  for (size_t p = 0; p < w->piece_sprouts.cap; p++) sylva__free(w->piece_sprouts.data[p].data);
+  sylva__free(w->piece_sprouts.data);
   sylva__free(w->stem_top.data);
   sylva__free(w->crown_bins.data);
   sylva__free(w->lit.data);
@@ -1392,7 +1393,7 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                (w->cells.cap + w->cell_start.cap) * sizeof(int32_t) + w->stamps.cap * sizeof(sylva__stamp) +
                w->stamp_lists.cap * sizeof(size_t) +
                (w->cell_first.cap + w->cell_items.cap + w->cell_of.cap + w->shed.cap +
-                w->finishing.cap + w->caps.cap + w->stem_first.cap + w->stem_sprouts.cap +
+                w->finishing.cap + w->caps.cap + w->stem_first.cap +
                 w->stem_top.cap + w->axis.cap + w->work.cap) *
                    sizeof(int32_t) +
                (w->crown_bins.cap + w->work_r.cap + w->work_light.cap) * sizeof(double) +
@@ -1403,7 +1404,10 @@ void sylva_world_memory(const sylva_world *w, sylva_memory *out) {
                w->zone_stats.cap * sizeof(sylva_zone_stat) +
                w->clear_stats.cap * sizeof(sylva_clearance_stat) +
                w->stem_box.cap * sizeof(sylva__box) + w->candidates.cap * sizeof(sylva__candidate) +
-               (w->stem_nodes.cap + w->stem_nodes_first.cap + w->pruned_ids.cap) * sizeof(int32_t);
+               (w->stem_nodes.cap + w->stem_nodes_first.cap + w->pruned_ids.cap) * sizeof(int32_t) +
+               w->piece_sprouts.cap * sizeof(sylva__piece_sprouts);
+  for (size_t p = 0; p < w->piece_sprouts.cap; p++)
+    out->other += w->piece_sprouts.data[p].cap * sizeof(sylva__sprout);
 }
 
 static uint64_t fnv(uint64_t h, const void *data, size_t n) {

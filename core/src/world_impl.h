@@ -61,6 +61,12 @@ typedef struct sylva__sprout {
   bool apex;
 } sylva__sprout;
 
+/** The sprouts one piece of the parallel allocation found. */
+typedef struct sylva__piece_sprouts {
+  sylva__sprout *data;
+  size_t len, cap;
+} sylva__piece_sprouts;
+
 /** One node of an axis being ranked by its BH share. */
 typedef struct sylva__ranked {
   double rbh;      /* RBH_i, the key of the ranking */
@@ -174,9 +180,8 @@ struct sylva_world {
                                      step can no longer fail */
   SYLVA__VEC(int32_t) caps;       /* allocation: c(T) of each stem that grows, else 0; then
                                    * the laterals' caps (stem_count + k) */
-  SYLVA__VEC(int32_t) stem_first; /* allocation: where each stem's sprouts are written (its
-                                     live nodes' share), then its first sprout, stem_count + 1 */
-  SYLVA__VEC(int32_t) stem_sprouts; /* allocation: each stem's sprouts */
+  SYLVA__VEC(int32_t) stem_first; /* allocation: the stems' live nodes summed (each piece's
+                                     room), then each stem's first sprout, stem_count + 1 */
   SYLVA__VEC(int32_t) stem_top;   /* shedding: each stem's highest live node; canopy: its
                                      leaf-bearing nodes, rows and counts by band
                                      (sylva__canopy_room, kept reserved) */
@@ -186,7 +191,9 @@ struct sylva_world {
   /* the rest as the phases need them */
   SYLVA__VEC(sylva__sprout) sprouts;
   SYLVA__VEC(int32_t) order;
-  /* allocation, one stretch for each piece of stems (allocate.c, axis_scratch) */
+  /* allocation, one list and one stretch of scratch for each piece of stems
+   * (allocate.c, axis_scratch) */
+  SYLVA__VEC(sylva__piece_sprouts) piece_sprouts;
   SYLVA__VEC(int32_t) axis;      /* nodes of one axis */
   SYLVA__VEC(sylva__ranked) ranked; /* ranking of one axis */
   SYLVA__VEC(int32_t) work;      /* pending (slot) stack for axes */

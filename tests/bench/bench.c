@@ -257,8 +257,9 @@ static void gives_cost(sylva_world *w, const summary *s) {
 /* What the voxels hold: chunks of shade, chunks with a node, block sums. */
 static void voxel_census(const sylva_world *w) {
   const sylva__grid *g = &w->grid;
-  size_t n = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2], nonzero = 0;
+  size_t n = (size_t)g->c[0] * (size_t)g->c[1] * (size_t)g->c[2], nonzero = 0, slots = 0, held = 0;
   for (size_t i = 0; i < n; i++) {
+    if (g->occ[i]) slots += g->occ[i]->cap, held += g->occ[i]->count;
     const sylva__chunk *c = g->chunks[i];
     if (!c) continue;
     for (int k = 0; k < SYLVA__CHUNK_VOXELS; k++) nonzero += c->shade[k] != 0;
@@ -266,6 +267,8 @@ static void voxel_census(const sylva_world *w) {
   printf("   voxels: %zu chunks of shade of %zu, %zu with a node (%.1f MB of occupancy), %zu block "
          "sums; %.1f%% of shade entries nonzero\n", g->chunk_count, n, g->occ_count, (double)g->occ_bytes / 1048576.0,
          g->colsum_count, g->chunk_count ? 100.0 * (double)nonzero / (double)(g->chunk_count * 4096) : 0.0);
+  printf("   occupancy: %zu voxels with a node in %zu slots (%.0f%% full)\n", held, slots,
+         slots ? 100.0 * (double)held / (double)slots : 0.0);
 }
 
 /* Library species in years (issue 20): scenarios/street.json's street of library
