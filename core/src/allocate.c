@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "sort.h"
 #include "world_impl.h"
 
 double sylva__bh_share(double lm, double ll, double lambda) {
@@ -116,7 +117,7 @@ static void allocate_axis(const sylva_world *w, axis_scratch *sc, int32_t stem, 
     items[0] = apex;
     from = 1;
   }
-  if (nb - from > 1) qsort(items + from, (size_t)(nb - from), sizeof *items, cmp_ranked);
+  sylva__sort(items + from, (size_t)(nb - from), sizeof *items, cmp_ranked);
   double sum = 0.0;
   for (int rank = 0; rank < nb; rank++) {
     double wr = sylva__priority_weight(rank, nb, d->k, d->w1, d->w2, d->w3);
@@ -240,7 +241,7 @@ static void allocate_pieces(void *arg, size_t begin, size_t end) {
       size_t from = sc.out_len;
       allocate_lgtm(w, &sc, (int32_t)k, sylva__stem_local(st, c->iteration), caps[k], lateral[k]);
       /* a stem's shoots grow in decreasing R_i (slot breaks ties) */
-      if (sc.out_len - from > 1) qsort(sc.out + from, sc.out_len - from, sizeof *sc.out, cmp_sprout);
+      sylva__sort(sc.out + from, sc.out_len - from, sizeof *sc.out, cmp_sprout);
     }
     list->len = sc.out_len;
   }

@@ -8,6 +8,7 @@
 #include "light.h"
 #include "rng.h"
 #include "shoot.h"
+#include "sort.h"
 #include "sylva/sylva.h"
 #include "world_impl.h"
 
@@ -123,6 +124,34 @@ static void test_lateral_direction(void) {
   double side[3] = {1, 0, 0};
   sylva__lateral_direction(side, 90.0, 30.0, out);
   CHECK_NEAR(out[0], 0.0, 1e-12);
+}
+
+typedef struct sort_item {
+  int32_t key, tie;
+  double pad[2];
+} sort_item;
+
+static int cmp_sort_item(const void *a, const void *b) {
+  const sort_item *x = a, *y = b;
+  if (x->key != y->key) return (x->key > y->key) - (x->key < y->key);
+  return (x->tie > y->tie) - (x->tie < y->tie);
+}
+
+/* sylva__sort (the allocation's, on the pool's threads) gives qsort's order under a
+ * total order: keys with many repeats, ties broken by a unique second key. */
+static void test_sort(void) {
+  sylva__rng r;
+  sylva__rng_seed(&r, 7);
+  static sort_item a[3000], b[3000];
+  size_t sizes[] = {0, 1, 2, 3, 17, 256, 3000};
+  for (size_t t = 0; t < sizeof sizes / sizeof *sizes; t++) {
+    size_t n = sizes[t];
+    for (size_t i = 0; i < n; i++)
+      a[i] = b[i] = (sort_item){(int32_t)sylva__rng_below(&r, 40), (int32_t)i, {(double)i, 0.0}};
+    sylva__sort(a, n, sizeof *a, cmp_sort_item);
+    if (n) qsort(b, n, sizeof *b, cmp_sort_item);
+    CHECK(n == 0 || memcmp(a, b, n * sizeof *a) == 0);
+  }
 }
 
 static void test_rng(void) {
@@ -392,7 +421,7 @@ static void test_shade_base(void) {
 int main(int argc, char **argv) {
   static const check_test tests[] = {
       CHECK_TEST(derivatives), CHECK_TEST(cap_and_stop), CHECK_TEST(bh_and_priority),
-      CHECK_TEST(light_sensitivity), CHECK_TEST(lateral_direction), CHECK_TEST(rng),
+      CHECK_TEST(light_sensitivity), CHECK_TEST(lateral_direction), CHECK_TEST(rng), CHECK_TEST(sort),
       CHECK_TEST(allocation_hand_worked), CHECK_TEST(allocation_cap),
       CHECK_TEST(allocation_lateral_reach),
       CHECK_TEST(allocation_apical_control), CHECK_TEST(allocation_apical_flow),
