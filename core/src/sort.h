@@ -10,8 +10,9 @@
 #define SYLVA__SORT_MAX_ELEM 64
 
 /** Sorts n elements of size bytes (at most SYLVA__SORT_MAX_ELEM) in place by cmp, as
- *  qsort does; in O(n log n), on the stack alone (heapsort). Not stable: under a
- *  total order (no two elements equal) the result is the one qsort gives. */
+ *  qsort does, on the stack alone (a quicksort that recurses into its smaller side).
+ *  Not stable: under a total order (no two elements equal) the result is the one
+ *  qsort gives. */
 void sylva__sort(void *base, size_t n, size_t size, int (*cmp)(const void *, const void *));
 
 #endif

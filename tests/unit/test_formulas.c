@@ -144,14 +144,19 @@ static void test_sort(void) {
   sylva__rng_seed(&r, 7);
   static sort_item a[3000], b[3000];
   size_t sizes[] = {0, 1, 2, 3, 17, 256, 3000};
-  for (size_t t = 0; t < sizeof sizes / sizeof *sizes; t++) {
-    size_t n = sizes[t];
-    for (size_t i = 0; i < n; i++)
-      a[i] = b[i] = (sort_item){(int32_t)sylva__rng_below(&r, 40), (int32_t)i, {(double)i, 0.0}};
-    sylva__sort(a, n, sizeof *a, cmp_sort_item);
-    if (n) qsort(b, n, sizeof *b, cmp_sort_item);
-    CHECK(n == 0 || memcmp(a, b, n * sizeof *a) == 0);
-  }
+  for (int mode = 0; mode < 3; mode++) /* random keys, ascending, descending */
+    for (size_t t = 0; t < sizeof sizes / sizeof *sizes; t++) {
+      size_t n = sizes[t];
+      for (size_t i = 0; i < n; i++) {
+        int32_t key = mode == 0 ? (int32_t)sylva__rng_below(&r, 40)
+                      : mode == 1 ? (int32_t)i : (int32_t)(n - i);
+        a[i] = b[i] = (sort_item){key, (int32_t)(i % 7), {(double)i, 0.0}};
+        if (mode == 0) a[i].tie = b[i].tie = (int32_t)i;
+      }
+      sylva__sort(a, n, sizeof *a, cmp_sort_item);
+      if (n) qsort(b, n, sizeof *b, cmp_sort_item);
+      CHECK(n == 0 || memcmp(a, b, n * sizeof *a) == 0);
+    }
 }
 
 static void test_rng(void) {
