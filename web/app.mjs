@@ -18,6 +18,7 @@ import { ConflictsPanel } from './conflicts.mjs';
 import { CompareView } from './compare.mjs';
 import { countInZones, zonesOf } from './zones.mjs';
 import { yearOf } from './helpers.mjs';
+import { stemsThreshold } from './stems.mjs';
 
 // What the daemon pushes (replies to requests go to their callers).
 const handlers = {
@@ -42,7 +43,7 @@ const session = new Session({
 const view = new View($('view'));
 const plots = new Plots($('charts'));
 const stand = new StandFigures($('stand'), $('stand-figures'));
-const watch = new Watch({ session, view, plots, onChange: changed });
+const watch = new Watch({ session, view, plots, onChange: changed, stemsThreshold: stemsThreshold(location.search) });
 
 // Watches a run that was just created or forked ({run, name}), then refreshes the
 // run list, which has it now.
@@ -73,6 +74,11 @@ function toggleLeaves(on = !view.leaves.visible) {
   $('leaves-toggle').setAttribute('aria-pressed', String(on));
 }
 $('leaves-toggle').onclick = () => toggleLeaves();
+// Stems (trunks and crowns from the stats) or every internode: the button.
+function renderDetail() {
+  $('detail-toggle').setAttribute('aria-pressed', String(watch.detail === 'stems'));
+}
+$('detail-toggle').onclick = () => watch.setDetail(watch.detail === 'stems' ? 'nodes' : 'stems');
 document.addEventListener('keydown', (ev) => {
   if (ev.key !== 'l' && ev.key !== 'L') return;
   if (ev.ctrlKey || ev.metaKey || ev.altKey || ev.target.closest?.('input, textarea, select, [contenteditable]')) return;
@@ -92,6 +98,9 @@ function changed(what) {
     edit.render();
     conflicts.render();
     stand.render(watch.shown().stand);
+    renderDetail();
+  } else if (what === 'detail') {
+    renderDetail();
   } else if (what === 'snapshot') {
     timeline.reset();
     edit.speciesOptions();
@@ -138,6 +147,10 @@ window.sylva = {
     nodes: watch.shown().live,
     liveIteration: watch.live.iteration,
     liveNodes: watch.live.live,
+    detail: watch.detail,
+    liveDetail: watch.live.detail,
+    drawnTrunks: view.stems.trunks,
+    drawnCrowns: view.stems.crowns,
     seq: watch.live.seq,
     obstacles: watch.shown().obstacles.map((o) => o.id),
     plants: watch.shown().plants.map((p) => p.id),

@@ -17,6 +17,7 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { isZone, markInZones, zonesOf } from './zones.mjs';
 import { markDeadStems } from './stand.mjs';
 import { Leaves } from './leaves.mjs';
+import { stemShapes } from './stems.mjs';
 import { LEAF_BUDGET, LEAF_BUDGET_MIN } from './foliage.mjs';
 
 // Frames slower than this (ms, the median of FRAME_SAMPLES in a row) halve the
@@ -155,6 +156,51 @@ void main() {
   gl_FragColor = vec4(vColor * light, 1.0);
   #include <colorspace_fragment>
 }`;
+
+// The stems of a skeleton of `detail` "stems" (stems.mjs): a trunk and a crown
+// each, in two instanced meshes made again from its stats at every show (a few
+// hundred stems); nothing for a skeleton of nodes.
+class StemModels {
+  constructor(scene) {
+    this.group = new THREE.Group();
+    scene.add(this.group);
+    this.trunkGeometry = new THREE.CylinderGeometry(1, 1, 1, 8).rotateX(Math.PI / 2).translate(0, 0, 0.5);
+    this.crownGeometry = new THREE.SphereGeometry(1, 16, 10);
+    this.trunkMaterial = new THREE.MeshLambertMaterial({ color: 0x6b4f35 });
+    this.crownMaterial = new THREE.MeshLambertMaterial({ color: 0xffffff });
+    this.trunks = 0;   // drawn
+    this.crowns = 0;
+  }
+
+  sync(sk) {
+    for (const m of this.group.children) m.dispose();
+    this.group.clear();
+    const shapes = sk.detail === 'stems' ? stemShapes(sk.plants, sk.stats, sk.plantIndex) : [];
+    const crowned = shapes.filter((s) => s.crownRadius > 0);
+    this.trunks = shapes.length;
+    this.crowns = crowned.length;
+    if (!shapes.length) return;
+    const m = new THREE.Matrix4(), q = new THREE.Quaternion(), p = new THREE.Vector3(), s = new THREE.Vector3();
+    const trunks = new THREE.InstancedMesh(this.trunkGeometry, this.trunkMaterial, shapes.length);
+    shapes.forEach((t, i) => {
+      const [x, y, z] = t.root;
+      trunks.setMatrixAt(i, m.compose(p.set(x, y, z), q, s.set(t.trunkRadius, t.trunkRadius, Math.max(t.height, 1e-3))));
+      trunks.setColorAt(i, new THREE.Color(t.dead ? DEAD_COLOR : 0x6b4f35));
+    });
+    trunks.name = 'stems:trunks';
+    this.group.add(trunks);
+    if (!crowned.length) return;
+    const crowns = new THREE.InstancedMesh(this.crownGeometry, this.crownMaterial, crowned.length);
+    crowned.forEach((c, i) => {
+      const [x, y, z] = c.root, half = (c.height - c.crownBase) / 2;
+      crowns.setMatrixAt(i, m.compose(p.set(x, y, z + c.crownBase + half), q, s.set(c.crownRadius, c.crownRadius, half)));
+      crowns.setColorAt(i, new THREE.Color(plantColor(c.plant)));
+    });
+    crowns.name = 'stems:crowns';
+    crowns.castShadow = true;
+    this.group.add(crowns);
+  }
+}
 
 // Branches of one skeleton: the GPU buffers follow the skeleton's arrays.
 class Branches {
@@ -378,6 +424,7 @@ export class View {
       },
     });
     this.branches = new Branches(this.scene, this.material);
+    this.stems = new StemModels(this.scene);
     // (the leaves' work done in slices of their own: the cards drawn again, and
     // the crown's shadow)
     this.leaves = new Leaves(this.scene, () => {
@@ -540,6 +587,8 @@ export class View {
     this.setWorld(sk.world);
     this.setObstacles(sk.obstacles);
     this.branches.sync(sk);
+    this.stems.sync(sk);
+    if (this.stems.trunks) this.shadowDirty = true;
     this.shown = sk;
     const t0 = performance.now();
     this.leaves.sync(sk);

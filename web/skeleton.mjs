@@ -27,6 +27,7 @@ export class Skeleton {
     this.changedFrom = 0;    // lowest slot whose data changed since the last take
     this.iteration = 0;
     this.seq = -1;
+    this.detail = 'nodes';   // the snapshot's detail: 'stems' holds stats and no internodes
     this.plants = [];        // [{id, stems}] as in the snapshot
     this.species = [];
     this.obstacles = [];
@@ -176,6 +177,7 @@ export class Skeleton {
     this.voxel = msg.voxel;
     this.iteration = msg.iteration;
     this.seq = msg.seq ?? -1;
+    this.detail = msg.detail ?? 'nodes';
     this.plantIndex = new Map((msg.plants || []).map((p, i) => [p.id, i]));
     this.setStats(msg.stats || [], msg.stand);
     this.changedFrom = 0;

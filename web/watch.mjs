@@ -6,16 +6,21 @@
 //   'snapshot' the live skeleton was loaded from a snapshot (species may differ);
 //   'live'     the live skeleton changed (after a snapshot or a delta);
 //   'shown'    the shown skeleton is another one (stored or live);
-//   'status'   the run's status changed.
+//   'status'   the run's status changed;
+//   'detail'   the detail it is watched at changed ('nodes' or 'stems', stems.mjs:
+//              by the run's size when it is picked, or as the user chose).
 import { Skeleton } from './skeleton.mjs';
+import { detailFor, STEMS_THRESHOLD } from './stems.mjs';
 import { parseStatsCsv, runSummary } from './helpers.mjs';
 import { standOfRows } from './stand.mjs';
 
 const TIMINGS = 200;   // delta timings kept for the page's state
 
 export class Watch {
-  constructor({ session, view, plots, onChange }) {
+  constructor({ session, view, plots, onChange, stemsThreshold = STEMS_THRESHOLD }) {
     this.session = session;
+    this.stemsThreshold = stemsThreshold;
+    this.detail = 'nodes';      // the detail the run is watched at
     this.view = view;
     this.plots = plots;
     this.onChange = onChange;
@@ -35,6 +40,7 @@ export class Watch {
   switchTo(summary) {
     if (this.run) this.session.send({ type: 'unsubscribe', run: this.run.run });
     this.run = runSummary(summary);
+    this.detail = detailFor(this.run, this.stemsThreshold);
     this.live = new Skeleton();
     this.history = null;
     this.timings.held = [];
@@ -55,7 +61,24 @@ export class Watch {
   }
 
   subscribe(since) {
-    this.session.send({ type: 'subscribe', run: this.run.run, ...(since !== undefined ? { since } : {}) });
+    this.session.send({ type: 'subscribe', run: this.run.run, ...(since !== undefined ? { since } : {}),
+      ...(this.detail === 'stems' ? { detail: 'stems' } : {}) });
+  }
+
+  // Watches the run at another detail ('nodes' or 'stems'): a fresh snapshot.
+  setDetail(detail) {
+    if (!this.run || detail === this.detail) return;
+    this.detail = detail;
+    this.live = new Skeleton();
+    this.timings.held = [];
+    this.subscribe();
+    this.onChange('detail');
+  }
+
+  // Whether a snapshot or delta is of the detail watched (one of the other may
+  // still arrive after a change of detail).
+  ours(msg) {
+    return msg.run === this.run?.run && (msg.detail ?? 'nodes') === this.detail;
   }
 
   // After a reconnection: subscribes again, asking for what was missed.
@@ -64,7 +87,7 @@ export class Watch {
   }
 
   snapshot(msg) {
-    if (msg.run !== this.run?.run) return;
+    if (!this.ours(msg)) return;
     this.live.loadSnapshot(msg);
     this.run.iteration = msg.iteration;
     this.plots.setPlants(this.live.plants.map((p) => p.id));
@@ -82,7 +105,7 @@ export class Watch {
 
   // meta: what the socket worker measured ({parseMs, bytes}).
   delta(msg, meta) {
-    if (msg.run !== this.run?.run) return;
+    if (!this.ours(msg) || this.live.seq < 0) return;   // (no snapshot yet: it comes)
     if (msg.seq <= this.live.seq) return;   // already held (a replay after a snapshot)
     if (msg.seq !== this.live.seq + 1) {
       // a gap: ask for what was missed

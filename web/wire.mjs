@@ -14,9 +14,10 @@ function leafArrays(list = []) {
 }
 
 // A delta: added [[id, parent, plant, stem, x, y, z, radius]], radii [[id, r]],
-// shed [id] and leaves [[id, n]] become flat arrays.
+// shed [id] and leaves [[id, n]] become flat arrays (empty ones for a delta of
+// `detail` "stems", which has none of them).
 export function deltaArrays(msg) {
-  const a = msg.added, n = a.length;
+  const a = msg.added ?? [], n = a.length;
   const added = {
     n, id: new Int32Array(n), parent: new Int32Array(n), plant: new Uint16Array(n),
     stem: new Uint16Array(n), xyzr: new Float32Array(n * 4),
@@ -32,32 +33,33 @@ export function deltaArrays(msg) {
     added.xyzr[i * 4 + 2] = e[6];
     added.xyzr[i * 4 + 3] = e[7];
   }
-  const r = msg.radii, m = r.length;
+  const r = msg.radii ?? [], m = r.length;
   const radii = { n: m, id: new Int32Array(m), r: new Float32Array(m) };
   for (let i = 0; i < m; i++) {
     radii.id[i] = r[i][0];
     radii.r[i] = r[i][1];
   }
   return {
-    type: 'delta', run: msg.run, seq: msg.seq, iteration: msg.iteration, stats: msg.stats,
-    canopy_cover: msg.canopy_cover, stand: msg.stand, added, radii, shed: Int32Array.from(msg.shed),
+    type: 'delta', run: msg.run, seq: msg.seq, iteration: msg.iteration, detail: msg.detail,
+    stats: msg.stats, canopy_cover: msg.canopy_cover, stand: msg.stand, added, radii,
+    shed: Int32Array.from(msg.shed ?? []),
     leaves: leafArrays(msg.leaves), typed: true,
   };
 }
 
 // A snapshot (or a skeleton export): the plants' nodes [id, parent, x, y, z,
 // radius, birth] and the leaves [[id, n]] become flat arrays, the nodes in plant,
-// stem, id order; the rest is kept.
+// stem, id order (none for a snapshot of `detail` "stems"); the rest is kept.
 export function snapshotArrays(msg) {
   let n = 0;
-  for (const p of msg.plants) for (const s of p.stems) n += s.nodes.length;
+  for (const p of msg.plants) for (const s of p.stems) n += s.nodes?.length ?? 0;
   const nodes = {
     n, id: new Int32Array(n), parent: new Int32Array(n), plant: new Uint16Array(n),
     stem: new Uint16Array(n), birth: new Int32Array(n), xyzr: new Float32Array(n * 4),
   };
   let k = 0;
   msg.plants.forEach((p, pi) => p.stems.forEach((s, si) => {
-    for (const e of s.nodes) {
+    for (const e of s.nodes ?? []) {
       nodes.id[k] = e[0];
       nodes.parent[k] = e[1];
       nodes.plant[k] = pi;

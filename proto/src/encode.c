@@ -295,9 +295,9 @@ static void put_node(sylva__strbuf *b, const sylva_node_info *n) {
   sylva__strbuf_printf(b, ",%" PRId32 "]", n->birth);
 }
 
-void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w) {
+void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w, bool with_nodes) {
   const sylva_world_def *def = sylva_world_get_def(w);
-  size_t node_count = sylva_world_node_count(w);
+  size_t node_count = with_nodes ? sylva_world_node_count(w) : 0;
   int stem_count = sylva_world_stem_count(w);
   /* One pass over the nodes, then a counting sort by global stem; nodes keep their
    * id order within a stem. */
@@ -347,12 +347,15 @@ void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w) {
       sylva_world_stem_root(w, s, root);
       sylva__strbuf_puts(b, k ? ",{\"root\":" : "{\"root\":");
       sylva__put_vec3(b, root);
-      sylva__strbuf_puts(b, ",\"nodes\":[");
-      for (size_t i = start[s]; i < start[s + 1]; i++) {
-        if (i > start[s]) sylva__strbuf_putc(b, ',');
-        put_node(b, &nodes[order[i]]);
+      if (with_nodes) {
+        sylva__strbuf_puts(b, ",\"nodes\":[");
+        for (size_t i = start[s]; i < start[s + 1]; i++) {
+          if (i > start[s]) sylva__strbuf_putc(b, ',');
+          put_node(b, &nodes[order[i]]);
+        }
+        sylva__strbuf_putc(b, ']');
       }
-      sylva__strbuf_puts(b, "]}");
+      sylva__strbuf_putc(b, '}');
     }
     sylva__strbuf_puts(b, "]}");
   }
@@ -376,7 +379,7 @@ char *sylva_encode_skeleton(const sylva_world *w) {
   sylva__strbuf b = {0};
   sylva__strbuf_printf(&b, "{\"format\":\"sylva.skeleton/1\",\"iteration\":%d,",
                        sylva_world_iteration(w));
-  sylva__put_world_body(&b, w);
+  sylva__put_world_body(&b, w, true);
   sylva__strbuf_puts(&b, "}\n");
   return sylva__strbuf_finish(&b);
 }

@@ -23,8 +23,9 @@ void sylva__put_node_geometry(sylva__strbuf *b, const sylva_node_info *n);
 /** A radius with 5 decimals, trimmed. */
 void sylva__put_radius(sylva__strbuf *b, float radius);
 /** "voxel":V,"world":{"min":[..],"max":[..]},"obstacles":[..],"plants":[..] of the
- *  skeleton format (without braces around it). */
-void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w);
+ *  skeleton format (without braces around it); without with_nodes each stem is only
+ *  {"root":[x,y,z]} (and the nodes are not read). */
+void sylva__put_world_body(sylva__strbuf *b, const sylva_world *w, bool with_nodes);
 /** Which optional fields the stats of a world carry (cli.md, "Output"). */
 typedef struct sylva__stats_form {
   bool conflicts; /**< pruned, zones, clearance (sylva_world_reports_conflicts) */

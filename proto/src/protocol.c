@@ -39,7 +39,7 @@ static const msg_kind kinds[] = {
     [SYLVA_MSG_HELLO] = KIND("hello", "token"),
     [SYLVA_MSG_LIST] = {"list", bare_keys, 2},
     [SYLVA_MSG_CREATE] = KIND("create", "scenario", "name", "start"),
-    [SYLVA_MSG_SUBSCRIBE] = KIND("subscribe", "run", "since"),
+    [SYLVA_MSG_SUBSCRIBE] = KIND("subscribe", "run", "since", "detail"),
     [SYLVA_MSG_UNSUBSCRIBE] = KIND("unsubscribe", "run"),
     [SYLVA_MSG_CONTROL] = KIND("control", "run", "action", "count"),
     [SYLVA_MSG_EDIT] = KIND("edit", "run", "add_plants", "add_obstacles", "remove_obstacles", "prune"),
@@ -66,6 +66,11 @@ static const char *const action_names[] = {
     [SYLVA_CONTROL_PAUSE] = "pause",
     [SYLVA_CONTROL_STEP] = "step",
     [SYLVA_CONTROL_STOP] = "stop",
+};
+
+static const char *const detail_names[] = {
+    [SYLVA_DETAIL_NODES] = "nodes",
+    [SYLVA_DETAIL_STEMS] = "stems",
 };
 
 /* ---- field readers ---- */
@@ -96,6 +101,24 @@ static int read_ref(sylva__parser *p, const cJSON *item, char **out) {
     rc = sylva__fail_nomem(p);
   }
   sylva__ptr_pop(p, old);
+  return rc;
+}
+
+/* item, the value of key, as one of names (count of them, listed in `known` for the
+ * error): its index in *out. */
+static int read_choice(sylva__parser *p, const cJSON *item, const char *key,
+                       const char *const *names, size_t count, const char *known, size_t *out) {
+  size_t old = sylva__ptr_push(p, key);
+  const char *s = "";
+  int rc = sylva__want_string(p, item, &s);
+  size_t k = 0;
+  while (!rc && k < count && strcmp(s, names[k]) != 0) k++;
+  if (!rc && k == count) {
+    char q[80];
+    rc = sylva__fail(p, "unknown %s %s (known: %s)", key, sylva__quote(q, s), known);
+  }
+  sylva__ptr_pop(p, old);
+  if (!rc) *out = k;
   return rc;
 }
 
@@ -322,6 +345,11 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
       m->has_since = true;
       m->since = (int64_t)v;
     }
+    if (!rc && (item = member(root, "detail"))) {
+      size_t k = 0;
+      rc = read_choice(p, item, "detail", detail_names, SYLVA_DETAIL_COUNT, "nodes, stems", &k);
+      if (!rc) m->detail = (sylva_detail)k;
+    }
     return rc;
   case SYLVA_MSG_UNSUBSCRIBE:
     return read_run(p, root, &m->run);
@@ -331,19 +359,9 @@ static int parse_fields(sylva__parser *p, const cJSON *root, sylva_msg *m) {
     if (!(item = member(root, "action")))
       return sylva__fail_at_key(p, "action",
                                 "required: \"start\", \"pause\", \"step\" or \"stop\"");
-    size_t old = sylva__ptr_push(p, "action");
-    const char *s = "";
-    rc = sylva__want_string(p, item, &s);
     size_t k = 0;
-    while (!rc && k < sizeof action_names / sizeof action_names[0] &&
-           strcmp(s, action_names[k]) != 0)
-      k++;
-    if (!rc && k == sizeof action_names / sizeof action_names[0]) {
-      char q[80];
-      rc =
-          sylva__fail(p, "unknown action %s (known: start, pause, step, stop)", sylva__quote(q, s));
-    }
-    sylva__ptr_pop(p, old);
+    rc = read_choice(p, item, "action", action_names, sizeof action_names / sizeof action_names[0],
+                     "start, pause, step, stop", &k);
     if (rc) return rc;
     m->action = (sylva_control_action)k;
     m->count = 1;
@@ -619,14 +637,27 @@ static void put_stand(sylva__strbuf *b, const sylva__stats_form *form, const syl
   sylva__put_stand(b, s, true);
 }
 
+/* ,"detail":"stems" of the messages of a stems subscriber (nothing for nodes). */
+static void put_detail(sylva__strbuf *b, sylva_detail detail) {
+  if (detail == SYLVA_DETAIL_STEMS) sylva__strbuf_puts(b, ",\"detail\":\"stems\"");
+}
+
 char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
                          const char *ref) {
+  return sylva_msg_snapshot_detail(run, seq, w, start_year, SYLVA_DETAIL_NODES, ref);
+}
+
+char *sylva_msg_snapshot_detail(int64_t run, int64_t seq, const sylva_world *w, int start_year,
+                                sylva_detail detail, const char *ref) {
   sylva__strbuf b = {0};
   sylva__stats_form form = sylva__stats_form_of(w, start_year);
+  bool nodes = detail != SYLVA_DETAIL_STEMS;
   sylva__strbuf_printf(&b, "{\"type\":\"snapshot\",\"run\":%" PRId64 ",\"seq\":%" PRId64
-                           ",\"iteration\":%d,",
+                           ",\"iteration\":%d",
                        run, seq, sylva_world_iteration(w));
-  sylva__put_world_body(&b, w);
+  put_detail(&b, detail);
+  sylva__strbuf_putc(&b, ',');
+  sylva__put_world_body(&b, w, nodes);
   sylva__strbuf_puts(&b, ",\"stats\":[");
   int stems = sylva_world_stem_count(w);
   for (int s = 0; s < stems; s++) {
@@ -645,7 +676,7 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int sta
   sylva__strbuf_puts(&b, sylva_world_get_def(w)->sky_count ? "],\"sky\":\"site\"" : "],\"sky\":\"zenith\"");
   put_start_year(&b, start_year);
   put_foliage(&b, w);
-  put_node_leaves(&b, w);
+  if (nodes) put_node_leaves(&b, w);
   sylva__strbuf_puts(&b, ",\"canopy_cover\":"); /* docs/model.md, "Canopy cover" */
   sylva__strbuf_fixed(&b, sylva_world_canopy_cover(w), 4);
   sylva_stand_stats stand;
@@ -655,10 +686,38 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int sta
   return sylva__strbuf_finish(&b);
 }
 
+/* "stats":[..],"canopy_cover":..,"stand":..} of a delta, at either detail. */
+static void put_delta_stats(sylva__strbuf *b, const sylva_world *w, const sylva_journal *j,
+                            int start_year) {
+  sylva__stats_form form = sylva__stats_form_of(w, start_year);
+  sylva__strbuf_puts(b, "\"stats\":[");
+  for (size_t i = 0; i < j->stem_count; i++) {
+    if (i) sylva__strbuf_putc(b, ',');
+    sylva__put_stem_stats(b, w, &j->stats[i], &form, true);
+  }
+  sylva__strbuf_puts(b, "],\"canopy_cover\":");
+  sylva__strbuf_fixed(b, j->canopy_cover, 4);
+  put_stand(b, &form, &j->stand);
+  sylva__strbuf_putc(b, '}');
+}
+
+char *sylva_msg_delta_detail(int64_t run, int64_t seq, const sylva_world *w,
+                             const sylva_journal *j, int start_year, sylva_detail detail) {
+  if (detail != SYLVA_DETAIL_STEMS) return sylva_msg_delta(run, seq, w, j, start_year);
+  sylva__strbuf b = {0};
+  if (!sylva__strbuf_reserve(&b, j->stem_count * 200 + 256)) return sylva__strbuf_finish(&b);
+  sylva__strbuf_printf(&b, "{\"type\":\"delta\",\"run\":%" PRId64 ",\"seq\":%" PRId64
+                           ",\"iteration\":%d",
+                       run, seq, j->iteration);
+  put_detail(&b, detail);
+  sylva__strbuf_putc(&b, ',');
+  put_delta_stats(&b, w, j, start_year);
+  return sylva__strbuf_finish(&b);
+}
+
 char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j,
                       int start_year) {
   sylva__strbuf b = {0};
-  sylva__stats_form form = sylva__stats_form_of(w, start_year);
   if (!sylva__strbuf_reserve(&b, j->added_count * 64 + j->radii_count * 24 + j->shed_count * 12 +
                                      j->leaves_count * 20 + j->stem_count * 200 + 256))
     return sylva__strbuf_finish(&b);
@@ -685,15 +744,8 @@ char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylv
   for (size_t i = 0; i < j->leaves_count; i++)
     sylva__strbuf_printf(&b, "%s[%" PRId32 ",%" PRId32 "]", i ? "," : "", j->leaves[i].id,
                          j->leaves[i].leaves);
-  sylva__strbuf_puts(&b, "],\"stats\":[");
-  for (size_t i = 0; i < j->stem_count; i++) {
-    if (i) sylva__strbuf_putc(&b, ',');
-    sylva__put_stem_stats(&b, w, &j->stats[i], &form, true);
-  }
-  sylva__strbuf_puts(&b, "],\"canopy_cover\":");
-  sylva__strbuf_fixed(&b, j->canopy_cover, 4);
-  put_stand(&b, &form, &j->stand);
-  sylva__strbuf_putc(&b, '}');
+  sylva__strbuf_puts(&b, "],");
+  put_delta_stats(&b, w, j, start_year);
   return sylva__strbuf_finish(&b);
 }
 

@@ -11,6 +11,7 @@
 #include <uv.h>
 
 #include "msgbuf.h"
+#include "sylva/protocol.h"
 
 typedef struct server server;
 typedef struct client client;
@@ -64,6 +65,7 @@ client *client_find(client_set *s, uint64_t serial);
 typedef struct subscription {
   int64_t run;
   bool need_snapshot; /**< send a snapshot (not the next delta) when there is one */
+  sylva_detail detail; /**< the detail of its snapshots and deltas */
   char *ref;          /**< the subscribe's id, for that snapshot (malloc'd), or NULL */
 } subscription;
 

@@ -80,7 +80,7 @@ static void handle_parsed(client *c, sylva_msg *mp, int rc, const char *parse_er
     if (code) reply_error(c, code, err, m.ref);
     break;
   }
-  case SYLVA_MSG_SUBSCRIBE: run_subscribe(r, c, m.has_since, m.since, m.ref); break;
+  case SYLVA_MSG_SUBSCRIBE: run_subscribe(r, c, m.has_since, m.since, m.detail, m.ref); break;
   case SYLVA_MSG_UNSUBSCRIBE:
     client_unsubscribe(c, r->id);
     runs_wake(d);

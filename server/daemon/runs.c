@@ -105,8 +105,10 @@ static void run_unload(run *r) {
     msgbuf_unref(r->history[i]);
     r->history[i] = NULL;
   }
-  msgbuf_unref(r->snapshot);
-  r->snapshot = NULL;
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) {
+    msgbuf_unref(r->snapshot[k]);
+    r->snapshot[k] = NULL;
+  }
   server_log(r->name, "unloaded (memory budget)");
 }
 
@@ -254,7 +256,9 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
     return false;
   }
   res->at_ms[1] = mono_ms();
-  res->text = sylva_msg_delta(r->id, seq, r->w, j, r->start_year);
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++)
+    if (atomic_load(&r->want[k]))
+      res->text[k] = sylva_msg_delta_detail(r->id, seq, r->w, j, r->start_year, (sylva_detail)k);
   res->at_ms[2] = mono_ms();
   res->iteration = sylva_world_iteration(r->w);
   res->stems = sylva_world_stem_count(r->w);
@@ -349,7 +353,10 @@ static void task_work(pool_task *t) {
     r->task_text = sylva_msg_light_slice(r->id, r->w, r->lights->z, r->lights->ref);
     break;
   case RUN_TASK_SNAPSHOT:
-    r->task_text = sylva_msg_snapshot(r->id, r->seq, r->w, r->start_year, NULL);
+    for (int k = 0; k < SYLVA_DETAIL_COUNT; k++)
+      if (r->task_details[k])
+        r->task_snapshots[k] =
+            sylva_msg_snapshot_detail(r->id, r->seq, r->w, r->start_year, (sylva_detail)k, NULL);
     break;
   case RUN_TASK_NONE: break;
   }
@@ -357,40 +364,66 @@ static void task_work(pool_task *t) {
 
 /* ---- the tasks' results, on the loop -------------------------------------------- */
 
-/* Sends the cached snapshot to every subscriber waiting for one. */
-static void send_waiting_snapshots(run *r) {
+/* Sends the cached snapshot of its detail to every subscriber waiting for one at
+ * one of the details `which`. */
+static void send_waiting_snapshots(run *r, const bool which[SYLVA_DETAIL_COUNT]) {
   for (client *c = r->d->clients.head; c; c = c->next) {
     subscription *s = client_subscription(c, r->id);
-    if (!s || !s->need_snapshot) continue;
+    if (!s || !s->need_snapshot || !which[s->detail]) continue;
+    msgbuf *snapshot = r->snapshot[s->detail];
     s->need_snapshot = false;
-    if (!r->snapshot) {
+    if (!snapshot) {
       client_send_text(c, NULL); /* out of memory: an error */
     } else if (s->ref) {
-      msgbuf *m = msgbuf_with_ref(r->snapshot, s->ref);
+      msgbuf *m = msgbuf_with_ref(snapshot, s->ref);
       if (m) client_send(c, m);
       else client_send_text(c, NULL);
       msgbuf_unref(m);
     } else {
-      client_send(c, r->snapshot);
+      client_send(c, snapshot);
     }
     free(s->ref);
     s->ref = NULL;
   }
 }
 
-static bool snapshot_wanted(run *r) {
+/* Whether a subscriber waits for a snapshot; the details they wait for in `details`. */
+static bool snapshot_wanted(run *r, bool details[SYLVA_DETAIL_COUNT]) {
+  bool any = false;
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) details[k] = false;
   for (client *c = r->d->clients.head; c; c = c->next) {
     subscription *s = client_subscription(c, r->id);
-    if (s && s->need_snapshot) return true;
+    if (s && s->need_snapshot) any = details[s->detail] = true;
   }
-  return false;
+  return any;
+}
+
+static bool snapshot_current(const run *r, sylva_detail k) {
+  return r->snapshot[k] && r->snapshot_seq[k] == r->seq;
+}
+
+/* Counts the details of the run's subscribers, whose deltas its iterations encode
+ * (r->want). The nodes delta is also encoded while nobody is subscribed, so that a
+ * viewer that comes back with `since` finds the deltas it missed held. */
+static void note_wanted(run *r) {
+  bool want[SYLVA_DETAIL_COUNT] = {false}, any = false;
+  for (client *c = r->d->clients.head; c; c = c->next) {
+    subscription *s = client_subscription(c, r->id);
+    if (s) any = want[s->detail] = true;
+  }
+  if (!any) want[SYLVA_DETAIL_NODES] = true;
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) atomic_store(&r->want[k], want[k]);
 }
 
 static void done_snapshot(run *r) {
-  msgbuf_unref(r->snapshot);
-  r->snapshot = r->task_text ? msgbuf_new(r->task_text, strlen(r->task_text)) : NULL;
-  r->snapshot_seq = r->seq;
-  send_waiting_snapshots(r);
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) {
+    if (!r->task_details[k]) continue;
+    char *text = r->task_snapshots[k];
+    msgbuf_unref(r->snapshot[k]);
+    r->snapshot[k] = text ? msgbuf_new(text, strlen(text)) : NULL;
+    r->snapshot_seq[k] = r->seq;
+  }
+  send_waiting_snapshots(r, r->task_details);
 }
 
 static void done_step(run *r, const step_result *res) {
@@ -412,10 +445,13 @@ static void done_step(run *r, const step_result *res) {
   r->nodes = res->nodes;
   r->finished = res->finished;
   r->seq++;
-  msgbuf *m = res->text ? msgbuf_new(res->text, strlen(res->text)) : NULL;
+  msgbuf *m[SYLVA_DETAIL_COUNT];
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++)
+    m[k] = res->text[k] ? msgbuf_new(res->text[k], strlen(res->text[k])) : NULL;
+  /* the nodes deltas are held for `since` (a stems subscriber gets a snapshot) */
   msgbuf **slot = &r->history[r->seq % DAEMON_DELTA_HISTORY];
   msgbuf_unref(*slot);
-  *slot = m;
+  *slot = m[SYLVA_DETAIL_NODES];
   /* keep the newest deltas up to a byte budget: a resubscriber further behind
    * gets a snapshot instead */
   size_t kept = 0;
@@ -428,13 +464,17 @@ static void done_step(run *r, const step_result *res) {
       *h = NULL;
     }
   }
-  /* a subscriber waiting for a snapshot gets the next one (the next task) instead */
+  /* a subscriber waiting for a snapshot gets the next one (the next task) instead, and
+   * so does one whose delta is missing (out of memory, or it subscribed at a detail
+   * nobody had wanted when the iteration began) */
   for (client *c = d->clients.head; c; c = c->next) {
     subscription *s = client_subscription(c, r->id);
     if (!s) continue;
-    if (!m) s->need_snapshot = true;
-    if (!s->need_snapshot) client_send(c, m);
+    if (!m[s->detail]) s->need_snapshot = true;
+    if (!s->need_snapshot) client_send(c, m[s->detail]);
   }
+  msgbuf_unref(m[SYLVA_DETAIL_STEMS]);
+  note_wanted(r); /* subscribers may have gone */
   if (d->opt.trace) /* the step returned, stored, its delta encoded, handed out */
     fprintf(d->opt.trace, "%lld %d %.6f %.6f %.6f %.6f\n", (long long)r->id, res->iteration,
             res->at_ms[0] / 1e3, res->at_ms[1] / 1e3, res->at_ms[2] / 1e3, mono_ms() / 1e3);
@@ -456,8 +496,10 @@ static void take_steps(run *r) {
   for (; r->taken < made; r->taken++) {
     step_result *res = &r->results[r->taken];
     done_step(r, res);
-    free(res->text);
-    res->text = NULL;
+    for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) {
+      free(res->text[k]);
+      res->text[k] = NULL;
+    }
   }
 }
 
@@ -560,6 +602,10 @@ static void task_done(pool_task *t, bool cancelled) {
   }
   free(r->task_text);
   r->task_text = NULL;
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) {
+    free(r->task_snapshots[k]);
+    r->task_snapshots[k] = NULL;
+  }
   sylva_world_destroy(r->task_world);
   r->task_world = NULL;
   if (cancelled || r->d->stopping) return;
@@ -589,7 +635,7 @@ void run_schedule(run *r) {
     /* loads when something needs the world; a run that cannot have the memory yet
      * waits (runs_wake tries again when memory is freed) */
     char why[256];
-    if (run_wants_step(r) || snapshot_wanted(r) || r->edits || r->lights)
+    if (run_wants_step(r) || snapshot_wanted(r, r->task_details) || r->edits || r->lights)
       run_load(r, why, sizeof why);
     return;
   }
@@ -598,13 +644,16 @@ void run_schedule(run *r) {
     kind = RUN_TASK_EDIT;
   else if (r->lights)
     kind = RUN_TASK_LIGHT;
-  else if (snapshot_wanted(r)) {
-    if (r->snapshot && r->snapshot_seq == r->seq) {
-      send_waiting_snapshots(r); /* the cached one is current */
+  else if (snapshot_wanted(r, r->task_details)) {
+    bool current[SYLVA_DETAIL_COUNT], any = false;
+    for (int k = 0; k < SYLVA_DETAIL_COUNT; k++)
+      any |= current[k] = r->task_details[k] && snapshot_current(r, (sylva_detail)k);
+    if (any) {
+      send_waiting_snapshots(r, current); /* the cached ones are current */
       run_schedule(r);
       return;
     }
-    kind = RUN_TASK_SNAPSHOT;
+    kind = RUN_TASK_SNAPSHOT; /* of the details in task_details */
   } else if (run_wants_step(r))
     kind = RUN_TASK_STEP;
   if (kind == RUN_TASK_NONE) return;
@@ -615,6 +664,7 @@ void run_schedule(run *r) {
     r->batch_seq = r->seq;
     r->made = r->taken = 0;
     atomic_store(&r->yield, false);
+    note_wanted(r);
   }
   submit(r, kind);
 }
@@ -681,7 +731,8 @@ bool runs_busy(server *d) {
   return false;
 }
 
-void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref) {
+void run_subscribe(run *r, client *c, bool has_since, int64_t since, sylva_detail detail,
+                   const char *ref) {
   char why[256];
   r->used = uv_now(&r->d->loop);
   if (!run_loaded(r) && run_load(r, why, sizeof why)) {
@@ -693,8 +744,11 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
     client_send_text(c, sylva_msg_error("internal", "out of memory", ref));
     return;
   }
-  /* the deltas after `since` can be replayed when every one of them is held */
-  if (!r->loading && has_since && since >= 0 && since <= r->seq &&
+  s->detail = detail;
+  note_wanted(r);
+  /* the deltas after `since` can be replayed when every one of them is held (nodes
+   * deltas only: a stems subscriber always gets a fresh snapshot) */
+  if (detail == SYLVA_DETAIL_NODES && !r->loading && has_since && since >= 0 && since <= r->seq &&
       r->seq - since < DAEMON_DELTA_HISTORY) {
     bool all = true;
     for (int64_t q = since + 1; q <= r->seq; q++)
@@ -710,8 +764,10 @@ void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char 
   s->ref = ref ? strdup(ref) : NULL;
   s->need_snapshot = true;
   /* now when the cached snapshot is current and no task is in flight, else after */
-  if (!r->busy && !r->loading && r->snapshot && r->snapshot_seq == r->seq)
-    send_waiting_snapshots(r);
+  bool only[SYLVA_DETAIL_COUNT] = {false};
+  only[detail] = true;
+  if (!r->busy && !r->loading && snapshot_current(r, detail))
+    send_waiting_snapshots(r, only);
   else
     run_schedule(r);
 }
@@ -760,7 +816,10 @@ static void run_free(run *r) {
     free(l);
   }
   for (int i = 0; i < DAEMON_DELTA_HISTORY; i++) msgbuf_unref(r->history[i]);
-  msgbuf_unref(r->snapshot);
+  for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) {
+    msgbuf_unref(r->snapshot[k]);
+    free(r->task_snapshots[k]);
+  }
   free(r->task_text);
   sylva_world_destroy(r->task_world);
   sylva_world_destroy(r->w);

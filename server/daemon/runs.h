@@ -43,7 +43,8 @@ typedef struct run_conflicts {
 typedef struct step_result {
   int status;        /**< SYLVA_OK or why it failed */
   char error[256];
-  char *text;        /**< the encoded delta (malloc'd; NULL when out of memory) */
+  char *text[SYLVA_DETAIL_COUNT]; /**< the encoded delta at each detail that was wanted
+                                       (malloc'd; NULL when not wanted or out of memory) */
   double ms;
   double at_ms[3];   /**< CLOCK_MONOTONIC ms when the step returned, when it was
                           stored and when its delta was encoded (--trace-iterations) */
@@ -99,15 +100,21 @@ struct run {
   int task_status;     /**< SYLVA_OK or why it failed */
   char task_error[512];
   const char *task_code; /**< the protocol error code of a failed edit */
-  char *task_text;     /**< an encoded delta, slice or snapshot (malloc'd) */
+  char *task_text;     /**< an encoded slice (malloc'd) */
+  bool task_details[SYLVA_DETAIL_COUNT]; /**< a snapshot task: the details to encode */
+  char *task_snapshots[SYLVA_DETAIL_COUNT]; /**< and their texts (malloc'd) */
+  /* the details whose deltas the worker encodes: those of the subscribers, as the
+   * loop last counted them (note_wanted, runs.c) */
+  atomic_bool want[SYLVA_DETAIL_COUNT];
   sylva_world *task_world; /**< an edited or loaded world */
   int64_t task_edits;  /**< loading: the edits logged since the run began */
   double task_ms;
   msgbuf *history[DAEMON_DELTA_HISTORY]; /**< the last deltas, by seq % size */
   struct pending_edit *edits;   /**< edits waiting for their task (runs.c) */
   struct pending_light *lights; /**< light requests waiting for theirs (runs.c) */
-  msgbuf *snapshot;          /**< the snapshot of seq `snapshot_seq`, shared by subscribers */
-  int64_t snapshot_seq;
+  /* the snapshot of seq `snapshot_seq` at each detail, shared by subscribers */
+  msgbuf *snapshot[SYLVA_DETAIL_COUNT];
+  int64_t snapshot_seq[SYLVA_DETAIL_COUNT];
   run *next;
 };
 
@@ -147,7 +154,8 @@ const char *run_create(server *d, client *c, sylva_scenario **s, const char *nam
 void run_schedule(run *r);
 /** Sends the client what a new subscription needs: a snapshot, or the deltas after
  *  `since` when they are all still held. */
-void run_subscribe(run *r, client *c, bool has_since, int64_t since, const char *ref);
+void run_subscribe(run *r, client *c, bool has_since, int64_t since, sylva_detail detail,
+                   const char *ref);
 /** Sets status (running, paused, finished) and tells the subscribers. */
 void run_set_status(run *r, sylva_run_status status);
 /** A `control` action (count: the steps of SYLVA_CONTROL_STEP); returns NULL or

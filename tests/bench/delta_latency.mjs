@@ -3,7 +3,7 @@
 //
 //   node tests/bench/delta_latency.mjs [--exe build/server/sylva] [--viewers 100]
 //        [--iterations5 20] [--iterations100 24] [--years 15] [--threads 2]
-//        [--serve-threads 1,2] [--only 5|100|hectare]
+//        [--serve-threads 1,2] [--only 5|100|hectare] [--detail nodes|stems]
 //
 // Three runs: the five-tree stand (scenarios/stand.json), a generated 100-tree
 // stand (igm-fig17b, tropism up, 10 x 10 trees 2 m apart in a 26 x 26 x 14 m world)
@@ -22,6 +22,9 @@
 // of the daemon, its loop thread and the viewers while growing. After the run, a
 // fresh client subscribes and times the snapshot of the final world (sent,
 // received and parsed), and asks for the same iteration with `get` (from the store).
+// --detail stems: the viewers and the fresh subscriber subscribe with `"detail":
+// "stems"` (protocol.md, "subscribe": each stem's stats, no internodes); default
+// nodes, every internode.
 // Use a release build on a quiet machine; the numbers include the viewers' own
 // receive path on the same machine.
 import { Worker, isMainThread, parentPort, workerData } from 'node:worker_threads';
@@ -40,7 +43,7 @@ const now = () => Number(process.hrtime.bigint()) / 1e6; // ms, monotonic, share
 // ---- viewer threads ----------------------------------------------------------------
 
 if (!isMainThread) {
-  const { url, run, count } = workerData;
+  const { url, run, count, detail } = workerData;
   const records = []; // [viewer, type, seq, iteration, bytes, t]
   const dropped = []; // [viewer, close code, reason]: closed by the daemon before the end
   let subscribed = 0;
@@ -67,7 +70,7 @@ if (!isMainThread) {
       const head = data.toString('latin1', 0, Math.min(data.length, 100));
       const type = (head.match(/^\{"type":"(\w+)"/) || [])[1];
       if (type === 'welcome') {
-        ws.send(JSON.stringify({ type: 'subscribe', run }));
+        ws.send(JSON.stringify({ type: 'subscribe', run, detail }));
       } else if (type === 'snapshot' || type === 'delta') {
         const m = head.match(/"seq":(\d+),"iteration":(\d+)/);
         records.push([v, type, Number(m[1]), Number(m[2]), data.length, t]);
@@ -152,7 +155,7 @@ async function bench(label, scenario, opts) {
     const dropped = [];
     for (let k = 0, left = opts.viewers; left > 0; k++, left -= per) {
       const count = Math.min(per, left);
-      const w = new Worker(fileURLToPath(import.meta.url), { workerData: { url: d.url, run, count } });
+      const w = new Worker(fileURLToPath(import.meta.url), { workerData: { url: d.url, run, count, detail: opts.detail } });
       const sub = new Promise((ok, fail) => {
         w.on('message', (m) => {
           if (m.error) fail(new Error(m.error));
@@ -232,13 +235,13 @@ async function bench(label, scenario, opts) {
       await f.opened;
       await f.next((x) => headType(x) === 'welcome');
       const s0 = now();
-      f.send({ type: 'subscribe', run });
+      f.send({ type: 'subscribe', run, detail: opts.detail });
       const msg = await f.next((x) => headType(x) === 'snapshot');
       const tArrive = msg.t;
       const snap = JSON.parse(msg.data);
       const tParsed = now();
       let nodes = 0;
-      for (const p of snap.plants) for (const s of p.stems) nodes += s.nodes.length;
+      for (const p of snap.plants) for (const s of p.stems) nodes += s.nodes?.length ?? 0;
       snaps.push({ kind: 'subscribe', arrive: tArrive - s0, parsed: tParsed - s0, bytes: msg.data.length, nodes, iteration: snap.iteration });
       const g0 = now();
       f.send({ type: 'get', run, iteration: snap.iteration, id: 'g' });
@@ -253,7 +256,7 @@ async function bench(label, scenario, opts) {
     const status = readFileSync(`/proc/${d.proc.pid}/status`, 'utf8');
     const hwm = Number(status.match(/VmHWM:\s+(\d+)/)[1]) / 1024;
     ctl.ws.close();
-    return { label, grow, rows, rel, spreads, abs, worst, shares, incomplete, snaps, hwm, cpuAll, cpuLoop, cpuViewers, deltaBytes, dropped,
+    return { label, detail: opts.detail, grow, rows, rel, spreads, abs, worst, shares, incomplete, snaps, hwm, cpuAll, cpuLoop, cpuViewers, deltaBytes, dropped,
       iterSeconds: Number(pick('sylva_iteration_seconds_total')), sent: Number(pick('sylva_bytes_sent_total')) };
   } finally {
     d.proc.kill('SIGTERM');
@@ -266,7 +269,7 @@ function fmtMs(x) { return x < 10 ? x.toFixed(2) : x.toFixed(0); }
 function fmtBytes(x) { return x >= 2 ** 20 ? `${(x / 2 ** 20).toFixed(1)} MiB` : `${(x / 1024).toFixed(1)} KiB`; }
 
 function report(r, viewers) {
-  console.log(`\n== ${r.label}: ${viewers} viewers ==`);
+  console.log(`\n== ${r.label}: ${viewers} viewers at detail ${r.detail} ==`);
   console.log(`grew ${r.rows.length} iterations in ${(r.grow / 1000).toFixed(2)} s (${r.iterSeconds.toFixed(2)} s of it growing, the rest fan-out and scheduling); ${fmtBytes(r.sent)} sent; daemon peak RSS ${r.hwm.toFixed(0)} MiB; deltas missing at some viewer: ${r.incomplete}`);
   if (r.dropped.length) {
     const why = [...new Set(r.dropped.map((x) => `${x[1]} ${x[2]}`))].join('; ');
@@ -297,7 +300,9 @@ async function main() {
     exe: resolve(arg('exe', process.env.SYLVA_EXE || join(root, 'build', 'server', 'sylva'))),
     viewers: Number(arg('viewers', '100')),
     threads: Number(arg('threads', '2')),
+    detail: arg('detail', 'nodes'),
   };
+  if (!['nodes', 'stems'].includes(opts.detail)) throw new Error(`--detail: nodes or stems, not ${opts.detail}`);
   const only = arg('only', null);
   const stand = JSON.parse(readFileSync(join(root, 'scenarios', 'stand.json'), 'utf8'));
   if (!only || only === '5') {

@@ -198,7 +198,16 @@ static void test_valid_subscribe(void) {
     CHECK_INT(m.type, SYLVA_MSG_SUBSCRIBE);
     CHECK_INT(m.run, 3);
     CHECK(!m.has_since);
+    CHECK_INT(m.detail, SYLVA_DETAIL_NODES);
   }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"subscribe\",\"run\":3,\"detail\":\"stems\",\"since\":2}", &m)) {
+    CHECK_INT(m.detail, SYLVA_DETAIL_STEMS);
+    CHECK_INT(m.since, 2);
+  }
+  sylva_msg_free(&m);
+  if (PARSE_OK("{\"type\":\"subscribe\",\"run\":3,\"detail\":\"nodes\"}", &m))
+    CHECK_INT(m.detail, SYLVA_DETAIL_NODES);
   sylva_msg_free(&m);
   if (PARSE_OK("{\"type\":\"subscribe\",\"run\":9007199254740991,\"since\":0}", &m)) {
     CHECK_INT(m.run, 9007199254740991LL);
@@ -480,6 +489,14 @@ static void test_invalid_subscribe(void) {
             "/since: expected a number, got null");
   PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"since\":1e308}",
             "/since: must be in [0, 9007199254740991]");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"detail\":\"leaves\"}",
+            "/detail: unknown detail \"leaves\" (known: nodes, stems)");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"detail\":\"Stems\"}",
+            "/detail: unknown detail \"Stems\"");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"detail\":1}",
+            "/detail: expected a string, got a number");
+  PARSE_BAD("{\"type\":\"subscribe\",\"run\":1,\"detail\":null}",
+            "/detail: expected a string, got null");
 }
 
 /* control: a known action; a count in [1, 100000], for step only. */
@@ -1266,6 +1283,35 @@ static void compare_with_skeleton(model *m, const sylva_world *w, int iteration)
 }
 
 /* A first snapshot: its header, stats and species; nodes, obstacles, plants as the skeleton's. */
+/* The stems snapshot of w is its snapshot (full, parsed) with "detail":"stems", no
+ * nodes in the stems and no leaves; the nodes snapshot of _detail is the snapshot. */
+static void check_stems_snapshot(cJSON *full, const sylva_world *w) {
+  char *nodes = sylva_msg_snapshot_detail(4, 10, w, 0, SYLVA_DETAIL_NODES, "\"sub\"");
+  char *stems = sylva_msg_snapshot_detail(4, 10, w, 0, SYLVA_DETAIL_STEMS, "\"sub\"");
+  cJSON *want = cJSON_Duplicate(full, true), *got = VALID_JSON(stems);
+  CHECK(full && nodes && stems && strstr(stems, "\"iteration\":0,\"detail\":\"stems\",\"voxel\""));
+  if (want && got) {
+    cJSON *full_again = cJSON_Parse(nodes);
+    CHECK(cJSON_Compare(full_again, full, true));
+    cJSON_Delete(full_again);
+    cJSON_DeleteItemFromObjectCaseSensitive(want, "leaves");
+    const cJSON *plant = NULL;
+    cJSON_ArrayForEach(plant, cJSON_GetObjectItemCaseSensitive(want, "plants")) {
+      cJSON *stem = NULL;
+      cJSON_ArrayForEach(stem, cJSON_GetObjectItemCaseSensitive(plant, "stems")) {
+        CHECK(cJSON_GetObjectItemCaseSensitive(stem, "nodes") != NULL);
+        cJSON_DeleteItemFromObjectCaseSensitive(stem, "nodes");
+      }
+    }
+    cJSON_AddStringToObject(want, "detail", "stems");
+    CHECK(cJSON_Compare(want, got, true));
+  }
+  cJSON_Delete(want);
+  cJSON_Delete(got);
+  free(nodes);
+  free(stems);
+}
+
 static void test_snapshot(void) {
   sylva_world *w = snapshot_world();
   if (!w) return;
@@ -1306,6 +1352,7 @@ static void test_snapshot(void) {
   check_snapshot_matches_skeleton(snap, w);
   compare_with_skeleton(&m, w, 0);
   model_compare_leaves(&m, w, 0);
+  check_stems_snapshot(sj, w);
   cJSON_Delete(sj);
   free(snap);
   free(m.nodes);
@@ -1335,6 +1382,19 @@ static void apply_delta(model *m, const sylva_world *w, const sylva_journal *j, 
     t->leaves += j->leaves_count;
     for (size_t i = 0; i < j->leaves_count; i++) t->leafless += j->leaves[i].leaves == 0;
     t->shed += model_apply(m, dj);
+    /* the stems delta: the same stats, canopy cover and stand bytes, without nodes */
+    char *stems = sylva_msg_delta_detail(4, 10 + it, w, j, 0, SYLVA_DETAIL_STEMS);
+    char *full_again = sylva_msg_delta_detail(4, 10 + it, w, j, 0, SYLVA_DETAIL_NODES);
+    char head[128];
+    snprintf(head, sizeof head,
+             "{\"type\":\"delta\",\"run\":4,\"seq\":%d,\"iteration\":%d,\"detail\":\"stems\",",
+             10 + it, it);
+    const char *tail = strstr(delta, "\"stats\":[");
+    CHECK(stems && tail && strncmp(stems, head, strlen(head)) == 0 &&
+          strcmp(stems + strlen(head), tail) == 0);
+    CHECK(full_again && strcmp(full_again, delta) == 0);
+    free(stems);
+    free(full_again);
     char *line = sylva_encode_stats_line(w, j, 0, 0);
     cJSON *lj = line ? cJSON_Parse(line) : NULL;
     CHECK(lj && cJSON_Compare(cJSON_GetObjectItemCaseSensitive(lj, "stems"),

@@ -123,6 +123,73 @@ test('create, subscribe, step: snapshot + deltas equal the stored export', async
   }
 });
 
+// The part of a delta's text from its stats on (stats, canopy_cover, stand).
+const statsBytes = (text) => text.slice(text.indexOf('"stats":['));
+
+test('detail "stems": snapshots and deltas without nodes and the same stats bytes; switching back; a bad detail changes nothing', async () => {
+  const d = await startDaemon();
+  try {
+    const full = await connect(d.url);
+    const stems = await connect(d.url);
+    const raw = { full: [], stems: [] };
+    full.ws.on('message', (b) => raw.full.push(b.toString()));
+    stems.ws.on('message', (b) => raw.stems.push(b.toString()));
+    const deltaText = (texts, seq) => texts.find((t) => t.startsWith('{"type":"delta"') && JSON.parse(t).seq === seq);
+    full.send({ type: 'create', name: 'stems', start: false, scenario: scenario('stand.json', { iterations: 6 }) });
+    const { run } = await full.type('created');
+    full.send({ type: 'subscribe', run });
+    const snap = await full.type('snapshot');
+    stems.send({ type: 'subscribe', run, detail: 'stems', id: 's' });
+    const ssnap = await stems.type('snapshot');
+    assert.equal(ssnap.detail, 'stems');
+    assert.equal(ssnap.ref, 's');
+    assert.equal(snap.detail, undefined);
+    assert.equal(ssnap.leaves, undefined);
+    assert.deepEqual(ssnap.plants, snap.plants.map((p) => ({ id: p.id, stems: p.stems.map((s) => ({ root: s.root })) })));
+    assert.deepEqual(ssnap.stats, snap.stats);
+    // a bad detail: bad_request naming the field, and the subscription stays as it was
+    for (const detail of ['leaves', 7]) {
+      stems.send({ type: 'subscribe', run, detail, id: 'bad' });
+      const e = await stems.type('error');
+      assert.equal(e.code, 'bad_request');
+      assert.match(e.message, /^\/detail: /);
+      assert.equal(e.ref, 'bad');
+    }
+    full.send({ type: 'control', run, action: 'step', count: 2 });
+    for (let i = 1; i <= 2; i++) {
+      const delta = await full.type('delta');
+      const sdelta = await stems.type('delta');
+      assert.equal(sdelta.detail, 'stems');
+      assert.deepEqual([sdelta.seq, sdelta.iteration], [delta.seq, delta.iteration]);
+      for (const k of ['added', 'radii', 'shed', 'leaves']) assert.equal(sdelta[k], undefined, k);
+      assert.ok(delta.added.length > 0);
+      assert.equal(statsBytes(deltaText(raw.stems, delta.seq)), statsBytes(deltaText(raw.full, delta.seq)), `stats bytes at ${i}`);
+    }
+    // a stems subscriber with since gets a fresh stems snapshot, even at the current seq
+    stems.send({ type: 'subscribe', run, detail: 'stems', since: 2 });
+    const again = await stems.type('snapshot');
+    assert.deepEqual([again.detail, again.seq, again.iteration], ['stems', 2, 2]);
+    // switching to nodes: a full snapshot, then full deltas
+    stems.send({ type: 'subscribe', run, detail: 'nodes', id: 'n' });
+    const back = await stems.type('snapshot');
+    assert.equal(back.detail, undefined);
+    assert.equal(back.ref, 'n');
+    const model = new Model(back);
+    assert.equal(model.plantsJSON(), plantsJSON(exportSkeleton(d.db, 'stems', 2)));
+    full.send({ type: 'control', run, action: 'step' });
+    const next = await stems.type('delta');
+    await full.type('delta');
+    assert.equal(next.detail, undefined);
+    model.apply(next);
+    assert.equal(model.plantsJSON(), plantsJSON(exportSkeleton(d.db, 'stems', 3)));
+    assert.equal(deltaText(raw.stems, next.seq), deltaText(raw.full, next.seq));
+    for (const x of [full, stems]) x.close();
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
 test('bad messages get an error and change nothing; other clients unaffected', async () => {
   const d = await startDaemon();
   try {

@@ -15,15 +15,15 @@ export async function launch() {
   });
 }
 
-// Opens the viewer of a daemon (at a location hash such as `#run=NAME`, when
-// given); resolves when it is connected.
-export async function openViewer(browser, http, { width = 1280, height = 860, hash = '' } = {}) {
+// Opens the viewer of a daemon (at a location hash such as `#run=NAME`, and with a
+// query such as `?stems=0`, when given); resolves when it is connected.
+export async function openViewer(browser, http, { width = 1280, height = 860, hash = '', query = '' } = {}) {
   const page = await browser.newPage({ viewport: { width, height } });
   const errors = [];
   page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
   page.on('pageerror', (e) => errors.push(`page: ${e.message}`));
   page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()} ${r.failure()?.errorText}`));
-  await page.goto(`${http}/${hash}`);
+  await page.goto(`${http}/${query}${hash}`);
   await page.waitForFunction(() => window.sylva?.state().connection === 'open');
   return { page, errors };
 }

@@ -12,6 +12,8 @@ import {
   boundsOf, insideFootprint, insideObstacle,
 } from '../../web/zones.mjs';
 import { STEM_KEY, deadStemKeys, sameKeys, markDeadStems, standRows, thinningPoint, standOfRows } from '../../web/stand.mjs';
+import { STEMS_THRESHOLD, stemsThreshold, detailFor, stemShapes } from '../../web/stems.mjs';
+import { deltaArrays, snapshotArrays } from '../../web/wire.mjs';
 
 const run = (id, name, status) => ({ run: id, name, status, iteration: 3, stems: 1, nodes: 40 });
 
@@ -468,4 +470,36 @@ test('a stand\'s figures from stats.csv\'s rows of an iteration', () => {
   // a run without stands: not given
   assert.equal(standOfRows(parseStatsCsv('iteration,plant,stem,height\n1,a,0,2\n').get(1)), undefined);
   assert.equal(standOfRows([]), undefined);
+});
+
+test('stem detail: the threshold, the detail of a run, the stems\' shapes; stems messages as typed arrays', () => {
+  assert.equal(stemsThreshold(''), STEMS_THRESHOLD);
+  assert.equal(stemsThreshold('?stems=0'), 0);
+  assert.equal(stemsThreshold('?stems=-1'), STEMS_THRESHOLD);
+  assert.equal(stemsThreshold('?stems=x'), STEMS_THRESHOLD);
+  assert.equal(detailFor({ nodes: STEMS_THRESHOLD }), 'nodes');
+  assert.equal(detailFor({ nodes: STEMS_THRESHOLD + 1 }), 'stems');
+  assert.equal(detailFor({ nodes: 5 }, 0), 'stems');
+  const plants = [{ id: 'a', stems: [{ root: [1, 2, 0] }] }, { id: 'b', stems: [{ root: [3, 4, 0.5] }] }];
+  const index = new Map([['a', 0], ['b', 1]]);
+  const shapes = stemShapes(plants, [
+    { plant: 'a', stem: 0, height: 6, dbh: 0.12, crown_base: 2, crown_width: 3 },
+    { plant: 'b', stem: 0, height: 0.8, dbh: null, crown_base: null, crown_width: 0.02, alive: true },
+    { plant: 'b', stem: 1, height: 1, dbh: null, crown_base: 0, crown_width: 1 },   // not held: left out
+  ], index);
+  assert.deepEqual(shapes, [
+    { plant: 0, root: [1, 2, 0], height: 6, dead: false, crownBase: 2, trunkRadius: 0.06, crownRadius: 1.5 },
+    { plant: 1, root: [3, 4, 0.5], height: 0.8, dead: false, crownBase: 0, trunkRadius: 0.01, crownRadius: 0.05 },
+  ]);
+  const dead = stemShapes(plants, [{ plant: 'a', stem: 0, height: 6, dbh: 0.1, crown_base: 2, crown_width: 3, alive: false }], index);
+  assert.equal(dead[0].dead, true);
+  assert.equal(dead[0].crownRadius, 0);
+  // a stems snapshot and delta hold no internodes
+  const snap = snapshotArrays({ type: 'snapshot', run: 1, seq: 2, iteration: 2, detail: 'stems', plants, stats: [] });
+  assert.equal(snap.nodes.n, 0);
+  assert.equal(snap.leaves.n, 0);
+  assert.equal(snap.detail, 'stems');
+  assert.deepEqual(snap.plants, plants);
+  const delta = deltaArrays({ type: 'delta', run: 1, seq: 3, iteration: 3, detail: 'stems', stats: [], canopy_cover: 0 });
+  assert.deepEqual([delta.added.n, delta.radii.n, delta.shed.length, delta.leaves.n, delta.detail], [0, 0, 0, 0, 'stems']);
 });

@@ -9,7 +9,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { ROOT, SLOW, startDaemon, stopDaemon, connect, cleanup } from '../server/harness.mjs';
+import { ROOT, SLOW, startDaemon, stopDaemon, connect, cleanup, serverSnapshot } from '../server/harness.mjs';
 import { launch, openViewer, until, createAndWatch } from './browser.mjs';
 
 const WEB = ['--web', join(ROOT, 'web')];
@@ -185,6 +185,57 @@ test('a run without stands (IGM presets): no stand figures, no self-thinning plo
     assert.deepEqual(s.standFigures, []);
     assert.deepEqual(s.greyed, {});
     assert.equal(await page.isVisible('#stand'), false);
+    assert.deepEqual(errors, []);
+  } finally {
+    await stopDaemon(d);
+    cleanup(d.dir);
+  }
+});
+
+// A run above the stems threshold (lowered to 0 internodes by the page's address)
+// is watched at stem detail: no internodes held or drawn, a trunk and a crown per
+// stem from the stats, which the plots take too; the button switches to every
+// internode (the skeleton as the store holds it) and back.
+test('a large run at stem detail: a trunk and a crown per stem; the button switches to the internodes and back', async () => {
+  const d = await startDaemon({ args: WEB });
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'create', scenario: STAND, name: 'stems', id: 'c' });
+    const { run } = await c.type('created');
+    c.send({ type: 'subscribe', run, detail: 'stems' });
+    await c.type('snapshot');
+    c.send({ type: 'control', run, action: 'step', count: 2 });
+    const d2 = await c.next((m) => m.type === 'delta' && m.iteration === 2, 60000);
+    // a crown for each stem alive and higher than its crown base
+    const crowned = (stats) => stats.filter((st) => st.alive !== false && st.height > (st.crown_base ?? 0)).length;
+    const { page, errors } = await openViewer(browser, d.http, { query: '?stems=0', hash: '#run=stems' });
+    const stems = ROOTS.length;
+    let s = await until(page, (x) => x.run === run && x.liveDetail === 'stems' && x.drawnTrunks === stems,
+      'the stems drawn');
+    assert.equal(s.drawnCrowns, crowned(d2.stats));
+    assert.ok(s.drawnCrowns > 0);
+    assert.equal(s.nodes, 0);
+    assert.equal(s.drawnInstances, 0);
+    assert.equal(await page.getAttribute('#detail-toggle', 'aria-pressed'), 'true');
+    c.send({ type: 'control', run, action: 'step', count: 1 });
+    const d3 = await c.next((m) => m.type === 'delta' && m.iteration === 3, 60000);
+    assert.equal(d3.detail, 'stems');
+    s = await until(page, (x) => x.liveIteration === 3 && x.drawnTrunks === stems, 'a stems delta', 60000 * SLOW);
+    assert.equal(s.drawnCrowns, crowned(d3.stats));
+    assert.equal(s.nodes, 0);
+    await page.waitForFunction(() => window.sylva.plots().height?.iterations.length === 3);
+    // every internode, as a fresh subscriber of nodes gets them
+    await page.click('#detail-toggle');
+    s = await until(page, (x) => x.liveDetail === 'nodes' && x.nodes > 0, 'the internodes');
+    assert.equal(s.drawnTrunks, 0);
+    assert.equal(s.drawnCrowns, 0);
+    const full = await serverSnapshot(d, run);
+    assert.equal(s.nodes, full.plants.flatMap((p) => p.stems).reduce((n, st) => n + st.nodes.length, 0));
+    assert.ok(s.drawnInstances > 0);
+    assert.equal(await page.getAttribute('#detail-toggle', 'aria-pressed'), 'false');
+    await page.click('#detail-toggle');
+    await until(page, (x) => x.liveDetail === 'stems' && x.drawnTrunks === stems && x.nodes === 0, 'stems again');
+    c.close();
     assert.deepEqual(errors, []);
   } finally {
     await stopDaemon(d);

@@ -55,6 +55,14 @@ typedef enum sylva_msg_type {
   SYLVA_MSG_SCENARIOS
 } sylva_msg_type;
 
+/** The detail of a subscription (subscribe's "detail"): every node, or each stem's
+ *  stats only (docs/protocol.md, "subscribe"). */
+typedef enum sylva_detail {
+  SYLVA_DETAIL_NODES, /**< "nodes", the default: snapshots and deltas with nodes */
+  SYLVA_DETAIL_STEMS, /**< "stems": without nodes, radii, shed nodes or leaves */
+  SYLVA_DETAIL_COUNT
+} sylva_detail;
+
 /** Actions of a "control" message. */
 typedef enum sylva_control_action {
   SYLVA_CONTROL_START,
@@ -75,6 +83,8 @@ typedef struct sylva_msg {
   /** subscribe: whether "since" was given, and the seq (>= 0). */
   bool has_since;
   int64_t since;
+  /** subscribe: the detail asked for (default SYLVA_DETAIL_NODES). */
+  sylva_detail detail;
   /** hello: the token, NULL if absent. */
   char *token;
   /** create (optional, else NULL), fork (required): the run name, 1 to
@@ -193,6 +203,13 @@ char *sylva_runs_json(const sylva_run_summary *runs, size_t n);
 char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int start_year,
                          const char *ref);
 
+/** The snapshot of a subscriber at `detail`: sylva_msg_snapshot() for
+ *  SYLVA_DETAIL_NODES; for SYLVA_DETAIL_STEMS the same message with "detail":"stems"
+ *  after "iteration", each stem of "plants" without its "nodes" ({"root":[x,y,z]}), and
+ *  no "leaves" (they name nodes). */
+char *sylva_msg_snapshot_detail(int64_t run, int64_t seq, const sylva_world *w, int start_year,
+                                sylva_detail detail, const char *ref);
+
 /** {"type":"delta","run":..,"seq":..,"iteration":..,"added":[[id,parent,plant,stem,x,
  *  y,z,radius],..],"radii":[[id,radius],..],"shed":[id,..],"leaves":[[id,n],..],
  *  "stats":[..]} of the step that gave journal j (plant: the plant's index as in
@@ -204,6 +221,13 @@ char *sylva_msg_snapshot(int64_t run, int64_t seq, const sylva_world *w, int sta
  *  stats' zone entries in calendar years. */
 char *sylva_msg_delta(int64_t run, int64_t seq, const sylva_world *w, const sylva_journal *j,
                       int start_year);
+
+/** The delta of a subscriber at `detail`: sylva_msg_delta() for SYLVA_DETAIL_NODES; for
+ *  SYLVA_DETAIL_STEMS {"type":"delta","run":..,"seq":..,"iteration":..,"detail":"stems",
+ *  "stats":[..],"canopy_cover":..,"stand":..}, the stats and what follows them byte for
+ *  byte as in sylva_msg_delta(). */
+char *sylva_msg_delta_detail(int64_t run, int64_t seq, const sylva_world *w,
+                             const sylva_journal *j, int start_year, sylva_detail detail);
 
 /** {"type":"light_slice","run":..,"iteration":..,"z":..,"origin":[x,y],"voxel":..,
  *  "nx":..,"ny":..,"values":"<base64>","ref":..}: the light of the horizontal voxel
