@@ -250,7 +250,11 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
              sylva_strerror(res->status));
     return false;
   }
-  if (store_save_step(d->st, r->id, r->w, j, r->snapshot_every, r->limit)) {
+  /* the iteration's row first: it is stored, and can be regrown, before its delta
+   * goes out; its snapshot, when due, is added after (work_step), so that viewers do
+   * not wait for the image of the whole world (docs/protocol.md) */
+  res->snapshot_due = store_step_snapshot(r->w, j, r->snapshot_every, r->limit);
+  if (store_save_iteration(d->st, r->id, r->w, j, false)) {
     snprintf(res->error, sizeof res->error, "%s", store_error(d->st));
     res->status = SYLVA_EINVAL;
     return false;
@@ -273,12 +277,20 @@ static bool step_once(run *r, int64_t seq, step_result *res) {
 /* Up to batch_max iterations, each handed to the loop when made. */
 static void work_step(run *r) {
   double t0 = mono_ms();
+  r->snapshot_error[0] = '\0';
   for (int k = 0; k < r->batch_max; k++) {
     bool ok = step_once(r, r->batch_seq + k + 1, &r->results[k]);
+    bool snapshot = ok && r->results[k].snapshot_due;
     pthread_mutex_lock(&r->lock);
     r->made = k + 1;
     pthread_mutex_unlock(&r->lock);
     pool_report(&r->d->pool, &r->task);
+    /* the loop sends the delta meanwhile; a snapshot that cannot be stored fails the
+     * run once the task is done (task_done), its row kept */
+    if (snapshot && store_save_snapshot(r->d->st, r->id, r->w)) {
+      snprintf(r->snapshot_error, sizeof r->snapshot_error, "%s", store_error(r->d->st));
+      break;
+    }
     if (!ok || r->results[k].finished || atomic_load(&r->yield) ||
         mono_ms() - t0 >= RUN_SLICE_MS)
       break;
@@ -589,7 +601,15 @@ static void task_done(pool_task *t, bool cancelled) {
   if (!cancelled) {
     switch (kind) {
     case RUN_TASK_LOAD: done_load(r); break;
-    case RUN_TASK_STEP: take_steps(r); break;
+    case RUN_TASK_STEP:
+      take_steps(r);
+      if (r->snapshot_error[0] && r->status != SYLVA_RUN_FAILED) {
+        server_log(r->name, "failed: %s", r->snapshot_error);
+        r->status = SYLVA_RUN_FAILED;
+        persist_status(r, NULL);
+        run_broadcast_status(r);
+      }
+      break;
     case RUN_TASK_EDIT: done_edit(r); break;
     case RUN_TASK_LIGHT: done_light(r); break;
     case RUN_TASK_SNAPSHOT: done_snapshot(r); break;

@@ -45,6 +45,7 @@ typedef struct step_result {
   char error[256];
   char *text[SYLVA_DETAIL_COUNT]; /**< the encoded delta at each detail that was wanted
                                        (malloc'd; NULL when not wanted or out of memory) */
+  bool snapshot_due; /**< its snapshot is to be added to its stored row (work_step) */
   double ms;
   double at_ms[3];   /**< CLOCK_MONOTONIC ms when the step returned, when it was
                           stored and when its delta was encoded (--trace-iterations) */
@@ -99,6 +100,7 @@ struct run {
   /* the task's results */
   int task_status;     /**< SYLVA_OK or why it failed */
   char task_error[512];
+  char snapshot_error[512]; /**< a step task: why a due snapshot was not stored ("": it was) */
   const char *task_code; /**< the protocol error code of a failed edit */
   char *task_text;     /**< an encoded slice (malloc'd) */
   bool task_details[SYLVA_DETAIL_COUNT]; /**< a snapshot task: the details to encode */

@@ -650,10 +650,42 @@ static int save_iteration_unlocked(store *st, int64_t run, const sylva_world *w,
   return SERVER_OK;
 }
 
+bool store_step_snapshot(const sylva_world *w, const sylva_journal *j, int every, int limit) {
+  bool last = sylva_world_finished(w) || j->iteration >= limit;
+  return last || j->iteration % every == 0;
+}
+
 int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
                     int every, int limit) {
-  bool last = sylva_world_finished(w) || j->iteration >= limit;
-  return store_save_iteration(st, run, w, j, last || j->iteration % every == 0);
+  return store_save_iteration(st, run, w, j, store_step_snapshot(w, j, every, limit));
+}
+
+static int save_snapshot_unlocked(store *st, int64_t run, const sylva_world *w) {
+  int it = sylva_world_iteration(w);
+  uint8_t *img = NULL;
+  size_t size = 0;
+  int rc = sylva_snapshot_save(w, &img, &size);
+  if (rc) return store__fail(st, "snapshot of iteration %d: %s", it, sylva_strerror(rc));
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, "UPDATE iterations SET snapshot = ? WHERE run = ? AND iteration = ?",
+                         -1, &q, NULL) != SQLITE_OK) {
+    free(img);
+    return store__fail(st, "storing the snapshot of iteration %d", it);
+  }
+  sqlite3_bind_blob64(q, 1, img, size, SQLITE_STATIC);
+  sqlite3_bind_int64(q, 2, run);
+  sqlite3_bind_int(q, 3, it);
+  rc = sqlite3_step(q);
+  bool changed = rc == SQLITE_DONE && sqlite3_changes(st->db) == 1;
+  sqlite3_finalize(q);
+  free(img);
+  if (rc != SQLITE_DONE) return store__fail(st, "storing the snapshot of iteration %d", it);
+  if (!changed) return store__fail(st, "storing the snapshot of iteration %d: no such iteration", it);
+  return SERVER_OK;
+}
+
+int store_save_snapshot(store *st, int64_t run, const sylva_world *w) {
+  LOCKED(st, save_snapshot_unlocked(st, run, w));
 }
 
 static int set_status_unlocked(store *st, int64_t run, sylva_run_status status, const char *reason,

@@ -98,6 +98,12 @@ int store_save_iteration(store *st, int64_t run, const sylva_world *w,
  *  record in between. */
 int store_save_step(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,
                     int every, int limit);
+/** Whether store_save_step stores iteration j with its snapshot. */
+bool store_step_snapshot(const sylva_world *w, const sylva_journal *j, int every, int limit);
+/** Adds the world's snapshot to its iteration's row, stored before without one (the
+ *  daemon stores an iteration's row, sends its delta, then adds the snapshot: a row
+ *  without its snapshot is regrown from the one before, as after a damaged one). */
+int store_save_snapshot(store *st, int64_t run, const sylva_world *w);
 /** Sets a run's status (and reason, may be NULL) and iteration limit (> 0 to change). */
 int store_set_status(store *st, int64_t run, sylva_run_status status, const char *reason,
                      int iterations);

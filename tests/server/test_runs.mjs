@@ -926,6 +926,31 @@ test('errors found while parsing a message still echo its id as ref', async () =
   }
 });
 
+test('snapshots: the daemon adds each due snapshot after the delta, every fifth and the last iteration', async () => {
+  const dir = tempDir();
+  const d = await startDaemon({ dir });
+  try {
+    const c = await connect(d.url);
+    c.send({ type: 'create', name: 'snaps', start: false, scenario: scenario('stand.json', { iterations: 11 }) });
+    const run = (await c.type('created')).run;
+    c.send({ type: 'subscribe', run });
+    await c.type('snapshot');
+    c.send({ type: 'control', run, action: 'start' });
+    await c.next((m) => m.type === 'status' && m.status === 'finished', 120000);
+    c.close();
+    await stopClean(d);
+    const q = spawnSync('sqlite3', [d.db, `SELECT iteration FROM iterations WHERE run = ${run} AND snapshot IS NOT NULL ORDER BY iteration`],
+      { encoding: 'utf8' });
+    assert.equal(q.status, 0, q.stderr);
+    assert.deepEqual(q.stdout.trim().split('\n').map(Number), [0, 5, 10, 11]);
+    const rows = spawnSync('sqlite3', [d.db, `SELECT count(*) FROM iterations WHERE run = ${run}`], { encoding: 'utf8' });
+    assert.equal(rows.stdout.trim(), '12');
+  } finally {
+    await stopDaemon(d);
+    cleanup(dir);
+  }
+});
+
 test('--trace-iterations: a line per grown iteration, on the clock its viewers read', async () => {
   const dir = tempDir();
   const trace = join(dir, 'iterations.trace');
