@@ -494,7 +494,13 @@ static void done_step(run *r, const step_result *res) {
   if (d->stopping) return;
   if (r->stop_after || r->finished || r->iteration >= r->limit) {
     r->stop_after = false;
-    run_set_status(r, SYLVA_RUN_FINISHED);
+    /* While the task still stores the last snapshot (work_step), marking the run
+     * finished in the store would wait for it on the loop thread, and the delta just
+     * handed out with it: the status follows when the task is done. */
+    if (r->busy)
+      r->finish_pending = true;
+    else
+      run_set_status(r, SYLVA_RUN_FINISHED);
     return;
   }
   if (r->status == SYLVA_RUN_PAUSED && r->steps == 0) run_broadcast_status(r);
@@ -602,12 +608,14 @@ static void task_done(pool_task *t, bool cancelled) {
     switch (kind) {
     case RUN_TASK_LOAD: done_load(r); break;
     case RUN_TASK_STEP:
-      take_steps(r);
+      take_steps(r); /* the last of them may leave the run to finish (done_step) */
       if (r->snapshot_error[0] && r->status != SYLVA_RUN_FAILED) {
         server_log(r->name, "failed: %s", r->snapshot_error);
         r->status = SYLVA_RUN_FAILED;
         persist_status(r, NULL);
         run_broadcast_status(r);
+      } else if (r->finish_pending && !r->d->stopping) {
+        run_set_status(r, SYLVA_RUN_FINISHED);
       }
       break;
     case RUN_TASK_EDIT: done_edit(r); break;
@@ -620,6 +628,7 @@ static void task_done(pool_task *t, bool cancelled) {
       return;
     }
   }
+  r->finish_pending = false;
   free(r->task_text);
   r->task_text = NULL;
   for (int k = 0; k < SYLVA_DETAIL_COUNT; k++) {

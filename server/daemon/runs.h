@@ -87,6 +87,8 @@ struct run {
   size_t estimate;  /**< its share of the memory budget (runs_estimate) */
   bool busy;        /**< a task is queued or running */
   bool stop_after;  /**< stop requested while busy */
+  bool finish_pending; /**< its last iteration is sent; finished once its step task is
+                            done (the snapshot stored, runs.c task_done) */
   pool_task task;
   run_task kind;
   /* a step task's iterations: the worker fills results[made++] (under lock); the
