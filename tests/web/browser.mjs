@@ -30,13 +30,24 @@ export async function openViewer(browser, http, { width = 1280, height = 860, ha
 
 // Creates a run of a scenario over the protocol, growing (start) or not, and
 // selects it in the page; resolves with its id once the page holds its snapshot.
+// A page that watches nothing opens the first run listed by itself (runs.mjs), and
+// drawing it can keep a loaded machine's page busy past a 10 s selector wait: the
+// page's state and list are polled instead, and the row clicked only when the
+// page has not opened the run by itself.
 export async function createAndWatch(d, page, doc, name, { start = false } = {}) {
   const c = await connect(d.url);
   c.send({ type: 'create', scenario: doc, name, start, id: 'c' });
   const { run } = await c.type('created');
   c.close();
-  await page.waitForSelector(`#runs tr[data-run="${run}"]`, { timeout: 10000 * SLOW });
-  await page.click(`#runs tr[data-run="${run}"]`);
+  const row = `#runs tr[data-run="${run}"]`;
+  for (const end = Date.now() + 60000 * SLOW; (await state(page)).run !== run;) {
+    if (await page.evaluate((sel) => document.querySelector(sel) !== null, row)) {
+      await page.click(row, { timeout: 30000 * SLOW });
+      break;
+    }
+    if (Date.now() > end) throw new Error(`run ${run} never listed in the page`);
+    await new Promise((r) => setTimeout(r, 100));
+  }
   await until(page, (s) => s.run === run && s.seq >= 0, 'the selected run');
   return run;
 }
