@@ -109,7 +109,7 @@ bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v
 }
 
 static inline size_t chunk_index(const sylva__grid *g, int cx, int cy, int cz) {
-  return ((size_t)cz * (size_t)g->c[1] + (size_t)cy) * (size_t)g->c[0] + (size_t)cx;
+  return sylva__grid_chunk_index(g, cx, cy, cz);
 }
 
 static inline int local_index(int x, int y, int z) {

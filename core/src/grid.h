@@ -153,11 +153,14 @@ size_t sylva__grid_bytes(const sylva__grid *g);
 
 /** Voxel of a point; false when outside the grid. */
 bool sylva__grid_voxel(const sylva__grid *g, double x, double y, double z, int v[3]);
-/** The index of voxel v's chunk (z, then y, then x of the 16-voxel chunks). */
+/** The index of chunk (cx, cy, cz) in the grid's per-chunk arrays: z, then y, then x. */
+static inline size_t sylva__grid_chunk_index(const sylva__grid *g, int cx, int cy, int cz) {
+  return ((size_t)cz * (size_t)g->c[1] + (size_t)cy) * (size_t)g->c[0] + (size_t)cx;
+}
+/** The index of voxel v's chunk. */
 static inline size_t sylva__grid_chunk_of(const sylva__grid *g, const int v[3]) {
-  return ((size_t)(v[2] >> SYLVA__CHUNK_BITS) * (size_t)g->c[1] + (size_t)(v[1] >> SYLVA__CHUNK_BITS)) *
-             (size_t)g->c[0] +
-         (size_t)(v[0] >> SYLVA__CHUNK_BITS);
+  return sylva__grid_chunk_index(g, v[0] >> SYLVA__CHUNK_BITS, v[1] >> SYLVA__CHUNK_BITS,
+                                 v[2] >> SYLVA__CHUNK_BITS);
 }
 /** True when voxel v is inside a live obstacle. */
 bool sylva__grid_blocked(const sylva__grid *g, const int v[3]);
