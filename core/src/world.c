@@ -1416,12 +1416,74 @@ static uint64_t fnv(uint64_t h, const void *data, size_t n) {
   return h;
 }
 
-uint64_t sylva_world_hash(const sylva_world *w) {
+/* The splitmix64 finaliser. */
+static inline uint64_t mix64(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+static inline uint32_t bits_of(float f) {
+  uint32_t u;
+  memcpy(&u, &f, sizeof u);
+  return u;
+}
+
+/* Hash 2's hash of one live node: its fields packed in five words, each mixed into
+ * the last. */
+static uint64_t node_hash2(const sylva__skeleton *s, size_t i) {
+  uint32_t parent = (uint32_t)(s->parent[i] >= 0 ? s->id[s->parent[i]] : -1);
+  uint64_t h = mix64(((uint64_t)(uint32_t)s->id[i] | (uint64_t)parent << 32) ^ 0x243f6a8885a308d3ULL);
+  h = mix64(h ^ ((uint64_t)bits_of(s->x[i]) | (uint64_t)bits_of(s->y[i]) << 32));
+  h = mix64(h ^ ((uint64_t)bits_of(s->z[i]) | (uint64_t)bits_of(s->radius[i]) << 32));
+  h = mix64(h ^ ((uint64_t)(uint32_t)s->birth[i] | (uint64_t)(uint32_t)s->stem[i] << 32));
+  return mix64(h ^ s->flags[i]);
+}
+
+/* The live nodes' hashes summed per piece of slots: a sum is the same however the
+ * slots are shared out, and ids rise with slots, so it names the nodes in id order
+ * as hash 1's chain does. */
+#define HASH2_PIECES 64
+typedef struct hash2_ctx {
+  const sylva__skeleton *s;
+  size_t grain;
+  uint64_t sum[HASH2_PIECES], live[HASH2_PIECES];
+} hash2_ctx;
+
+static void hash2_piece(void *arg, size_t begin, size_t end) {
+  hash2_ctx *c = arg;
+  for (size_t b = begin; b < end; b += c->grain) {
+    size_t e = b + c->grain < end ? b + c->grain : end;
+    uint64_t sum = 0, live = 0;
+    for (size_t i = b; i < e; i++) {
+      if (!(c->s->flags[i] & SYLVA__NODE_ALIVE)) continue;
+      sum += node_hash2(c->s, i);
+      live++;
+    }
+    c->sum[b / c->grain] = sum;
+    c->live[b / c->grain] = live;
+  }
+}
+
+uint64_t sylva_world_hash_of(const sylva_world *w, int version) {
+  if (version != 1 && version != 2) return 0;
   uint64_t h = 0xcbf29ce484222325ULL;
   h = fnv(h, &w->iteration, sizeof w->iteration);
   h = fnv(h, w->rng.s, sizeof w->rng.s);
   const sylva__skeleton *s = &w->nodes;
-  for (size_t i = 0; i < s->count; i++) {
+  if (version == 2) {
+    hash2_ctx c = {.s = s, .grain = (s->count + HASH2_PIECES - 1) / HASH2_PIECES};
+    if (c.grain < 4096) c.grain = 4096;
+    sylva__pool_for(w->pool, s->count, c.grain, hash2_piece, &c);
+    uint64_t sum = 0, live = 0;
+    for (size_t k = 0; k * c.grain < s->count; k++) {
+      sum += c.sum[k];
+      live += c.live[k];
+    }
+    h = fnv(h, &live, sizeof live);
+    h = fnv(h, &sum, sizeof sum);
+  }
+  for (size_t i = 0; version == 1 && i < s->count; i++) {
     if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
     int32_t parent = s->parent[i] >= 0 ? s->id[s->parent[i]] : -1;
     h = fnv(h, &s->id[i], 4);
@@ -1462,3 +1524,5 @@ uint64_t sylva_world_hash(const sylva_world *w) {
   }
   return h;
 }
+
+uint64_t sylva_world_hash(const sylva_world *w) { return sylva_world_hash_of(w, 1); }

@@ -172,6 +172,9 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "ALTER TABLE iterations ADD COLUMN sdi REAL;"
     "ALTER TABLE iterations ADD COLUMN cv_height REAL;"
     "ALTER TABLE iterations ADD COLUMN cv_dbh REAL;",
+    /* 7 -> 8: the world hash's definition per run (docs/store.md, "The world hash"):
+     * the runs stored before keep hash 1 */
+    "ALTER TABLE runs ADD COLUMN hash_version INTEGER NOT NULL DEFAULT 1;",
 };
 
 static int migrate(store *st) {
@@ -282,11 +285,35 @@ static void bind_int_or_null(sqlite3_stmt *q, int col, int64_t v) {
     sqlite3_bind_int64(q, col, v);
 }
 
+/* The world's hash by the definition the run keeps (docs/store.md, "The world hash"). */
+static int world_hash_unlocked(store *st, int64_t run, const sylva_world *w, uint64_t *hash) {
+  sqlite3_stmt *q;
+  if (sqlite3_prepare_v2(st->db, "SELECT hash_version FROM runs WHERE id = ?", -1, &q, NULL) !=
+      SQLITE_OK)
+    return store__fail(st, "reading a run's hash version");
+  sqlite3_bind_int64(q, 1, run);
+  int rc = sqlite3_step(q);
+  int64_t version = rc == SQLITE_ROW ? sqlite3_column_int64(q, 0) : 0;
+  sqlite3_finalize(q);
+  if (rc != SQLITE_ROW) return store__fail(st, "reading a run's hash version");
+  if (version < 1 || version > SYLVA_WORLD_HASH_VERSION) {
+    snprintf(last_error, sizeof last_error,
+             "%s: run %lld keeps world hashes of version %lld, which this build does not know "
+             "(it knows 1 to %d)", st->path, (long long)run, (long long)version,
+             SYLVA_WORLD_HASH_VERSION);
+    return SERVER_EINPUT;
+  }
+  *hash = sylva_world_hash_of(w, (int)version);
+  return SERVER_OK;
+}
+
 /* Inserts an iteration record (and its snapshot) inside the caller's transaction. */
 static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool snapshot) {
   uint8_t *img = NULL;
   size_t size = 0;
   int it = sylva_world_iteration(w);
+  uint64_t hash;
+  if (world_hash_unlocked(st, run, w, &hash)) return SERVER_EFAIL;
   if (snapshot) {
     int rc = sylva_snapshot_save(w, &img, &size);
     if (rc) return store__fail(st, "snapshot of iteration %d: %s", it, sylva_strerror(rc));
@@ -303,7 +330,7 @@ static int insert_iteration(store *st, int64_t run, const sylva_world *w, bool s
   }
   sqlite3_bind_int64(q, 1, run);
   sqlite3_bind_int(q, 2, it);
-  sqlite3_bind_int64(q, 3, (int64_t)sylva_world_hash(w));
+  sqlite3_bind_int64(q, 3, (int64_t)hash);
   sqlite3_bind_int64(q, 4, (int64_t)sylva_world_node_count(w));
   /* the image carries its own checksum (sylva_snapshot_load verifies it) */
   if (img)
@@ -340,9 +367,9 @@ static int create_run_unlocked(store *st, const char *name, const char *scenario
   sqlite3_stmt *q;
   if (sqlite3_prepare_v2(st->db,
                          "INSERT INTO runs (name, scenario, seed, iterations, snapshot_every,"
-                         " status, reason, created, updated, start_year)"
+                         " status, reason, created, updated, start_year, hash_version)"
                          " VALUES (?1, ?2, ?3, ?4, ?5, 'running', NULL, ?6, ?7,"
-                         " json_extract(CASE WHEN json_valid(?2) THEN ?2 END, '$.start_year'))",
+                         " json_extract(CASE WHEN json_valid(?2) THEN ?2 END, '$.start_year'), ?8)",
                          -1, &q, NULL) != SQLITE_OK) {
     store__rollback(st);
     return store__fail(st, "creating run \"%s\"", name);
@@ -354,6 +381,7 @@ static int create_run_unlocked(store *st, const char *name, const char *scenario
   sqlite3_bind_int(q, 5, snapshot_every);
   sqlite3_bind_text(q, 6, now, -1, SQLITE_STATIC);
   sqlite3_bind_text(q, 7, now, -1, SQLITE_STATIC);
+  sqlite3_bind_int(q, 8, SYLVA_WORLD_HASH_VERSION);
   int rc = sqlite3_step(q);
   sqlite3_finalize(q);
   if (rc == SQLITE_CONSTRAINT_UNIQUE) {
@@ -744,23 +772,31 @@ static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(cons
     size_t size = (size_t)sqlite3_column_bytes(q, 1);
     const char *problem = NULL;
     int load = 0;
+    uint64_t hash = 0;
     if (!img)
       problem = "empty";
     else if ((load = sylva_snapshot_load(img, size, world_out)) != 0)
       problem = sylva_strerror(load);
-    else if (sylva_world_iteration(*world_out) != it) {
+    else if (sylva_world_iteration(*world_out) != it)
       problem = "it holds another iteration";
-      sylva_world_destroy(*world_out);
-      *world_out = NULL;
-    } else if (sylva_world_hash(*world_out) != (uint64_t)sqlite3_column_int64(q, 2)) {
-      /* a valid image, but not of the world stored for this iteration */
-      problem = "it holds another world than the one stored";
+    else {
+      /* one thread if the system gives no more: the same world */
+      if (st->threads > 1) sylva_world_set_threads(*world_out, st->threads);
+      if (world_hash_unlocked(st, run, *world_out, &hash)) {
+        sylva_world_destroy(*world_out);
+        *world_out = NULL;
+        sqlite3_finalize(q);
+        return SERVER_EFAIL;
+      }
+      if (hash != (uint64_t)sqlite3_column_int64(q, 2))
+        /* a valid image, but not of the world stored for this iteration */
+        problem = "it holds another world than the one stored";
+    }
+    if (problem && *world_out) {
       sylva_world_destroy(*world_out);
       *world_out = NULL;
     }
     if (!problem) {
-      /* one thread if the system gives no more: the same world */
-      if (st->threads > 1) sylva_world_set_threads(*world_out, st->threads);
       *from = it;
       sqlite3_finalize(q);
       return 0;
@@ -839,13 +875,20 @@ static int apply_edit_unlocked(store *st, int64_t run, const sylva_world *w, con
     return rc ? store__fail(st, "%s: %s", what, sylva_strerror(rc)) : SERVER_EFAIL;
   }
   sqlite3_stmt *q;
+  uint64_t hash;
+  if (world_hash_unlocked(st, run, w, &hash)) {
+    store__rollback(st);
+    free(record);
+    free(img);
+    return SERVER_EFAIL;
+  }
   rc = sqlite3_prepare_v2(st->db,
                           "UPDATE iterations SET snapshot = ?, hash = ?, nodes = ?"
                           " WHERE run = ? AND iteration = ?",
                           -1, &q, NULL);
   if (rc == SQLITE_OK) {
     sqlite3_bind_blob64(q, 1, img, size, SQLITE_STATIC);
-    sqlite3_bind_int64(q, 2, (int64_t)sylva_world_hash(w));
+    sqlite3_bind_int64(q, 2, (int64_t)hash);
     sqlite3_bind_int64(q, 3, (int64_t)sylva_world_node_count(w));
     sqlite3_bind_int64(q, 4, run);
     sqlite3_bind_int(q, 5, it);
@@ -873,7 +916,7 @@ int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg)
   while (sylva_world_iteration(w) < at) {
     int status = sylva_world_step(w, NULL);
     int it = sylva_world_iteration(w);
-    uint64_t hash;
+    uint64_t hash, mine = 0;
     bool found = false;
     int failed = 0;
     if (status == SYLVA_OK) {
@@ -881,11 +924,13 @@ int store_world_at(store *st, int64_t run, int at, void (*warn)(const char *msg)
       failed = replay_commands(st, run, it, &w);
       pthread_mutex_unlock(&st->lock);
     }
-    if (status == SYLVA_OK && (failed || store_iteration_hash(st, run, it, &hash, &found))) {
+    if (status == SYLVA_OK &&
+        (failed || store_iteration_hash(st, run, it, &hash, &found) ||
+         (found && store_world_hash(st, run, w, &mine)))) {
       sylva_world_destroy(w);
       return SERVER_EFAIL;
     }
-    if (status != SYLVA_OK || (found && hash != sylva_world_hash(w))) {
+    if (status != SYLVA_OK || (found && hash != mine)) {
       snprintf(last_error, sizeof last_error,
                "%s: regrowing iteration %d from the snapshot of %d %s", st->path, it, from,
                status != SYLVA_OK ? sylva_strerror(status)
@@ -1063,6 +1108,10 @@ int store_find_run(store *st, const char *name, store_run *out, bool *found) {
 
 int store_list_runs(store *st, store_run **out, size_t *count) {
   LOCKED(st, list_runs_unlocked(st, out, count));
+}
+
+int store_world_hash(store *st, int64_t run, const sylva_world *w, uint64_t *hash) {
+  LOCKED(st, world_hash_unlocked(st, run, w, hash));
 }
 
 int store_save_iteration(store *st, int64_t run, const sylva_world *w, const sylva_journal *j,

@@ -29,7 +29,7 @@
 /** PRAGMA application_id of a sylva store ("SYLV"). */
 #define STORE_APPLICATION_ID 0x53594c56
 /** Schema version this build writes (PRAGMA user_version). */
-#define STORE_SCHEMA_VERSION 7
+#define STORE_SCHEMA_VERSION 8
 /** Default number of iterations between two full snapshots. */
 #define STORE_SNAPSHOT_EVERY 5
 
@@ -109,6 +109,9 @@ int store_set_status(store *st, int64_t run, sylva_run_status status, const char
                      int iterations);
 /** The world hash stored for an iteration; *found false when there is no record. */
 int store_iteration_hash(store *st, int64_t run, int iteration, uint64_t *hash, bool *found);
+/** The world's hash by the definition the run keeps (docs/store.md, "The world hash");
+ *  SERVER_EINPUT for a definition this build does not know. */
+int store_world_hash(store *st, int64_t run, const sylva_world *w, uint64_t *hash);
 
 /** Restores the newest good snapshot at or before iteration `at`. A snapshot whose
  *  checksum or content is bad is reported through warn (if given) and the previous

@@ -60,6 +60,7 @@ typedef struct summary {
   size_t peak_voxels, peak_skeleton, peak_other;
   double shade_us_per_node_early, shade_us_per_node_late;
   double last_ms[5]; /* the last five iterations' wall time, ms */
+  double hash_ms[2];  /* the final world's hash by definitions 1 and 2 (docs/store.md) */
 } summary;
 
 static const char *phase_names[SYLVA_PHASE_COUNT] = {"light", "alloc", "shoots", "shade",
@@ -109,6 +110,12 @@ static summary grow(const char *name, sylva_world *w, int limit, size_t target) 
     if (target && s.live >= target) break;
   }
   s.seconds = now(NULL) - t0;
+  for (int v = 1; v <= 2; v++) { /* what the store's row of an iteration costs */
+    double h0 = now(NULL);
+    volatile uint64_t h = sylva_world_hash_of(w, v);
+    (void)h;
+    s.hash_ms[v - 1] = (now(NULL) - h0) * 1e3;
+  }
   s.shade_us_per_node_early = early_nodes ? early_shade * 1e6 / (double)early_nodes : 0;
   s.shade_us_per_node_late = late_nodes ? late_shade * 1e6 / (double)late_nodes : 0;
   return s;
@@ -127,6 +134,8 @@ static void report(const summary *s) {
          (double)s->peak_other / 1048576.0, (double)peak_rss_kb() / 1024.0);
   printf("   shade per new internode: %.2f us (T <= 10), %.2f us (T > 10)\n",
          s->shade_us_per_node_early, s->shade_us_per_node_late);
+  printf("   world hash of the last iteration: %.1f ms by definition 1, %.1f ms by 2\n",
+         s->hash_ms[0], s->hash_ms[1]);
 }
 
 static sylva_world *from_file(const char *dir, const char *file, int *limit) {

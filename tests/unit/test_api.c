@@ -375,13 +375,48 @@ static void test_phase_checks(void) {
 }
 #endif
 
+/* The world hash's definitions (docs/store.md, "The world hash"): hash 2 is the same
+ * for a world on 1 and 3 threads and for its snapshot image loaded again; it sees
+ * one node's radius; an unknown definition gives 0. The shrubs are grown until they
+ * hold more slots than one piece of hash 2 (4,096). */
+static void test_world_hash_versions(void) {
+  sylva_world_def wd = sylva_default_world_def();
+  sylva_world *w = NULL;
+  CHECK_INT(sylva_world_create(&wd, &w), 0);
+  if (!w) return;
+  sylva_species_def sp = sylva_default_species_def();
+  int s = sylva_world_add_species(w, &sp, "oak");
+  double roots[6][3] = {{-2, -2, 0}, {0, -2, 0}, {2, -2, 0}, {-2, 2, 0}, {0, 2, 0}, {2, 2, 0}};
+  sylva_plant_def pd = {s, "shrubs", (const double(*)[3])roots, 6, 0, NULL, 0};
+  CHECK(s >= 0 && sylva_world_add_plant(w, &pd, NULL) >= 0);
+  while (w->nodes.count <= 3 * 4096 && !sylva_world_finished(w))
+    CHECK_INT(sylva_world_step(w, NULL), 0);
+  CHECK(w->nodes.count > 3 * 4096);
+  uint64_t h1 = sylva_world_hash_of(w, 1), h2 = sylva_world_hash_of(w, 2);
+  CHECK(h1 == sylva_world_hash(w) && h2 != h1 && h2 != 0);
+  CHECK(sylva_world_hash_of(w, 0) == 0 && sylva_world_hash_of(w, 3) == 0);
+  CHECK_INT(sylva_world_set_threads(w, 3), 0);
+  CHECK(sylva_world_hash_of(w, 2) == h2 && sylva_world_hash_of(w, 1) == h1);
+  uint8_t *img = NULL;
+  size_t n = 0;
+  sylva_world *r = NULL;
+  CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
+  if (img) CHECK_INT(sylva_snapshot_load(img, n, &r), 0);
+  CHECK(r && sylva_world_hash_of(r, 2) == h2);
+  free(img);
+  sylva_world_destroy(r);
+  w->nodes.radius[w->nodes.count - 1] *= 1.5f;
+  CHECK(sylva_world_hash_of(w, 2) != h2 && sylva_world_hash_of(w, 1) != h1);
+  sylva_world_destroy(w);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
 #ifndef NDEBUG
       CHECK_TEST(phase_checks),
 #endif
       CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot), CHECK_TEST(heartwood_snapshot), CHECK_TEST(measured_without_bad_root),
-      CHECK_TEST(leaf_area)};
+      CHECK_TEST(leaf_area), CHECK_TEST(world_hash_versions)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");
 }

@@ -75,14 +75,15 @@ static const char *tmp_file(const tmp *t, const char *name, char *buf, size_t si
 /* A store, runs.db in a temporary directory, holding the run "r1" of
  * world_of(false) (with fixture_open_as, of world_of(years) and a scenario from 2027
  * whose species x counts in years): 7 of 12 iterations, a snapshot every 3;
- * hashes[t] is the world's hash after iteration t. */
+ * hashes[t] is the world's hash after iteration t as the store keeps it (the newest
+ * definition), hashes1[t] by the first (the runs of a store before schema 8). */
 typedef struct fixture {
   tmp t;
   char path[256];
   store *st;
   sylva_world *w;
   int64_t run;
-  uint64_t hashes[8];
+  uint64_t hashes[8], hashes1[8];
 } fixture;
 
 static void fixture_open_as(fixture *f, bool years) {
@@ -94,16 +95,28 @@ static void fixture_open_as(fixture *f, bool years) {
   const char *scenario =
       years ? "{\"start_year\": 2027, \"species\": {\"x\": {\"years\": 1}, \"igm\": {}}}" : "{}";
   CHECK_INT(store_create_run(f->st, "r1", scenario, 7, 12, 3, f->w, &f->run), 0);
-  f->hashes[0] = sylva_world_hash(f->w);
-  for (int t = 1; t <= 7; t++) {
+  for (int t = 0; t <= 7; t++) {
     const sylva_journal *j;
-    CHECK_INT(sylva_world_step(f->w, &j), 0);
-    f->hashes[t] = sylva_world_hash(f->w);
+    if (t > 0) CHECK_INT(sylva_world_step(f->w, &j), 0);
+    f->hashes[t] = sylva_world_hash_of(f->w, SYLVA_WORLD_HASH_VERSION);
+    f->hashes1[t] = sylva_world_hash(f->w);
+    if (t == 0) continue;
     CHECK_INT(store_save_iteration(f->st, f->run, f->w, j, t % 3 == 0), 0);
   }
 }
 
 static void fixture_open(fixture *f) { fixture_open_as(f, false); }
+
+/* The fixture's closed store as a store before schema 8 kept it: the run's rows hold
+ * the first definition's hashes. */
+static void fixture_hashes_v1(const fixture *f) {
+  char sql[160];
+  for (int t = 0; t <= 7; t++) {
+    snprintf(sql, sizeof sql, "UPDATE iterations SET hash = %lld WHERE run = %lld AND iteration = %d",
+             (long long)f->hashes1[t], (long long)f->run, t);
+    exec_sql(f->path, sql);
+  }
+}
 
 static void fixture_close(fixture *f) {
   store_close(f->st);
@@ -161,11 +174,11 @@ static void test_load_world(void) {
   int from = -1;
   CHECK_INT(store_load_world(f.st, f.run, 7, NULL, &back, &from), 0);
   CHECK_INT(from, 6);
-  CHECK(sylva_world_hash(back) == f.hashes[6]);
+  CHECK(sylva_world_hash(back) == f.hashes1[6]);
   sylva_world_destroy(back);
   CHECK_INT(store_load_world(f.st, f.run, 2, NULL, &back, &from), 0);
   CHECK_INT(from, 0);
-  CHECK(sylva_world_hash(back) == f.hashes[0]);
+  CHECK(sylva_world_hash(back) == f.hashes1[0]);
   sylva_world_destroy(back);
   fixture_close(&f);
 }
@@ -234,7 +247,7 @@ static void test_corrupt_snapshot_falls_back(void) {
   int from = -1;
   CHECK_INT(store_load_world(f.st, f.run, 7, NULL, &back, &from), 0);
   CHECK_INT(from, 3);
-  if (back) CHECK(sylva_world_hash(back) == f.hashes[3]);
+  if (back) CHECK(sylva_world_hash(back) == f.hashes1[3]);
   sylva_world_destroy(back);
   fixture_close(&f);
 }
@@ -273,9 +286,13 @@ static int first_row(const store_stats_row *r, void *ctx) {
   return 0;
 }
 
-/* The columns schema 7 added, dropped: a store of schema 6 again. */
+/* The column schema 8 added, dropped: a store of schema 7 again (its hashes made
+ * the first definition's by fixture_hashes_v1). */
+#define BACK_TO_SCHEMA_7 "ALTER TABLE runs DROP COLUMN hash_version; PRAGMA user_version = 7;"
+
+/* The columns schemas 8 and 7 added, dropped: a store of schema 6 again. */
 #define BACK_TO_SCHEMA_6                                                                  \
-  "ALTER TABLE stats DROP COLUMN alive; ALTER TABLE stats DROP COLUMN died;"              \
+  BACK_TO_SCHEMA_7 " ALTER TABLE stats DROP COLUMN alive; ALTER TABLE stats DROP COLUMN died;"              \
   " ALTER TABLE stats DROP COLUMN vigour; ALTER TABLE iterations DROP COLUMN stand_area;"  \
   " ALTER TABLE iterations DROP COLUMN stand_alive;"                                      \
   " ALTER TABLE iterations DROP COLUMN stand_died;"                                       \
@@ -285,7 +302,7 @@ static int first_row(const store_stats_row *r, void *ctx) {
   " ALTER TABLE iterations DROP COLUMN sdi; ALTER TABLE iterations DROP COLUMN cv_height;" \
   " ALTER TABLE iterations DROP COLUMN cv_dbh; PRAGMA user_version = 6;"
 
-/* The columns schemas 7 and 6 added, dropped: a store of schema 5 again. */
+/* The columns schemas 8 to 6 added, dropped: a store of schema 5 again. */
 #define BACK_TO_SCHEMA_5                                                                  \
   BACK_TO_SCHEMA_6 " ALTER TABLE stats DROP COLUMN crown_area; ALTER TABLE stats DROP COLUMN wood_volume;"    \
   " ALTER TABLE stats DROP COLUMN biomass; ALTER TABLE stats DROP COLUMN biomass_model;"   \
@@ -293,7 +310,7 @@ static int first_row(const store_stats_row *r, void *ctx) {
   " ALTER TABLE stats DROP COLUMN co2_sequestered;"                                       \
   " ALTER TABLE iterations DROP COLUMN canopy_cover; PRAGMA user_version = 5;"
 
-/* The columns schemas 7 to 5 added, dropped: a store of schema 4 again. */
+/* The columns schemas 8 to 5 added, dropped: a store of schema 4 again. */
 #define BACK_TO_SCHEMA_4                                                                  \
   BACK_TO_SCHEMA_5 " ALTER TABLE stats DROP COLUMN leaf_area; PRAGMA user_version = 4;"
 
@@ -314,6 +331,7 @@ static void test_schema1_migrates(void) {
   store_close(f.st);
   f.st = NULL;
   /* back to schema 1: the columns of migrations 2 and 1 gone */
+  fixture_hashes_v1(&f);
   exec_sql(path, BACK_TO_SCHEMA_2
                  "ALTER TABLE stats DROP COLUMN clearance; ALTER TABLE stats DROP COLUMN zones;"
                  " ALTER TABLE stats DROP COLUMN pruned; PRAGMA user_version = 1");
@@ -348,6 +366,7 @@ static void fixture_reopen_from(fixture *f, const char *sql, int version) {
   fixture_open(f);
   store_close(f->st);
   f->st = NULL;
+  fixture_hashes_v1(f);
   exec_sql(f->path, sql);
   CHECK_INT(user_version(f->path), version);
   CHECK_INT(store_open(f->path, false, &f->st), 0);
@@ -460,6 +479,7 @@ static void test_schema6_migrates(void) {
   fixture_open_as(&f, true);
   store_close(f.st);
   f.st = NULL;
+  fixture_hashes_v1(&f);
   exec_sql(f.path, BACK_TO_SCHEMA_6);
   CHECK_INT(user_version(f.path), 6);
   CHECK_INT(store_open(f.path, false, &f.st), 0);
@@ -487,6 +507,43 @@ static void test_schema6_migrates(void) {
   CHECK(want.alive == 3 && got[8].stand.alive == want.alive && got[8].stand.died == want.died);
   CHECK(got[8].stand.stems_per_ha == want.stems_per_ha && got[8].stand.qmd == want.qmd &&
         got[8].stand.dominant_height == want.dominant_height);
+  fixture_close(&f);
+}
+
+/* A store of schema 7 is migrated in place: its run keeps the first definition of the
+ * world hash, restores and regrows every iteration against it, and grows on storing
+ * it, while a new run keeps the newest; a run that names a definition this build does
+ * not know is refused by name, and its rows stay as they were. */
+static void test_schema7_keeps_hash1(void) {
+  fixture f;
+  fixture_reopen_from(&f, BACK_TO_SCHEMA_7, 7);
+  uint64_t h = 0;
+  bool found = false;
+  for (int t = 0; t <= 7 && f.st; t++) {
+    sylva_world *w = NULL;
+    CHECK_INT(store_world_at(f.st, f.run, t, NULL, &w), 0);
+    CHECK(w && sylva_world_hash(w) == f.hashes1[t]);
+    sylva_world_destroy(w);
+  }
+  const sylva_journal *j;
+  CHECK_INT(sylva_world_step(f.w, &j), 0);
+  if (f.st) CHECK_INT(store_save_iteration(f.st, f.run, f.w, j, false), 0);
+  if (f.st) CHECK_INT(store_iteration_hash(f.st, f.run, 8, &h, &found), 0);
+  CHECK(found && h == sylva_world_hash(f.w) && h != sylva_world_hash_of(f.w, 2));
+  int64_t fresh = 0;
+  if (f.st) CHECK_INT(store_create_run(f.st, "fresh", "{}", 7, 12, 3, f.w, &fresh), 0);
+  if (f.st) CHECK_INT(store_iteration_hash(f.st, fresh, 8, &h, &found), 0);
+  CHECK(found && h == sylva_world_hash_of(f.w, SYLVA_WORLD_HASH_VERSION));
+  store_close(f.st);
+  exec_sql(f.path, "UPDATE runs SET hash_version = 3 WHERE name = 'r1'");
+  f.st = NULL;
+  CHECK_INT(store_open(f.path, false, &f.st), 0);
+  sylva_world *w = NULL;
+  if (f.st) CHECK_INT(store_world_at(f.st, f.run, 4, NULL, &w), SERVER_EFAIL);
+  CHECK(w == NULL);
+  if (f.st) CHECK(strstr(store_error(f.st), "version 3") != NULL);
+  if (f.st) CHECK_INT(store_iteration_hash(f.st, f.run, 4, &h, &found), 0);
+  CHECK(found && h == f.hashes1[4]);
   fixture_close(&f);
 }
 
@@ -573,7 +630,7 @@ int main(int argc, char **argv) {
       CHECK_TEST(command_log), CHECK_TEST(list_runs), CHECK_TEST(corrupt_snapshot_falls_back),
       CHECK_TEST(foreign_file_refused), CHECK_TEST(newer_file_refused),
       CHECK_TEST(schema1_migrates), CHECK_TEST(schema2_migrates), CHECK_TEST(schema4_migrates), CHECK_TEST(schema5_migrates),
-      CHECK_TEST(schema6_migrates),
+      CHECK_TEST(schema6_migrates), CHECK_TEST(schema7_keeps_hash1),
       CHECK_TEST(years_round_trip)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("store");

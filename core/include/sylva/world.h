@@ -404,7 +404,19 @@ double sylva_world_light_at(const sylva_world *w, const double p[3]);
 void sylva_world_dims(const sylva_world *w, int dims[3]);
 /** Memory held now: voxels, skeleton and per-step scratch. */
 void sylva_world_memory(const sylva_world *w, sylva_memory *out);
-/** A 64-bit hash of the whole state (skeleton, generator, iteration). */
+/** The newest definition of the world hash, the one new stores keep (docs/store.md,
+ *  "The world hash"). */
+#define SYLVA_WORLD_HASH_VERSION 2
+/** A 64-bit hash of the whole state (skeleton, generator, iteration, stems'
+ *  clocks, obstacles) by definition `version` (docs/store.md, "The world hash"):
+ *  1, FNV-1a over every live node's fields byte by byte, in id order; 2, the same
+ *  except that the live nodes enter as the sum (mod 2^64) of a hash of each node,
+ *  which the world's threads share out (equal for every thread count). Two worlds
+ *  that grow alike have equal hashes of either version. 0 for an unknown version.
+ *  Uses the world's threads: not to be called on one world from two threads at
+ *  once. */
+uint64_t sylva_world_hash_of(const sylva_world *w, int version);
+/** sylva_world_hash_of(w, 1). */
 uint64_t sylva_world_hash(const sylva_world *w);
 
 #endif
