@@ -14,7 +14,7 @@
 enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_TOKEN_FILE,
        OPT_PUBLIC_READ, OPT_HOST, OPT_ORIGIN, OPT_INSECURE, OPT_MAX_MESSAGE, OPT_RATE,
        OPT_THREADS, OPT_WORKERS, OPT_MAX_RUNS, OPT_MAX_STEMS, OPT_MAX_OBSTACLES, OPT_MAX_CLIENTS,
-       OPT_MAX_JOBS, OPT_MAX_INPUT, OPT_MEMORY, OPT_TRACE, OPT_HELP, OPT_COUNT };
+       OPT_MAX_JOBS, OPT_MAX_INPUT, OPT_MEMORY, OPT_WORK_NICE, OPT_TRACE, OPT_HELP, OPT_COUNT };
 
 static const cli_option serve_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
@@ -53,6 +53,9 @@ static const cli_option serve_options[OPT_COUNT] = {
                        "most bytes of unfinished messages of all clients (default 64 MiB)"},
     [OPT_MEMORY] = {"memory-budget", 0, "MIB",
                     "memory the runs' worlds may take, by estimate (default 4096)"},
+    [OPT_WORK_NICE] = {"work-nice", 0, "N",
+                       "run the growth and the exports N steps of niceness below the loop that "
+                       "serves the clients (0 to 19, default 10)"},
     [OPT_TRACE] = {"trace-iterations", 0, "FILE",
                    "append a line per grown iteration: run, iteration, and the monotonic "
                    "seconds when its step returned, was stored, its delta encoded and handed "
@@ -132,6 +135,7 @@ int cmd_serve(int argc, char **argv) {
                   .max_pending = DAEMON_MAX_PENDING, .max_clients = DAEMON_MAX_CLIENTS,
                   .max_input = DAEMON_MAX_INPUT, .message_ms = DAEMON_MESSAGE_MS},
       .workers = DAEMON_WORKERS, .threads = cli_default_threads(1),
+      .work_nice = DAEMON_WORK_NICE,
       .max_runs = DAEMON_MAX_RUNS, .max_stems = DAEMON_MAX_STEMS,
       .max_obstacles = DAEMON_MAX_OBSTACLES, .max_jobs = DAEMON_MAX_JOBS,
       .memory_budget = (size_t)DAEMON_MEMORY_BUDGET_MIB << 20};
@@ -214,6 +218,10 @@ int cmd_serve(int argc, char **argv) {
     case OPT_MEMORY:
       if (cli_parse_u64("serve", "memory-budget", arg, 16, 1u << 20, &v)) return CLI_EXIT_USAGE;
       o.memory_budget = (size_t)v << 20;
+      break;
+    case OPT_WORK_NICE:
+      if (cli_parse_u64("serve", "work-nice", arg, 0, 19, &v)) return CLI_EXIT_USAGE;
+      o.work_nice = (int)v;
       break;
     case OPT_TRACE:
       if (o.trace) fclose(o.trace);

@@ -314,7 +314,7 @@ int server_main(const server_options *opt) {
     rc = 1;
   }
   bool pool_up = false;
-  if (!rc && !(pool_up = pool_init(&d->pool, &d->loop, opt->workers) == 0)) {
+  if (!rc && !(pool_up = pool_init(&d->pool, &d->loop, opt->workers, opt->work_nice) == 0)) {
     server_log(NULL, "cannot start %d worker threads", opt->workers);
     rc = 1;
   }

@@ -47,6 +47,10 @@
 #define DAEMON_MAX_SLICE (16ll << 20)
 /** Threads of the run pool (default). */
 #define DAEMON_WORKERS 2
+/** The growth's and the exports' steps of niceness below the loop (default; pool.h):
+ *  the loop's fan-out of a delta goes before the next iteration (docs/performance.md,
+ *  "The live view"). */
+#define DAEMON_WORK_NICE 10
 /** Runs held, forks included (default). */
 #define DAEMON_MAX_RUNS 64
 /** Stems per world (default). */
@@ -88,6 +92,8 @@ typedef struct server_options {
   client_limits clients; /**< message size and rate, backlog, clients, input */
   int workers;           /**< threads of the run pool */
   int threads;           /**< threads every run's world grows on (0 or 1: one) */
+  int work_nice;         /**< the growth's and the jobs' steps of niceness below the
+                              loop (pool.h) */
   int max_runs;          /**< runs held (forks count) */
   int max_stems;         /**< stems per world */
   int max_obstacles;     /**< obstacles per world */

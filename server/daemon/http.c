@@ -301,6 +301,7 @@ static int write_report(http_job *j) {
 /* Worker thread: the export or report into a tmpfile. */
 static void job_work(uv_work_t *req) {
   http_job *j = req->data;
+  pool_thread_nice(j->d->opt.work_nice); /* an export may regrow a world */
   j->file = tmpfile();
   if (!j->file) {
     j->failed = SERVER_EFAIL;

@@ -1,10 +1,26 @@
+/* syscall(SYS_gettid): a thread's own niceness */
+#define _DEFAULT_SOURCE
 #include "pool.h"
 
 #include <errno.h>
 #include <stdlib.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+void pool_thread_nice(int steps) {
+  /* below the main thread, the loop's, which nothing renices (PRIO_PROCESS with the
+   * process id reads the main thread's own on Linux) */
+  errno = 0;
+  int base = getpriority(PRIO_PROCESS, (id_t)getpid());
+  if (base == -1 && errno) return;
+  int nice = base + steps > 19 ? 19 : base + steps;
+  (void)setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), nice);
+}
 
 static void *worker(void *arg) {
   pool *p = arg;
+  pool_thread_nice(p->nice);
   pthread_mutex_lock(&p->lock);
   for (;;) {
     while (!p->queue && !p->stopping) pthread_cond_wait(&p->wake, &p->lock);
@@ -69,8 +85,8 @@ static void on_async(uv_async_t *a) {
   }
 }
 
-int pool_init(pool *p, uv_loop_t *loop, int count) {
-  *p = (pool){.count = 0};
+int pool_init(pool *p, uv_loop_t *loop, int count, int nice) {
+  *p = (pool){.count = 0, .nice = nice};
   if (pthread_mutex_init(&p->lock, NULL)) return -ENOMEM;
   if (pthread_cond_init(&p->wake, NULL)) {
     pthread_mutex_destroy(&p->lock);

@@ -4,7 +4,10 @@
  * and submits its next one when the last is done, so the runs take turns
  * (round-robin) and none starves another. A task's done callback runs on the
  * loop thread. The exports and regrows of clients use libuv's own threadpool
- * (capped apart, see jobs in daemon.h), so they never hold up growing. */
+ * (capped apart, see jobs in daemon.h), so they never hold up growing. The
+ * workers, and the jobs that grow, run at a lower priority (nice) than the loop,
+ * so that the loop's fan-out of a delta never waits behind the next iteration's
+ * growth; a world's threads, made by them, inherit it. */
 #ifndef SYLVA_SERVER_POOL_H
 #define SYLVA_SERVER_POOL_H
 
@@ -37,12 +40,19 @@ typedef struct pool {
   pool_task *reports;            /**< running tasks with progress for the loop */
   int running;                   /**< tasks on workers now */
   bool stopping;
+  int nice;                      /**< the workers' steps of niceness below the loop */
   uv_async_t async;              /**< wakes the loop for finished tasks */
 } pool;
 
-/** Starts count workers on the loop's side; 0 or a negative errno (then nothing is
- *  left to stop or close). */
-int pool_init(pool *p, uv_loop_t *loop, int count);
+/** Starts count workers on the loop's side, each `nice` steps of niceness below the
+ *  loop (pool_thread_nice); 0 or a negative errno (then nothing is left to stop or
+ *  close). */
+int pool_init(pool *p, uv_loop_t *loop, int count, int nice);
+/** Sets the calling thread's niceness `steps` (0 to 19) above the main thread's, the
+ *  loop's, at most 19: its own alone (Linux keeps one per thread, and the threads it
+ *  starts inherit it). A system that refuses leaves it as it was: the same results,
+ *  served less promptly. */
+void pool_thread_nice(int steps);
 /** Queues a task (loop thread). */
 void pool_submit(pool *p, pool_task *t);
 /** From the task's work, on its worker: has its progress callback run on the

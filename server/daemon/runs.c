@@ -1134,6 +1134,7 @@ static void create_work(job *j) {
 static void job_work(uv_work_t *req) {
   job *j = req->data;
   server *d = j->d;
+  pool_thread_nice(d->opt.work_nice); /* the world's threads it makes inherit it */
   j->code = NULL;
   if (j->kind == JOB_CREATE) {
     create_work(j);

@@ -4,6 +4,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
+import { readdirSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { SYLVA, ROOT, withDaemon, startDaemon, stopDaemon, connect, Client, scenario, tempDir,
   cleanup, rawCloseCode } from './harness.mjs';
@@ -342,6 +343,44 @@ test('the pool: two growing runs take turns on one worker; SIGTERM drops what ha
     assert.ok(Date.now() - t0 < 5000, `stopped in ${Date.now() - t0} ms`);
     cleanup(d.dir);
   }
+});
+
+// The niceness of each of a process's threads, by thread id (/proc/PID/task/TID/stat:
+// the 19th field, the 17th after the command's closing parenthesis).
+function threadNice(pid) {
+  const out = new Map();
+  for (const tid of readdirSync(`/proc/${pid}/task`)) {
+    try {
+      const stat = readFileSync(`/proc/${pid}/task/${tid}/stat`, 'utf8');
+      out.set(Number(tid), Number(stat.slice(stat.lastIndexOf(')') + 2).split(' ')[16]));
+    } catch { /* the thread ended meanwhile */ }
+  }
+  return out;
+}
+
+test('--work-nice: bad values exit 2; the workers, a create job and the world\'s threads run N steps below the loop', async () => {
+  for (const bad of ['20', 'x', '-1']) {
+    const r = spawnSync(SYLVA, ['serve', '--work-nice', bad, '--db', '/nonexistent/x.db'], { encoding: 'utf8' });
+    assert.equal(r.status, 2, r.stderr);
+    assert.match(r.stderr, new RegExp(`--work-nice: expected an integer from 0 to 19, got '${bad}'`));
+  }
+  await withDaemon({ args: ['--work-nice', '7', '--workers', '1', '--threads', '2'] }, async (d) => {
+    const pid = d.proc.pid;
+    const loop = threadNice(pid).get(pid);
+    const below = Math.min(19, loop + 7);
+    const niced = () => [...threadNice(pid).values()].filter((n) => n === below).length;
+    if (below !== loop) assert.equal(niced(), 1, 'before any run: the one worker');
+    const c = await connect(d.url);
+    const a = await create(c, 'a', scenario('stand.json', { iterations: 200 }), true);
+    assert.equal(a.type, 'created');
+    c.send({ type: 'subscribe', run: a.run, id: 's' });
+    await c.next((m) => m.type === 'delta' && m.run === a.run, 60000);
+    const now = threadNice(pid);
+    assert.equal(now.get(pid), loop, 'the loop keeps its niceness');
+    // the worker, the libuv thread that built the world, and the world's second thread
+    if (below !== loop) assert.ok(niced() >= 3, `niceness by thread: ${JSON.stringify([...now])}`);
+    c.close();
+  });
 });
 
 // The daemon's gauges of client input (/metrics): {input, reading, waiting}.
