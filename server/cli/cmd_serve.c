@@ -14,7 +14,7 @@
 enum { OPT_DB, OPT_LISTEN, OPT_RUN, OPT_WEB, OPT_SCENARIOS, OPT_TOKEN, OPT_TOKEN_FILE,
        OPT_PUBLIC_READ, OPT_HOST, OPT_ORIGIN, OPT_INSECURE, OPT_MAX_MESSAGE, OPT_RATE,
        OPT_THREADS, OPT_WORKERS, OPT_MAX_RUNS, OPT_MAX_STEMS, OPT_MAX_OBSTACLES, OPT_MAX_CLIENTS,
-       OPT_MAX_JOBS, OPT_MAX_INPUT, OPT_MEMORY, OPT_WORK_NICE, OPT_TRACE, OPT_HELP, OPT_COUNT };
+       OPT_MAX_JOBS, OPT_MAX_INPUT, OPT_MAX_BACKLOG, OPT_MEMORY, OPT_WORK_NICE, OPT_TRACE, OPT_HELP, OPT_COUNT };
 
 static const cli_option serve_options[OPT_COUNT] = {
     [OPT_DB] = {"db", 0, "FILE", "the store (default sylva.db)"},
@@ -51,6 +51,9 @@ static const cli_option serve_options[OPT_COUNT] = {
                       "most exports, history snapshots and forks at once (default 2)"},
     [OPT_MAX_INPUT] = {"max-input", 0, "BYTES",
                        "most bytes of unfinished messages of all clients (default 64 MiB)"},
+    [OPT_MAX_BACKLOG] = {"max-backlog", 0, "BYTES",
+                         "most bytes waiting for one client behind the message going out to "
+                         "it (default 64 MiB); past it the client is closed as too slow"},
     [OPT_MEMORY] = {"memory-budget", 0, "MIB",
                     "memory the runs' worlds may take, by estimate (default 4096)"},
     [OPT_WORK_NICE] = {"work-nice", 0, "N",
@@ -214,6 +217,10 @@ int cmd_serve(int argc, char **argv) {
     case OPT_MAX_INPUT:
       if (cli_parse_u64("serve", "max-input", arg, 1024, 1ull << 34, &v)) return CLI_EXIT_USAGE;
       o.clients.max_input = (size_t)v;
+      break;
+    case OPT_MAX_BACKLOG:
+      if (cli_parse_u64("serve", "max-backlog", arg, 1024, 1ull << 34, &v)) return CLI_EXIT_USAGE;
+      o.clients.max_pending = (size_t)v;
       break;
     case OPT_MEMORY:
       if (cli_parse_u64("serve", "memory-budget", arg, 16, 1u << 20, &v)) return CLI_EXIT_USAGE;

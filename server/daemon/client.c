@@ -350,7 +350,10 @@ void client_close_after_sending(client *c, int code, const char *reason) {
 
 void client_send(client *c, msgbuf *m) {
   if (c->close_code) return;
-  if (c->pending + m->len > c->set->limits.max_pending) {
+  /* The message going out now does not count: a snapshot (`get`) larger than the
+   * cap reaches a client that reads, and what queues behind it is capped. */
+  size_t queued = c->qlen ? c->pending - c->queue[c->qhead]->len : 0;
+  if (queued + m->len > c->set->limits.max_pending && c->qlen) {
     client_close(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, "client too slow: output backlog");
     return;
   }

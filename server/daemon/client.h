@@ -26,7 +26,8 @@ typedef struct client client;
 /** The limits every client is held to. */
 typedef struct client_limits {
   size_t max_message;   /**< bytes of one message */
-  size_t max_pending;   /**< bytes waiting to be sent to one client */
+  size_t max_pending;   /**< bytes waiting to be sent to one client behind the message
+                             going out (client_send) */
   int rate_limit;       /**< messages per second */
   int max_clients;      /**< WebSockets at once */
   size_t max_input;     /**< bytes of unfinished messages of all clients together */

@@ -119,6 +119,13 @@ function client(url) {
     queue.push({ data, t });
     for (const w of [...waiters]) w();
   });
+  // closed by the daemon (a `get` of a world larger than a client's 64 MiB backlog):
+  // what the waiter gets is an error naming the close
+  ws.on('close', (code, reason) => {
+    const data = Buffer.from(JSON.stringify({ type: 'error', code: 'closed', message: `closed ${code} ${reason}` }));
+    queue.push({ data, t: now() });
+    for (const w of [...waiters]) w();
+  });
   const next = (pred) => new Promise((ok) => {
     const check = () => {
       const i = queue.findIndex((x) => pred(x));
@@ -236,9 +243,13 @@ async function bench(label, scenario, opts) {
       await f.next((x) => headType(x) === 'welcome');
       const s0 = now();
       f.send({ type: 'subscribe', run, detail: opts.detail });
-      const msg = await f.next((x) => headType(x) === 'snapshot');
+      const msg = await f.next((x) => headType(x) === 'snapshot' || headType(x) === 'error');
       const tArrive = msg.t;
       const snap = JSON.parse(msg.data);
+      if (snap.type === 'error') {
+        snaps.push({ kind: 'subscribe', arrive: tArrive - s0, parsed: now() - s0, bytes: msg.data.length, nodes: snap.message, iteration: '-' });
+        break;
+      }
       const tParsed = now();
       let nodes = 0;
       for (const p of snap.plants) for (const s of p.stems) nodes += s.nodes?.length ?? 0;
@@ -248,8 +259,9 @@ async function bench(label, scenario, opts) {
       const gm = await f.next((x) => headType(x) === 'snapshot' || headType(x) === 'error');
       const gParsed = JSON.parse(gm.data);
       snaps.push({ kind: 'get', arrive: gm.t - g0, parsed: now() - g0, bytes: gm.data.length,
-        nodes: gParsed.plants ? gParsed.plants.reduce((n, p) => n + p.stems.reduce((m, s) => m + s.nodes.length, 0), 0) : gParsed.message, iteration: gParsed.iteration });
+        nodes: gParsed.plants ? gParsed.plants.reduce((n, p) => n + p.stems.reduce((m, s) => m + s.nodes.length, 0), 0) : gParsed.message, iteration: gParsed.iteration ?? '-' });
       f.ws.close();
+      if (gParsed.type === 'error') break; /* the same again */
     }
     const metrics = await (await fetch(`${d.http}/metrics`)).text();
     const pick = (n) => (metrics.match(new RegExp(`^${n} (\\S+)$`, 'm')) || [])[1];

@@ -345,6 +345,39 @@ test('the pool: two growing runs take turns on one worker; SIGTERM drops what ha
   }
 });
 
+test('--max-backlog: a get larger than it reaches a client that reads; a client that does not read is closed with 1008 once what waits behind passes it', () => withDaemon({ args: ['--max-backlog', '100000', '--max-jobs', '64'] }, async (d) => {
+  const c = await connect(d.url);
+  const a = await create(c, 'a', scenario('stand.json', { iterations: 20 }), true);
+  assert.equal(a.type, 'created');
+  c.send({ type: 'subscribe', run: a.run, detail: 'stems', id: 's' });
+  await c.next((m) => m.type === 'status' && m.run === a.run && m.status === 'finished', 60000);
+  // the stand's snapshot (about 400 KB) is larger than the backlog: it goes out whole
+  c.send({ type: 'get', run: a.run, iteration: 20, id: 'g' });
+  const g = await c.next((m) => m.ref === 'g', 60000);
+  assert.equal(g.type, 'snapshot');
+  assert.ok(JSON.stringify(g).length > 100000, 'the snapshot is larger than the backlog');
+  assert.equal(c.closed, null);
+  // a client that stops reading and asks for 40 of them: the kernel's buffers fill, the
+  // replies wait behind the one going out, and past 100,000 bytes it is closed
+  const slow = await connect(d.url);
+  slow.ws._socket.pause();
+  for (let i = 0; i < 40; i++) slow.send({ type: 'get', run: a.run, iteration: 20, id: `g${i}` });
+  let h;
+  const t0 = Date.now();
+  do {
+    await new Promise((r) => setTimeout(r, 100));
+    h = await fetch(`${d.http}/healthz`).then((r) => r.json());
+  } while (h.clients !== 1 && Date.now() - t0 < 30000);
+  assert.equal(h.clients, 1, 'the slow client was closed, the reader kept');
+  slow.ws._socket.resume();
+  const closed = await new Promise((ok) => {
+    if (slow.closed) return ok(slow.closed);
+    slow.ws.once('close', (code) => ok({ code }));
+  });
+  assert.ok([1008, 1006].includes(closed.code), `closed with ${closed.code}`);
+  c.close();
+}));
+
 // The niceness of each of a process's threads, by thread id (/proc/PID/task/TID/stat:
 // the 19th field, the 17th after the command's closing parenthesis).
 function threadNice(pid) {
