@@ -4,11 +4,13 @@
 //   node tests/bench/delta_latency.mjs [--exe build/server/sylva] [--viewers 100]
 //        [--iterations5 20] [--iterations100 24] [--years 15] [--threads 2]
 //        [--serve-threads 1,2] [--only 5|100|hectare] [--detail nodes|stems]
+//        [--work-nice N]
 //
 // Three runs: the five-tree stand (scenarios/stand.json), a generated 100-tree
 // stand (igm-fig17b, tropism up, 10 x 10 trees 2 m apart in a 26 x 26 x 14 m world)
 // and the growing hectare (400 utdb:NoEast:TICO 5 m apart, --years), the last once
-// per --serve-threads value (`sylva serve --threads`; default: the daemon's own).
+// per --serve-threads value (`sylva serve --threads`; default: the daemon's own), with
+// `--work-nice N` when given (default: the daemon's, 10).
 // The viewers live in worker threads (--threads of them, each its own event loop)
 // and stamp every message on arrival with the system's monotonic clock, which is
 // the daemon's CLOCK_MONOTONIC: the daemon writes when each iteration's step
@@ -327,8 +329,10 @@ async function main() {
     const years = Number(arg('years', '15'));
     for (const n of arg('serve-threads', '').split(',')) {
       // its worlds' estimate (400 stems) passes the default budget of 4096 MiB
-      const daemonArgs = ['--memory-budget', '8192', ...(n ? ['--threads', n] : [])];
-      report(await bench(`growing hectare (400 utdb:NoEast:TICO, 5 m apart), ${years} years, daemon --threads ${n || 'default'}`,
+      const nice = arg('work-nice', null);
+      const daemonArgs = ['--memory-budget', '8192', ...(n ? ['--threads', n] : []),
+        ...(nice !== null ? ['--work-nice', nice] : [])];
+      report(await bench(`growing hectare (400 utdb:NoEast:TICO, 5 m apart), ${years} years, daemon --threads ${n || 'default'}${nice !== null ? ` --work-nice ${nice}` : ''}`,
         hectare(years), { ...opts, daemonArgs }), opts.viewers);
     }
   }
