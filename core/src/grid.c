@@ -447,6 +447,45 @@ static inline void row_runs(int64_t *layer, int x0, int x1, int y0, int y1, int6
   }
 }
 
+/* A stamp's writes to one layer of one chunk (or one block sum): row_runs of value
+ * over x0..x1, y0..y1. A stamp lists them all, asking memory for each layer's two
+ * runs as it lists it, and then writes them: the writes wait for the slowest run
+ * rather than for each in turn (a crown's chunks seldom sit in the nearer caches;
+ * on the 100-tree stand the shade phase took 1.4-2.0 s writing as it went, 1.06 s
+ * so). The order of a stamp's writes changes no sum. */
+typedef struct stamp_run {
+  int64_t *layer;
+  int64_t value;
+  int8_t x0, x1, y0, y1;
+} stamp_run;
+
+enum { STAMP_RUNS = 256 };
+
+typedef struct stamp_runs {
+  int n;
+  stamp_run run[STAMP_RUNS];
+} stamp_runs;
+
+static void runs_write(stamp_runs *r) {
+  for (int k = 0; k < r->n; k++) {
+    const stamp_run *u = &r->run[k];
+    row_runs(u->layer, u->x0, u->x1, u->y0, u->y1, u->value);
+  }
+  r->n = 0;
+}
+
+static inline void runs_add(stamp_runs *r, int64_t *layer, int x0, int x1, int y0, int y1,
+                            int64_t value) {
+  if (r->n == STAMP_RUNS) runs_write(r);
+  r->run[r->n++] = (stamp_run){layer, value, (int8_t)x0, (int8_t)x1, (int8_t)y0, (int8_t)y1};
+  __builtin_prefetch(layer + (x0 << 4) + y0, 1);
+  __builtin_prefetch(layer + (x0 << 4) + y1, 1);
+  if (x1 + 1 < SYLVA__CHUNK) {
+    __builtin_prefetch(layer + ((x1 + 1) << 4) + y0, 1);
+    __builtin_prefetch(layer + ((x1 + 1) << 4) + y1, 1);
+  }
+}
+
 /* One pass of a stamp over the chunk columns cx_min..cx_max: sign +1 or -1 writes
  * it; sign 0 only makes every chunk and block sum the writes will touch. */
 static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int sign, int cx_min,
@@ -460,6 +499,8 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
   int xlo = clip_lo(v[0] - h, 0), xhi = clip_hi(v[0] + h, g->n[0] - 1);
   int ylo = clip_lo(v[1] - h, 0), yhi = clip_hi(v[1] + h, g->n[1] - 1);
   int cx0 = clip_lo(xlo >> 4, cx_min), cx1 = clip_hi(xhi >> 4, cx_max);
+  stamp_runs runs;
+  runs.n = 0;
   for (int cz = zlo >> 4; zhi >= 0 && cz <= zhi >> 4; cz++)
     for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
       for (int cx = cx0; cx <= cx1; cx++) {
@@ -479,7 +520,8 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
           int y0 = clip_lo(clip_lo(v[1] - hq, cy << 4), 0);
           int y1 = clip_hi(clip_hi(v[1] + hq, (cy << 4) + 15), g->n[1] - 1);
           if (x0 > x1 || y0 > y1) continue; /* this layer misses the chunk */
-          row_runs(c->shade + ((z & 15) << 8), x0 & 15, x1 & 15, y0 & 15, y1 & 15, sign * w[q - 1]);
+          runs_add(&runs, c->shade + ((z & 15) << 8), x0 & 15, x1 & 15, y0 & 15, y1 & 15,
+                   sign * w[q - 1]);
         }
       }
   /* Column: every voxel of the base footprint from depth + 1 below down to the
@@ -488,28 +530,30 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
    * every lower chunk reads it from one block sum, so the cost does not depend on
    * the height of the tree. */
   int ztop = v[2] - depth - 1;
-  if (ztop < 0 || p->column == 0) return SYLVA_OK;
-  int64_t value = sign * p->column;
-  int bz = ztop >> 4, zl = ztop & 15;
-  for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
-    for (int cx = cx0; cx <= cx1; cx++) {
-      sylva__chunk *c = chunk_get(g, cx, cy, bz);
-      if (!c) return SYLVA_ENOMEM;
-      int64_t *sum = NULL;
-      if (bz > 0) {
-        sum = colsum_get(g, cx, cy, bz);
-        if (!sum) return SYLVA_ENOMEM;
+  if (ztop >= 0 && p->column != 0) {
+    int64_t value = sign * p->column;
+    int bz = ztop >> 4, zl = ztop & 15;
+    for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
+      for (int cx = cx0; cx <= cx1; cx++) {
+        sylva__chunk *c = chunk_get(g, cx, cy, bz);
+        if (!c) return SYLVA_ENOMEM;
+        int64_t *sum = NULL;
+        if (bz > 0) {
+          sum = colsum_get(g, cx, cy, bz);
+          if (!sum) return SYLVA_ENOMEM;
+        }
+        if (!sign) continue;
+        int y0 = clip_lo(ylo, cy << 4) & 15, y1 = clip_hi(yhi, (cy << 4) + 15) & 15;
+        int x0 = clip_lo(xlo, cx << 4) & 15, x1 = clip_hi(xhi, (cx << 4) + 15) & 15;
+        for (int z = 0; z <= zl; z++) runs_add(&runs, c->shade + (z << 8), x0, x1, y0, y1, value);
+        if (sum) {
+          runs_add(&runs, sum, x0, x1, y0, y1, value);
+          int32_t *top = &g->colsum_top[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
+          if (bz > *top) *top = bz;
+        }
       }
-      if (!sign) continue;
-      int y0 = clip_lo(ylo, cy << 4) & 15, y1 = clip_hi(yhi, (cy << 4) + 15) & 15;
-      int x0 = clip_lo(xlo, cx << 4) & 15, x1 = clip_hi(xhi, (cx << 4) + 15) & 15;
-      for (int z = 0; z <= zl; z++) row_runs(c->shade + (z << 8), x0, x1, y0, y1, value);
-      if (sum) {
-        row_runs(sum, x0, x1, y0, y1, value);
-        int32_t *top = &g->colsum_top[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
-        if (bz > *top) *top = bz;
-      }
-    }
+  }
+  runs_write(&runs);
   return SYLVA_OK;
 }
 
