@@ -351,6 +351,16 @@ static void occ_free(sylva__grid *g, sylva__occ *o) {
   sylva__free(o);
 }
 
+void sylva__grid_prefetch(const sylva__grid *g, const int v[3]) {
+  size_t ci = chunk_index(g, v[0] >> 4, v[1] >> 4, v[2] >> 4);
+  const sylva__occ *o = g->occ[ci];
+  if (o) __builtin_prefetch(&o->slot[occ_home(o, local_index(v[0], v[1], v[2]))]);
+  const sylva__chunk *c = g->chunks[ci];
+  if (!c) return;
+  const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
+  for (int x = 0; x <= (v[0] & 15); x++) __builtin_prefetch(row + (x << 4));
+}
+
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]) {
   if (occ_word(g, v)) return -1.0;
   return light_in(g, chunk_at(g, v), v, false);

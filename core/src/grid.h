@@ -170,6 +170,10 @@ bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]);
 int64_t sylva__grid_shade_raw(const sylva__grid *g, const int v[3]);
 /** Light max(0, 1 - S) of voxel v, 0 under or in an obstacle. */
 double sylva__grid_light(const sylva__grid *g, const int v[3]);
+/** Asks memory for what sylva__grid_free_light(v) will read in its chunk (its
+ *  occupancy slot and its row of shade), so that a caller with several voxels to read
+ *  waits once for all of them. Changes nothing. */
+void sylva__grid_prefetch(const sylva__grid *g, const int v[3]);
 /** Light of voxel v if no stem occupies it, else -1 (one chunk lookup for both). */
 double sylva__grid_free_light(const sylva__grid *g, const int v[3]);
 /** Voxel v's occupancy word ((stem + 1) << 12 | its nodes there), 0 when free. */

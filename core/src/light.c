@@ -29,15 +29,14 @@ static int lit_age(const sylva_world *w, size_t i, int T, int32_t *stem,
   return sylva__leaf_age(&w->nodes, &species_of(w, i, stem, sp)->def, i, T);
 }
 
-/* The light live node i collects at age (0 when age < 0: no leaves, sp unread):
- * reads the grid (its own voxel) and the species' cached powers, writes only its
- * own q and light. */
-static void collect_node(const collect_ctx *c, size_t i, int age, const sylva__species *sp) {
+/* The light live node i collects at age (0 when age < 0: no leaves, sp unread) in
+ * voxel v: reads the grid (its own voxel) and the species' cached powers, writes only
+ * its own q and light. */
+static void collect_node(const collect_ctx *c, size_t i, int age, const sylva__species *sp,
+                         const int v[3]) {
   sylva_world *w = c->w;
   double L = 0.0;
   if (age >= 0) {
-    int v[3];
-    sylva__node_voxel(w, (int32_t)i, v);
     double l = sylva__grid_light_shared(&w->grid, v);
     /* the cache holds age^sigma for every age a leaf has (warmed below) */
     double p = age == 0 ? 0.0
@@ -49,16 +48,49 @@ static void collect_node(const collect_ctx *c, size_t i, int age, const sylva__s
   if (c->light) c->light[i] = L;
 }
 
+/* Nodes are read in batches: each batch's voxels asked of memory first (a crown's
+ * chunks seldom sit in the nearer caches), then read; each node's light is its own. */
+enum { COLLECT_BATCH = 16 };
+
+typedef struct collect_batch {
+  int n;
+  size_t slot[COLLECT_BATCH];
+  int age[COLLECT_BATCH];
+  const sylva__species *sp[COLLECT_BATCH];
+  int v[COLLECT_BATCH][3];
+} collect_batch;
+
+static void batch_add(const collect_ctx *c, collect_batch *b, size_t i, int age,
+                      const sylva__species *sp) {
+  int k = b->n++;
+  b->slot[k] = i;
+  b->age[k] = age;
+  b->sp[k] = sp;
+  if (age >= 0) {
+    sylva__node_voxel(c->w, (int32_t)i, b->v[k]);
+    sylva__grid_prefetch(&c->w->grid, b->v[k]);
+  }
+}
+
+static void batch_collect(const collect_ctx *c, collect_batch *b) {
+  for (int k = 0; k < b->n; k++) collect_node(c, b->slot[k], b->age[k], b->sp[k], b->v[k]);
+  b->n = 0;
+}
+
 /* The light of the live nodes in slots [begin, end). */
 static void collect_range(void *arg, size_t begin, size_t end) {
   const collect_ctx *c = arg;
   int32_t cur_stem = -1;
   const sylva__species *sp = NULL;
+  collect_batch b;
+  b.n = 0;
   for (size_t i = begin; i < end; i++) {
     if (!(c->w->nodes.flags[i] & SYLVA__NODE_ALIVE)) continue;
     int age = lit_age(c->w, i, c->iteration, &cur_stem, &sp);
-    collect_node(c, i, age, sp);
+    batch_add(c, &b, i, age, sp);
+    if (b.n == COLLECT_BATCH) batch_collect(c, &b);
   }
+  batch_collect(c, &b);
 }
 
 /* The light of the listed lit nodes [begin, end) of c->lit. */
@@ -66,10 +98,14 @@ static void collect_listed(void *arg, size_t begin, size_t end) {
   const collect_ctx *c = arg;
   int32_t cur_stem = -1;
   const sylva__species *sp = NULL;
+  collect_batch b;
+  b.n = 0;
   for (size_t k = begin; k < end; k++) {
     size_t i = (size_t)c->lit[k].slot;
-    collect_node(c, i, c->lit[k].age, species_of(c->w, i, &cur_stem, &sp));
+    batch_add(c, &b, i, c->lit[k].age, species_of(c->w, i, &cur_stem, &sp));
+    if (b.n == COLLECT_BATCH) batch_collect(c, &b);
   }
+  batch_collect(c, &b);
 }
 
 void sylva__light_collect(sylva_world *w, int iteration, double *light) {
@@ -97,7 +133,7 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
       if (!(s->flags[i] & SYLVA__NODE_ALIVE)) continue;
       int age = lit_age(w, i, iteration, &stem, &sp);
       if (age < 0) {
-        collect_node(&c, i, age, sp);
+        collect_node(&c, i, age, sp, NULL);
         continue;
       }
       int v[3];

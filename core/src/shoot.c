@@ -166,23 +166,39 @@ static void optimal_direction(sylva_world *w, const index_ctx *ix, const sylva_s
   basis(vd, e1, e2);
   double cos_a = cos(d->cone_angle * SYLVA__DEG);
   double len = d->cone_radius * d->rho;
-  for (int m = 0; m < markers; m++) {
-    double u1 = sylva__rng_unit(&w->rng), u2 = sylva__rng_unit(&w->rng),
-           u3 = sylva__rng_unit(&w->rng);
-    double c = 1.0 - u1 * (1.0 - cos_a);
-    double sn = sqrt(fmax(0.0, 1.0 - c * c));
-    double psi = 2.0 * 3.14159265358979323846 * u2;
-    double r = len * cbrt(u3);
-    double dir[3];
-    for (int i = 0; i < 3; i++) dir[i] = c * vd[i] + sn * (cos(psi) * e1[i] + sin(psi) * e2[i]);
-    double p[3] = {tip[0] + r * dir[0], tip[1] + r * dir[1], tip[2] + r * dir[2]};
+  /* the markers drawn first, their voxels asked of memory, then read in turn: the
+   * same draws and the same sum in the same order */
+  enum { BATCH = 32 };
+  struct marker {
+    double dir[3], p[3], r;
     int v[3];
-    if (!sylva__grid_voxel(&w->grid, p[0], p[1], p[2], v)) continue;
-    if (w->grid.obstacle_count && sylva__grid_blocked(&w->grid, v)) continue;
-    double l = sylva__grid_free_light(&w->grid, v);
-    if (l < 0.0) continue; /* occupied */
-    if (contested(w, ix, p, r * r, self)) continue;
-    for (int i = 0; i < 3; i++) vo[i] += l * dir[i];
+    bool inside;
+  } mk[BATCH];
+  for (int m0 = 0; m0 < markers; m0 += BATCH) {
+    int n = markers - m0 < BATCH ? markers - m0 : BATCH;
+    for (int k = 0; k < n; k++) {
+      struct marker *q = &mk[k];
+      double u1 = sylva__rng_unit(&w->rng), u2 = sylva__rng_unit(&w->rng),
+             u3 = sylva__rng_unit(&w->rng);
+      double c = 1.0 - u1 * (1.0 - cos_a);
+      double sn = sqrt(fmax(0.0, 1.0 - c * c));
+      double psi = 2.0 * 3.14159265358979323846 * u2;
+      q->r = len * cbrt(u3);
+      for (int i = 0; i < 3; i++)
+        q->dir[i] = c * vd[i] + sn * (cos(psi) * e1[i] + sin(psi) * e2[i]);
+      for (int i = 0; i < 3; i++) q->p[i] = tip[i] + q->r * q->dir[i];
+      q->inside = sylva__grid_voxel(&w->grid, q->p[0], q->p[1], q->p[2], q->v);
+      if (q->inside) sylva__grid_prefetch(&w->grid, q->v);
+    }
+    for (int k = 0; k < n; k++) {
+      const struct marker *q = &mk[k];
+      if (!q->inside) continue;
+      if (w->grid.obstacle_count && sylva__grid_blocked(&w->grid, q->v)) continue;
+      double l = sylva__grid_free_light(&w->grid, q->v);
+      if (l < 0.0) continue; /* occupied */
+      if (contested(w, ix, q->p, q->r * q->r, self)) continue;
+      for (int i = 0; i < 3; i++) vo[i] += l * q->dir[i];
+    }
   }
   /* only the direction counts: mu weighs it against Vd and Vt whatever the number
    * of markers (docs/model.md, "Shoots") */
