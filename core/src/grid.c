@@ -461,7 +461,7 @@ static inline void row_runs(int64_t *layer, int x0, int x1, int y0, int y1, int6
  * over x0..x1, y0..y1. A stamp lists them all, asking memory for each layer's two
  * runs as it lists it, and then writes them: the writes wait for the slowest run
  * rather than for each in turn (a crown's chunks seldom sit in the nearer caches;
- * on the 100-tree stand the shade phase took 1.4-2.0 s writing as it went, 1.06 s
+ * on the 100-tree stand the shade phase took 1.4-2.0 s writing as it went, 0.9-1.1 s
  * so). The order of a stamp's writes changes no sum. */
 typedef struct stamp_run {
   int64_t *layer;
