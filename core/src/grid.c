@@ -264,11 +264,16 @@ bool sylva__grid_under_obstacle(const sylva__grid *g, const int v[3]) {
   return false;
 }
 
+/* The row of chunk c that voxel v's shade sums (x = 0 up to v's, stride 16). */
+static inline const int64_t *shade_row(const sylva__chunk *c, const int v[3]) {
+  return c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
+}
+
 /* Shade of voxel v given its chunk c (may be NULL). */
 static int64_t shade_in(const sylva__grid *g, const sylva__chunk *c, const int v[3]) {
   int64_t s = 0;
   if (c) {
-    const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
+    const int64_t *row = shade_row(c, v);
     for (int x = 0; x <= (v[0] & 15); x++) s += row[x << 4];
   }
   /* the block sums above, up to the highest a column starts in */
@@ -357,7 +362,7 @@ void sylva__grid_prefetch(const sylva__grid *g, const int v[3]) {
   if (o) __builtin_prefetch(&o->slot[occ_home(o, local_index(v[0], v[1], v[2]))]);
   const sylva__chunk *c = g->chunks[ci];
   if (!c) return;
-  const int64_t *row = c->shade + ((v[2] & 15) << 8) + (v[1] & 15);
+  const int64_t *row = shade_row(c, v);
   for (int x = 0; x <= (v[0] & 15); x++) __builtin_prefetch(row + (x << 4));
 }
 

@@ -7,6 +7,14 @@ typedef struct sylva__rng {
   uint64_t s[4];
 } sylva__rng;
 
+/** The splitmix64 finaliser: a 64-bit word's bits mixed into every bit (the seeding's,
+ *  and the world hash's mixing of a node's fields). */
+static inline uint64_t sylva__mix64(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
 void sylva__rng_seed(sylva__rng *r, uint64_t seed);
 uint64_t sylva__rng_next(sylva__rng *r);
 /** Uniform in [0, 1) with 53 random bits. */

@@ -1416,13 +1416,6 @@ static uint64_t fnv(uint64_t h, const void *data, size_t n) {
   return h;
 }
 
-/* The splitmix64 finaliser. */
-static inline uint64_t mix64(uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 static inline uint32_t bits_of(float f) {
   uint32_t u;
   memcpy(&u, &f, sizeof u);
@@ -1433,11 +1426,11 @@ static inline uint32_t bits_of(float f) {
  * the last. */
 static uint64_t node_hash2(const sylva__skeleton *s, size_t i) {
   uint32_t parent = (uint32_t)(s->parent[i] >= 0 ? s->id[s->parent[i]] : -1);
-  uint64_t h = mix64(((uint64_t)(uint32_t)s->id[i] | (uint64_t)parent << 32) ^ 0x243f6a8885a308d3ULL);
-  h = mix64(h ^ ((uint64_t)bits_of(s->x[i]) | (uint64_t)bits_of(s->y[i]) << 32));
-  h = mix64(h ^ ((uint64_t)bits_of(s->z[i]) | (uint64_t)bits_of(s->radius[i]) << 32));
-  h = mix64(h ^ ((uint64_t)(uint32_t)s->birth[i] | (uint64_t)(uint32_t)s->stem[i] << 32));
-  return mix64(h ^ s->flags[i]);
+  uint64_t h = sylva__mix64(((uint64_t)(uint32_t)s->id[i] | (uint64_t)parent << 32) ^ 0x243f6a8885a308d3ULL);
+  h = sylva__mix64(h ^ ((uint64_t)bits_of(s->x[i]) | (uint64_t)bits_of(s->y[i]) << 32));
+  h = sylva__mix64(h ^ ((uint64_t)bits_of(s->z[i]) | (uint64_t)bits_of(s->radius[i]) << 32));
+  h = sylva__mix64(h ^ ((uint64_t)(uint32_t)s->birth[i] | (uint64_t)(uint32_t)s->stem[i] << 32));
+  return sylva__mix64(h ^ s->flags[i]);
 }
 
 /* The live nodes' hashes summed per piece of slots: a sum is the same however the
