@@ -72,7 +72,7 @@ typedef struct sylva__obstacle_list {
 typedef struct sylva__slab {
   struct sylva__slab *next;
   size_t count, used;
-  sylva__chunk *chunk; /* inside the same block, at a 2 MB boundary */
+  sylva__chunk *chunk; /* inside the same block, at a page boundary */
 } sylva__slab;
 
 typedef struct sylva__grid {
