@@ -534,31 +534,41 @@ static int stamp(sylva__grid *g, const int v[3], const sylva__pyramid *p, int si
         }
       }
   /* Column: every voxel of the base footprint from depth + 1 below down to the
-   * ground gets p->column. Inside the chunk where it starts it is written into the
-   * rows of every layer at and below its top voxel, as the pyramid's layers are;
-   * every lower chunk reads it from one block sum, so the cost does not depend on
-   * the height of the tree. */
+   * ground gets p->column. Every chunk below the block of its top reads it from one
+   * block sum, so the cost does not depend on the height of the tree. Inside that
+   * block it is written into the rows of the layers, as the pyramid's are: the layers
+   * at and below its top; or, when its top lies in the block's upper half, the block
+   * sum of the block above holds it for the whole block and the layers above its top
+   * take it away again. Either way at most 8 layers, the same shade to the bit. */
   int ztop = v[2] - depth - 1;
   if (ztop >= 0 && p->column != 0) {
     int64_t value = sign * p->column;
     int bz = ztop >> 4, zl = ztop & 15;
+    bool above = zl >= 8 && bz + 1 < g->c[2];
+    int sb = above ? bz + 1 : bz; /* the block whose sum holds the column */
+    int z0 = above ? zl + 1 : 0, z1 = above ? 15 : zl;
+    int64_t layer_value = above ? -value : value;
     for (int cy = ylo >> 4; cy <= yhi >> 4; cy++)
       for (int cx = cx0; cx <= cx1; cx++) {
-        sylva__chunk *c = chunk_get(g, cx, cy, bz);
-        if (!c) return SYLVA_ENOMEM;
+        sylva__chunk *c = NULL;
+        if (z0 <= z1) {
+          c = chunk_get(g, cx, cy, bz);
+          if (!c) return SYLVA_ENOMEM;
+        }
         int64_t *sum = NULL;
-        if (bz > 0) {
-          sum = colsum_get(g, cx, cy, bz);
+        if (sb > 0) {
+          sum = colsum_get(g, cx, cy, sb);
           if (!sum) return SYLVA_ENOMEM;
         }
         if (!sign) continue;
         int y0 = clip_lo(ylo, cy << 4) & 15, y1 = clip_hi(yhi, (cy << 4) + 15) & 15;
         int x0 = clip_lo(xlo, cx << 4) & 15, x1 = clip_hi(xhi, (cx << 4) + 15) & 15;
-        for (int z = 0; z <= zl; z++) runs_add(&runs, c->shade + (z << 8), x0, x1, y0, y1, value);
+        for (int z = z0; z <= z1; z++)
+          runs_add(&runs, c->shade + (z << 8), x0, x1, y0, y1, layer_value);
         if (sum) {
           runs_add(&runs, sum, x0, x1, y0, y1, value);
           int32_t *top = &g->colsum_top[(size_t)cy * (size_t)g->c[0] + (size_t)cx];
-          if (bz > *top) *top = bz;
+          if (sb > *top) *top = sb;
         }
       }
   }
