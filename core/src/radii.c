@@ -42,6 +42,9 @@ static void radii_stems(void *arg, size_t begin, size_t end) {
     const sylva_species_def *d = &sp->def;
     double v = d->pipe_exponent, inv_v = 1.0 / v, r_tip = d->r_tip, scale = sp->scale,
            heartwood = d->heartwood;
+    /* the pipes of a tip, asked of pow once a stem: the same values */
+    const float r_tip_f = (float)r_tip;
+    const double tip_pipes = pow(r_tip, v), tip_radius_pipes = pow((double)r_tip_f, v);
     for (int32_t at = first[k + 1]; at-- > first[k];) {
       int32_t i = nodes[at];
       bool terminal = s->axis_child[i] < 0 && s->lateral_child[i] < 0;
@@ -62,8 +65,9 @@ static void radii_stems(void *arg, size_t begin, size_t end) {
         /* a tip's pipes are functional; a cut end (a terminal wider than a tip) has none */
         bool tip = terminal && s->radius[i] <= (float)r_tip;
         double share = tip ? tip_share(s, (size_t)i, scale) : 1.0;
-        pipe[s->parent[i]] += pow((double)s->radius[i], v) * share;
-        sap[s->parent[i]] += tip ? pow(r_tip, v) * share : terminal ? 0.0 : sap[i];
+        double pipes = s->radius[i] == r_tip_f ? tip_radius_pipes : pow((double)s->radius[i], v);
+        pipe[s->parent[i]] += pipes * share;
+        sap[s->parent[i]] += tip ? tip_pipes * share : terminal ? 0.0 : sap[i];
       }
     }
   }
