@@ -65,10 +65,9 @@ typedef struct sylva__obstacle_list {
   sylva__obstacle_box box[];
 } sylva__obstacle_list;
 
-/** Chunks are made in slabs of a growing number of them (up to 128, 4 MB), aligned
- *  to and asked of the system as 2 MB huge pages where it offers them: a crown fills
- *  hundreds of megabytes of chunks, and a page fault per 4 KB cost a tenth of the
- *  shade phase. */
+/** Chunks are made in slabs of a growing number of them (up to 128, 4 MB), in
+ *  ordinary 4 KB pages touched only when written (huge pages were tried: a new one
+ *  cost more than the page faults they saved, docs/performance.md, "4 KB pages"). */
 typedef struct sylva__slab {
   struct sylva__slab *next;
   size_t count, used;

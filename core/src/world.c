@@ -1433,9 +1433,9 @@ static uint64_t node_hash2(const sylva__skeleton *s, size_t i) {
   return sylva__mix64(h ^ s->flags[i]);
 }
 
-/* The live nodes' hashes summed per piece of slots: a sum is the same however the
- * slots are shared out, and ids rise with slots, so it names the nodes in id order
- * as hash 1's chain does. */
+/* The live nodes' hashes summed per piece of slots, then the pieces' sums: addition
+ * mod 2^64 gives the same total however the slots are shared out, so the hash is
+ * equal for every number of threads. */
 #define HASH2_PIECES 64
 typedef struct hash2_ctx {
   const sylva__skeleton *s;

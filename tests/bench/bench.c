@@ -467,7 +467,7 @@ static void shade_floor_of(const char *title, sylva_world *w, int iterations) {
 }
 
 /* The floors of issue 35: the 100 igm-fig13 trees 2.5 m apart, 30 iterations; and a
- * library species' stand, 36 lindens 5 m apart, 20 years. */
+ * library species' stand, 36 lindens 5 m apart, 20 and 40 years. */
 static void shade_floor(void) {
   shade_floor_of("100 igm-fig13 trees 2.5 m apart, 30 iterations",
                  stand_of("igm-fig13", 10, 2.5, 14.0), 30);
@@ -475,6 +475,11 @@ static void shade_floor(void) {
                  stand_of("utdb:NoEast:TICO", 6, 5.0, 30.0), 20);
   shade_floor_of("36 lindens (utdb:NoEast:TICO) 5 m apart, 40 years",
                  stand_of("utdb:NoEast:TICO", 6, 5.0, 30.0), 40);
+  free(floor_rec.v);
+  free(floor_rec.pyr);
+  floor_rec.v = NULL;
+  floor_rec.pyr = NULL;
+  floor_rec.cap = 0;
 }
 
 /* A site of 4000 x 4000 x 200 voxels: 200 m x 200 m x 10 m at 5 cm, nothing in it. */
