@@ -1,6 +1,7 @@
 /* The world's threads (pool.h): workers sleep on a condition variable until a loop
  * is posted, take pieces of it by an atomic counter, and the last one done wakes
- * the caller. */
+ * the caller. A loop posted while another runs (worlds that share the pool, grown
+ * on different threads) runs on its caller alone. */
 #include "pool.h"
 
 #include <pthread.h>
@@ -19,6 +20,7 @@ struct sylva__pool {
   uint64_t generation; /* one more for every loop posted (lock) */
   int busy;            /* workers still in the posted loop (lock) */
   bool stop;           /* lock */
+  bool running;        /* a loop is posted and not yet done (lock) */
   /* the posted loop: written before generation moves, read after */
   sylva__range_fn fn;
   void *ctx;
@@ -108,6 +110,12 @@ void sylva__pool_for(sylva__pool *p, size_t n, size_t grain, sylva__range_fn fn,
     return;
   }
   pthread_mutex_lock(&p->lock);
+  if (p->running) { /* another world's loop: this one on its caller, the same results */
+    pthread_mutex_unlock(&p->lock);
+    fn(ctx, 0, n);
+    return;
+  }
+  p->running = true;
   p->fn = fn;
   p->ctx = ctx;
   p->n = n;
@@ -120,5 +128,6 @@ void sylva__pool_for(sylva__pool *p, size_t n, size_t grain, sylva__range_fn fn,
   run_pieces(p);
   pthread_mutex_lock(&p->lock);
   while (p->busy) pthread_cond_wait(&p->done, &p->lock);
+  p->running = false;
   pthread_mutex_unlock(&p->lock);
 }

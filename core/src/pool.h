@@ -1,5 +1,6 @@
 /* The world's threads: a fixed pool that runs one parallel loop at a time for the
- * phases whose work splits into independent parts (docs/model.md, "Determinism").
+ * phases whose work splits into independent parts (docs/model.md, "Determinism");
+ * several worlds may share one (sylva_threads).
  * A loop's body writes only what its own indices own and never allocates, so the
  * results do not depend on how the indices are shared out, nor on the number of
  * threads. */
@@ -21,7 +22,8 @@ void sylva__pool_destroy(sylva__pool *p);
 int sylva__pool_threads(const sylva__pool *p);
 /** Runs fn over [0, n) in pieces of grain indices (the last may be shorter), on
  *  the workers and the caller, and returns when every piece is done. With a NULL
- *  pool, or a single piece, the caller runs it all. */
+ *  pool, a single piece, or while the pool runs another caller's loop, the caller
+ *  runs it all. */
 void sylva__pool_for(sylva__pool *p, size_t n, size_t grain, sylva__range_fn fn, void *ctx);
 
 #endif

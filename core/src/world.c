@@ -79,10 +79,17 @@ int sylva_world_create(const sylva_world_def *def, sylva_world **out) {
   return SYLVA_OK;
 }
 
+/* The world's own pool stopped, or the shared one left. */
+static void leave_pool(sylva_world *w) {
+  if (!w->shared) sylva__pool_destroy(w->pool);
+  w->pool = NULL;
+  w->shared = NULL;
+}
+
 int sylva_world_set_threads(sylva_world *w, int threads) {
   if (threads < 0 || threads > SYLVA_MAX_THREADS) return SYLVA_EINVAL;
-  if ((threads <= 1 ? 1 : threads) == sylva__pool_threads(w->pool)) return SYLVA_OK;
-  sylva__pool_destroy(w->pool);
+  if (!w->shared && (threads <= 1 ? 1 : threads) == sylva__pool_threads(w->pool)) return SYLVA_OK;
+  leave_pool(w);
   w->def.threads = threads;
   int rc = sylva__pool_create(threads, &w->pool);
   if (rc) w->def.threads = 1;
@@ -91,9 +98,46 @@ int sylva_world_set_threads(sylva_world *w, int threads) {
 
 int sylva_world_threads(const sylva_world *w) { return sylva__pool_threads(w->pool); }
 
+struct sylva_threads {
+  sylva__pool *pool; /* NULL for one thread */
+};
+
+int sylva_threads_create(int count, sylva_threads **out) {
+  *out = NULL;
+  if (count < 1 || count > SYLVA_MAX_THREADS) return SYLVA_EINVAL;
+  sylva_threads *t = sylva__calloc(1, sizeof *t);
+  if (!t) return SYLVA_ENOMEM;
+  int rc = sylva__pool_create(count, &t->pool);
+  if (rc) {
+    sylva__free(t);
+    return rc;
+  }
+  *out = t;
+  return SYLVA_OK;
+}
+
+int sylva_threads_count(const sylva_threads *t) { return sylva__pool_threads(t->pool); }
+
+void sylva_threads_destroy(sylva_threads *t) {
+  if (!t) return;
+  sylva__pool_destroy(t->pool);
+  sylva__free(t);
+}
+
+void sylva_world_share_threads(sylva_world *w, sylva_threads *t) {
+  leave_pool(w);
+  if (t) {
+    w->pool = t->pool;
+    w->shared = t;
+  }
+  w->def.threads = sylva__pool_threads(w->pool);
+}
+
+sylva_threads *sylva_world_shared_threads(const sylva_world *w) { return w->shared; }
+
 void sylva_world_destroy(sylva_world *w) {
   if (!w) return;
-  sylva__pool_destroy(w->pool);
+  leave_pool(w);
   sylva__grid_free(&w->grid);
   sylva__skeleton_free(&w->nodes);
   for (int i = 0; i < w->species_count; i++) {

@@ -122,6 +122,7 @@ typedef struct sylva__mark {
 struct sylva_world {
   sylva_world_def def;
   sylva__pool *pool; /* NULL: the caller's thread alone */
+  sylva_threads *shared; /* the threads pool is, when shared: not the world's to stop */
   sylva__grid grid;
   sylva__skeleton nodes;
   sylva__rng rng;

@@ -272,8 +272,14 @@ int server_main(const server_options *opt) {
     free(d);
     return 2;
   }
-  /* the worlds of runs loaded, resumed and forked from the store */
-  store_set_threads(d->reader, opt->threads);
+  /* Every world the daemon grows (created, loaded, resumed, forked, regrown for a
+   * job) shares one set of --threads threads, below the loop as its workers are:
+   * a daemon of many runs keeps --threads - 1 of them, not that many per run. */
+  d->threads = pool_world_threads(opt->threads, opt->work_nice);
+  if (!d->threads && opt->threads > 1)
+    server_log(NULL, "cannot start %d threads for the worlds: they grow on one each",
+               opt->threads);
+  store_share_threads(d->reader, d->threads);
   lws_set_log_level(LLL_ERR, lws_log);
   struct lws_http_mount static_mount = {
       .mountpoint = "/", .origin = opt->web, .def = "index.html",
@@ -349,6 +355,7 @@ int server_main(const server_options *opt) {
   store_close(d->reader);
   store_close(d->st);
   if (uv_loop_close(&d->loop)) server_log(NULL, "the loop still had handles at exit");
+  sylva_threads_destroy(d->threads); /* every world is gone with the runs and jobs */
   free(d);
   /* the reports' pictures and plots (http.c) drew text: cairo's font caches and
    * fontconfig's hold memory until the process ends; every job is done (the loop

@@ -115,6 +115,8 @@ struct server {
   run *runs;
   client_set clients;
   pool pool;             /**< the workers every run's tasks share */
+  sylva_threads *threads; /**< the threads every world the daemon grows shares
+                               (--threads), or NULL: each on its caller's */
   bool stopping;
   uint64_t stop_at;
   int64_t iterations_total;

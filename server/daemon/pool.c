@@ -18,6 +18,26 @@ void pool_thread_nice(int steps) {
   (void)setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), nice);
 }
 
+typedef struct world_threads_start {
+  int count, nice;
+  sylva_threads *made;
+} world_threads_start;
+
+static void *start_world_threads(void *arg) {
+  world_threads_start *s = arg;
+  pool_thread_nice(s->nice);
+  if (sylva_threads_create(s->count, &s->made)) s->made = NULL;
+  return NULL;
+}
+
+sylva_threads *pool_world_threads(int count, int nice) {
+  world_threads_start s = {count < 1 ? 1 : count, nice, NULL};
+  pthread_t starter;
+  if (pthread_create(&starter, NULL, start_world_threads, &s)) return NULL;
+  pthread_join(starter, NULL);
+  return s.made;
+}
+
 static void *worker(void *arg) {
   pool *p = arg;
   pool_thread_nice(p->nice);

@@ -15,6 +15,8 @@
 #include <stdbool.h>
 #include <uv.h>
 
+#include "sylva/world.h"
+
 typedef struct pool_task pool_task;
 
 /** One piece of work: work runs on a worker, done on the loop (cancelled true
@@ -53,6 +55,10 @@ int pool_init(pool *p, uv_loop_t *loop, int count, int nice);
  *  starts inherit it). A system that refuses leaves it as it was: the same results,
  *  served less promptly. */
 void pool_thread_nice(int steps);
+/** The threads every run's world shares (sylva_threads_create, count of them), made
+ *  by a thread `nice` steps below the loop, so that they run there too; NULL when the
+ *  system gave none (every world then grows on its caller's thread: the same worlds). */
+sylva_threads *pool_world_threads(int count, int nice);
 /** Queues a task (loop thread). */
 void pool_submit(pool *p, pool_task *t);
 /** From the task's work, on its worker: has its progress callback run on the

@@ -1113,8 +1113,7 @@ static void create_work(job *j) {
     snprintf(j->err, sizeof j->err, "/scenario%s%s", why[0] == '/' ? "" : ": ", why);
     return;
   }
-  /* one thread if the system gives no more: the same world */
-  sylva_world_set_threads(j->w, d->opt.threads);
+  sylva_world_share_threads(j->w, d->threads);
   char *json = sylva_scenario_json(s);
   if (!json) {
     j->code = "internal";

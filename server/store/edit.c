@@ -73,9 +73,12 @@ int edit_apply(const sylva_world *w, const edit *e, sylva_world **out, char *err
     snprintf(err, errlen, "%s", sylva_strerror(rc));
     return rc;
   }
-  /* the copy grows on the threads of w (or on one if the system gives no more: the
-   * same world) */
-  if (sylva_world_threads(w) > 1) sylva_world_set_threads(copy, sylva_world_threads(w));
+  /* the copy grows on the threads of w, shared or its own (or on one if the system
+   * gives no more: the same world) */
+  if (sylva_world_shared_threads(w))
+    sylva_world_share_threads(copy, sylva_world_shared_threads(w));
+  else if (sylva_world_threads(w) > 1)
+    sylva_world_set_threads(copy, sylva_world_threads(w));
   for (int i = 0; i < e->removal_count; i++) {
     int id = sylva_world_find_obstacle(copy, e->removals[i]);
     if (id < 0 || (rc = sylva_world_remove_obstacle(copy, id)) != 0) {

@@ -260,6 +260,8 @@ int store_open(const char *path, bool create, store **out) {
 
 void store_set_threads(store *st, int threads) { st->threads = threads; }
 
+void store_share_threads(store *st, sylva_threads *t) { st->shared = t; }
+
 void store_close(store *st) {
   if (!st) return;
   sqlite3_close_v2(st->db);
@@ -781,7 +783,10 @@ static int load_world_unlocked(store *st, int64_t run, int at, void (*warn)(cons
       problem = "it holds another iteration";
     else {
       /* one thread if the system gives no more: the same world */
-      if (st->threads > 1) sylva_world_set_threads(*world_out, st->threads);
+      if (st->shared)
+        sylva_world_share_threads(*world_out, st->shared);
+      else if (st->threads > 1)
+        sylva_world_set_threads(*world_out, st->threads);
       if (world_hash_unlocked(st, run, *world_out, &hash)) {
         sylva_world_destroy(*world_out);
         *world_out = NULL;

@@ -71,6 +71,9 @@ const char *store_error(const store *st);
  *  before any regrowing) grow on this many threads (0 or 1: one; see
  *  sylva_world_set_threads; a thread count never changes a world). */
 void store_set_threads(store *st, int threads);
+/** The worlds the store restores from now on share t (sylva_world_share_threads;
+ *  NULL: as store_set_threads says), which must outlive them. */
+void store_share_threads(store *st, sylva_threads *t);
 
 /** The message of a failed store_open (which has no store to ask). */
 const char *store_open_error(void);

@@ -13,6 +13,7 @@ struct store {
   char *path;
   pthread_mutex_t lock; /* recursive: one caller at a time on the one connection */
   int threads;          /* the worlds it restores grow on this many (store_set_threads) */
+  sylva_threads *shared; /* or share these (store_share_threads) */
 };
 
 #define STORE_ERROR_MAX 512

@@ -402,7 +402,7 @@ test('--work-nice: bad values exit 2; the workers, a create job and the world\'s
     const loop = threadNice(pid).get(pid);
     const below = Math.min(19, loop + 7);
     const niced = () => [...threadNice(pid).values()].filter((n) => n === below).length;
-    if (below !== loop) assert.equal(niced(), 1, 'before any run: the one worker');
+    if (below !== loop) assert.equal(niced(), 2, 'before any run: the one worker and the worlds\' second thread');
     const c = await connect(d.url);
     const a = await create(c, 'a', scenario('stand.json', { iterations: 200 }), true);
     assert.equal(a.type, 'created');
@@ -410,8 +410,28 @@ test('--work-nice: bad values exit 2; the workers, a create job and the world\'s
     await c.next((m) => m.type === 'delta' && m.run === a.run, 60000);
     const now = threadNice(pid);
     assert.equal(now.get(pid), loop, 'the loop keeps its niceness');
-    // the worker, the libuv thread that built the world, and the world's second thread
+    // the worker, the libuv thread that built the world, and the worlds' second thread
     if (below !== loop) assert.ok(niced() >= 3, `niceness by thread: ${JSON.stringify([...now])}`);
+    c.close();
+  });
+});
+
+test('every world shares the daemon\'s --threads: three growing runs keep the threads of one', async () => {
+  await withDaemon({ args: ['--threads', '4'] }, async (d) => {
+    const threads = () => readdirSync(`/proc/${d.proc.pid}/task`).length;
+    const c = await connect(d.url);
+    const grow = async (name) => {
+      const r = await create(c, name, scenario('stand.json', { iterations: 200 }), true);
+      assert.equal(r.type, 'created');
+      c.send({ type: 'subscribe', run: r.run, id: `s-${name}` });
+      await c.next((m) => m.type === 'delta' && m.run === r.run, 60000);
+    };
+    await grow('a');
+    const one = threads(); // the loop, the workers, libuv's threads, the worlds' three
+    await grow('b');
+    await grow('c');
+    // each world on threads of its own would add three a run: six more here
+    assert.equal(threads(), one, 'the same threads for three runs as for one');
     c.close();
   });
 });

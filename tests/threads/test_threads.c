@@ -7,7 +7,9 @@
  * throughout. The cases: the IGM stand, a pruned street under a site's sky, a dense
  * stand that thins (deaths by light and by chance, snags that fall), and a world edited
  * between steps as the daemon edits one (obstacles and zones added and removed, a
- * plant added, a prune by hand, a schedule added, threads changed). */
+ * plant added, a prune by hand, a schedule added, threads changed); and two worlds
+ * that share one set of threads, grown at once. */
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -601,10 +603,93 @@ static void test_threads_api(void) {
   sylva_scenario_free(s);
 }
 
+/* (e) Threads that worlds share (sylva_threads), as the daemon's runs do: two pruned
+ * streets of other seeds share four, each grown on a thread of its own at the same
+ * time, so that one world's loops find the threads busy with the other's and run on
+ * their caller (2 to 14 of their loops did in three runs on two cores). Every step's hash, and
+ * the snapshot at the end, are those of the same world grown alone on one thread. */
+enum { SHARED_STEPS = 12 };
+
+typedef struct shared_grower {
+  sylva_world *w;
+  uint64_t hash[SHARED_STEPS];
+  int rc;
+} shared_grower;
+
+static void *grow_shared(void *arg) {
+  shared_grower *g = arg;
+  for (int k = 0; k < SHARED_STEPS && !g->rc; k++) {
+    g->rc = sylva_world_step(g->w, NULL);
+    g->hash[k] = sylva_world_hash(g->w);
+  }
+  return NULL;
+}
+
+static void test_shared_threads(void) {
+  sylva_threads *t = NULL;
+  CHECK_INT(sylva_threads_create(0, &t), SYLVA_EINVAL);
+  CHECK(t == NULL);
+  CHECK_INT(sylva_threads_create(SYLVA_MAX_THREADS + 1, &t), SYLVA_EINVAL);
+  CHECK_INT(sylva_threads_create(1, &t), 0);
+  CHECK_INT(sylva_threads_count(t), 1);
+  sylva_threads_destroy(t);
+  CHECK_INT(sylva_threads_create(4, &t), 0);
+  if (!t) return;
+  CHECK_INT(sylva_threads_count(t), 4);
+
+  const char *names[2] = {"street-pruned.json", "street-pruned.json (seed + 1)"};
+  sylva_scenario *sc[2];
+  shared_grower g[2], alone[2];
+  pthread_t th[2];
+  for (int i = 0; i < 2; i++) {
+    sc[i] = scenario_named("street-pruned.json");
+    sc[i]->seed += (uint64_t)i;
+    g[i] = (shared_grower){.w = scenario_world(sc[i])};
+    alone[i] = (shared_grower){.w = scenario_world(sc[i])};
+    sylva_world_share_threads(g[i].w, t);
+    CHECK(sylva_world_shared_threads(g[i].w) == t);
+    CHECK_INT(sylva_world_threads(g[i].w), 4);
+  }
+  for (int i = 0; i < 2; i++) CHECK_INT(pthread_create(&th[i], NULL, grow_shared, &g[i]), 0);
+  for (int i = 0; i < 2; i++) grow_shared(&alone[i]);
+  for (int i = 0; i < 2; i++) pthread_join(th[i], NULL);
+  for (int i = 0; i < 2; i++) {
+    CHECK_INT(g[i].rc, 0);
+    for (int k = 0; k < SHARED_STEPS; k++)
+      if (g[i].hash[k] != alone[i].hash[k]) {
+        fprintf(stderr, "%s on shared threads: step %d hash %016llx, alone %016llx\n", names[i],
+                k + 1, (unsigned long long)g[i].hash[k], (unsigned long long)alone[i].hash[k]);
+        CHECK(false);
+        break;
+      }
+    char why[256] = "";
+    if (!same_snapshot(g[i].w, alone[i].w, why, sizeof why)) {
+      fprintf(stderr, "%s on shared threads: %s\n", names[i], why);
+      CHECK(false);
+    }
+    printf("%s: %d steps on shared threads, %zu nodes\n", names[i], SHARED_STEPS,
+           sylva_world_node_count(g[i].w));
+  }
+  /* threads of its own leave the shared ones; NULL leaves them for the caller's */
+  CHECK_INT(sylva_world_set_threads(g[0].w, 2), 0);
+  CHECK(sylva_world_shared_threads(g[0].w) == NULL);
+  CHECK_INT(sylva_world_threads(g[0].w), 2);
+  sylva_world_share_threads(g[1].w, NULL);
+  CHECK(sylva_world_shared_threads(g[1].w) == NULL);
+  CHECK_INT(sylva_world_threads(g[1].w), 1);
+  sylva_world_share_threads(g[0].w, t); /* destroyed while sharing them */
+  for (int i = 0; i < 2; i++) {
+    sylva_world_destroy(g[i].w);
+    sylva_world_destroy(alone[i].w);
+    sylva_scenario_free(sc[i]);
+  }
+  sylva_threads_destroy(t);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {CHECK_TEST(threads_api), CHECK_TEST(igm_stand),
                                      CHECK_TEST(street), CHECK_TEST(thinning),
-                                     CHECK_TEST(edits)};
+                                     CHECK_TEST(edits), CHECK_TEST(shared_threads)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("threads");
 }

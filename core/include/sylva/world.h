@@ -321,8 +321,29 @@ void sylva_world_set_clock(sylva_world *w, double (*clock)(void *ctx), void *ctx
  *  SYLVA_ENOMEM (memory or threads the system would not give) leaves it on one
  *  thread, which grows the same world. */
 int sylva_world_set_threads(sylva_world *w, int threads);
-/** The threads the world grows on (1 without a pool). */
+/** The threads the world grows on (1 without a pool), shared ones too. */
 int sylva_world_threads(const sylva_world *w);
+
+/** Threads that several worlds share: count - 1 workers that run the parallel loops
+ *  of whichever world posts one, beside that world's own thread. A loop posted while
+ *  they run another world's runs on its caller alone, so a daemon's many worlds keep
+ *  count - 1 threads between them, not each. Never affects results (docs/model.md,
+ *  "Determinism"). */
+typedef struct sylva_threads sylva_threads;
+/** SYLVA_EINVAL outside 1..SYLVA_MAX_THREADS; SYLVA_ENOMEM (memory or threads the
+ *  system would not give) leaves *out NULL. The threads start at the caller's
+ *  scheduling priority. */
+int sylva_threads_create(int count, sylva_threads **out);
+/** Threads a loop runs on, the posting world's included. */
+int sylva_threads_count(const sylva_threads *t);
+/** Stops the threads: only once no world shares them (destroyed, or given others). */
+void sylva_threads_destroy(sylva_threads *t);
+/** Grows w on t from now on (NULL: on the caller's thread alone); threads of its own
+ *  (sylva_world_set_threads) are stopped. Worlds that share t may step on different
+ *  threads at once. */
+void sylva_world_share_threads(sylva_world *w, sylva_threads *t);
+/** The threads w shares, or NULL (its own, or none). */
+sylva_threads *sylva_world_shared_threads(const sylva_world *w);
 
 /** Grows one iteration. SYLVA_EFINISHED when every stem has finished. SYLVA_ENOMEM
  *  when memory ran out: the world is as it was before the call (the previous
