@@ -7,7 +7,8 @@
 typedef struct collect_ctx {
   sylva_world *w;
   int iteration;
-  double *light;
+  double *own;   /* each node's own L: w->q, summed over subtrees after the pass */
+  double *light; /* a copy of it (allocation's w->light), or NULL */
   const sylva__lit *lit; /* the lit nodes under a site sky (w->lit), else NULL */
 } collect_ctx;
 
@@ -31,7 +32,7 @@ static int lit_age(const sylva_world *w, size_t i, int T, int32_t *stem,
 
 /* The light live node i collects at age (0 when age < 0: no leaves, sp unread) in
  * voxel v: reads the grid (its own voxel) and the species' cached powers, writes only
- * its own q and light. */
+ * its own own and light. */
 static void collect_node(const collect_ctx *c, size_t i, int age, const sylva__species *sp,
                          const int v[3]) {
   sylva_world *w = c->w;
@@ -44,7 +45,7 @@ static void collect_node(const collect_ctx *c, size_t i, int age, const sylva__s
                                      : pow((double)age, sp->def.sigma);
     L = sylva__collected(sp->def.alpha, l, p);
   }
-  w->q[i] = L;
+  c->own[i] = L;
   if (c->light) c->light[i] = L;
 }
 
@@ -108,7 +109,8 @@ static void collect_listed(void *arg, size_t begin, size_t end) {
   batch_collect(c, &b);
 }
 
-void sylva__light_collect(sylva_world *w, int iteration, double *light) {
+/* Each live node's own light L at iteration T into own (and light, if not NULL). */
+static void collect_own(sylva_world *w, int iteration, double *own, double *light) {
   sylva__skeleton *s = &w->nodes;
   /* What the threads only read: every species' powers of a leaf's ages, and under a
    * site sky the site factors' cache of the chunk of every voxel the pass reads. */
@@ -116,7 +118,7 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
     const sylva_species_def *d = &w->species[k].def;
     sylva__species_age_pow(&w->species[k], d->leaf_age > 1 ? d->leaf_age : 1);
   }
-  collect_ctx c = {w, iteration, light, NULL};
+  collect_ctx c = {w, iteration, own, light, NULL};
   if (!w->grid.sky_count) {
     sylva__pool_for(w->pool, s->count, 4096, collect_range, &c);
   } else {
@@ -144,8 +146,44 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
     c.lit = w->lit.data;
     sylva__pool_for(w->pool, w->lit.len, 4096, collect_listed, &c);
   }
-  /* Children sit in higher slots than their parents: one reverse sweep adds each
-   * finished subtree total into its parent. */
+}
+
+/* Children sit in higher slots than their parents: one reverse sweep adds each
+ * finished subtree total into its parent, in the same order whatever the pass. */
+static void sum_subtrees(const sylva__skeleton *s, double *q) {
   for (size_t i = s->count; i-- > 0;)
-    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) w->q[s->parent[i]] += w->q[i];
+    if ((s->flags[i] & SYLVA__NODE_ALIVE) && s->parent[i] >= 0) q[s->parent[i]] += q[i];
+}
+
+void sylva__light_collect(sylva_world *w, int iteration, double *light) {
+  w->light_at = 0; /* q holds sums now, no longer the kept pass */
+  collect_own(w, iteration, w->q, light);
+  sum_subtrees(&w->nodes, w->q);
+}
+
+void sylva__light_keep(sylva_world *w, int iteration) {
+  sylva__skeleton *s = &w->nodes;
+  collect_own(w, iteration, w->q, NULL);
+  /* the sums in light's block, free until the stats' canopy pass: each stem's */
+  double *sum = w->light;
+  for (size_t i = 0; i < s->count; i++) sum[i] = (s->flags[i] & SYLVA__NODE_ALIVE) ? w->q[i] : 0.0;
+  sum_subtrees(s, sum);
+  sylva__stems_light(w, sum);
+  w->light_at = iteration;
+}
+
+void sylva__stems_light(sylva_world *w, const double *q) {
+  for (int k = 0; k < w->stem_count; k++) {
+    sylva__stem *st = &w->stems[k];
+    st->light_next = st->root_slot >= 0 ? q[st->root_slot] : 0.0;
+  }
+}
+
+bool sylva__light_kept(sylva_world *w, int iteration) {
+  if (w->light_at != iteration) return false;
+  w->light_at = 0;
+  const sylva__skeleton *s = &w->nodes;
+  for (size_t i = 0; i < s->count; i++) w->light[i] = w->q[i];
+  sum_subtrees(s, w->q);
+  return true;
 }

@@ -282,9 +282,14 @@ int sylva__shed(sylva_world *w, int iteration) {
       }
     }
   }
-  if (!doomed) return SYLVA_OK;
+  if (!doomed) {
+    sylva__stems_light(w, w->q);
+    return SYLVA_OK;
+  }
   sylva__remove_doomed(w, false);
-  /* the removed subtrees no longer send light to their parents */
-  sylva__light_collect(w, iteration + 1, NULL);
+  /* the removed subtrees no longer send light to their parents: the pass of the next
+   * iteration, which its light phase takes as it is (docs/performance.md, "The light
+   * kept") */
+  sylva__light_keep(w, iteration + 1);
   return SYLVA_OK;
 }

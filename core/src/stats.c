@@ -170,7 +170,7 @@ void sylva__stats(sylva_world *w, int iteration) {
       continue;
     }
     st->stats.age = stem_age(w, st, iteration);
-    st->stats.light = w->q[st->root_slot];
+    st->stats.light = st->light_next;
     st->stats.cap = sylva__clock_cap(&w->species[st->species], st->clock_prev, st->clock, 1.0);
     sylva__stats_carbon(w, k, st->stats.co2); /* the co2 before this pass */
   }

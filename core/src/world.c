@@ -274,6 +274,7 @@ bool sylva__species_stops(const sylva__species *sp, int local) {
 }
 
 int sylva_world_add_species(sylva_world *w, const sylva_species_def *def, const char *label) {
+  w->light_at = 0; /* each change between steps: the next light phase reads the grid */
   if (!label || strlen(label) >= SYLVA_LABEL_MAX) return SYLVA_EINVAL;
   if (sylva_species_check(def, NULL)) return SYLVA_ERANGE;
   if (w->species_count == w->species_cap) {
@@ -477,6 +478,7 @@ static void set_mark(sylva_world *w) {
  * occupancy and links, the stems planted since are dropped, the generator and the
  * iteration are restored. */
 static void take_back(sylva_world *w) {
+  w->light_at = 0; /* the step may have summed the kept pass */
   const sylva__mark *m = &w->mark;
   sylva__skeleton *s = &w->nodes;
   for (size_t i = s->count; i-- > m->count;) {
@@ -556,6 +558,7 @@ static void clear_trunks(sylva_world *w, int (*cuts)[3], int ncuts) {
   size_t n = sylva__cut_voxels(w, cuts, (size_t)ncuts, T, w->pruned_ids.data, &w->pruned_ids.len);
   if (!n) return;
   sylva__light_collect(w, T + 1, NULL); /* as after a prune */
+  sylva__stems_light(w, w->q);
   if (T == 0)
     for (int k = 0; k < w->stem_count; k++) sylva__stats_planted(w, k);
   else
@@ -867,6 +870,7 @@ static int add_measured(sylva_world *w, const sylva_plant_def *def, int *bad) {
 }
 
 int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_root) {
+  w->light_at = 0;
   if (bad_root) *bad_root = -1;
   if (w->status) return w->status;
   if (def && def->nodes) return add_measured(w, def, bad_root);
@@ -951,6 +955,7 @@ int sylva_world_add_plant(sylva_world *w, const sylva_plant_def *def, int *bad_r
 }
 
 int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def) {
+  w->light_at = 0;
   if (w->status) return w->status;
   int id = sylva__grid_add_obstacle_def(&w->grid, w->grid.next_obstacle_id, def);
   if (id < 0) return id;
@@ -968,6 +973,7 @@ int sylva_world_add_obstacle(sylva_world *w, const sylva_obstacle_def *def) {
 }
 
 int sylva_world_remove_obstacle(sylva_world *w, int obstacle) {
+  w->light_at = 0;
   if (w->status) return w->status;
   int rc = sylva__grid_remove_obstacle(&w->grid, obstacle);
   if (rc) return rc;
@@ -979,6 +985,7 @@ int sylva_world_remove_obstacle(sylva_world *w, int obstacle) {
 }
 
 int sylva_world_add_prune(sylva_world *w, const sylva_prune_def *def) {
+  w->light_at = 0;
   if (w->status) return w->status;
   int slot = sylva__grid_obstacle_slot(&w->grid, def->zone);
   if (slot < 0 || !w->grid.obstacles[slot].zone || def->every < 0 || def->from < 1)
@@ -1000,13 +1007,18 @@ int sylva_world_prune_at(const sylva_world *w, int i, sylva_prune_def *out) {
 /* Drops the dead slots of the skeleton (parents before children stay in order). */
 static void compact_nodes(sylva_world *w) {
   if (w->nodes.count == w->nodes.live) return;
+  size_t count = w->nodes.count;
   sylva__skeleton_compact(&w->nodes, w->remap);
   for (int s = 0; s < w->stem_count; s++) /* a fallen stem has no root */
     if (w->stems[s].root_slot >= 0) w->stems[s].root_slot = w->remap[w->stems[s].root_slot];
+  if (w->light_at) /* the light kept moves with its nodes (remap[i] <= i) */
+    for (size_t i = 0; i < count; i++)
+      if (w->remap[i] >= 0) w->q[w->remap[i]] = w->q[i];
 }
 
 int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[3],
                           const int32_t **removed, size_t *removed_count) {
+  w->light_at = 0;
   if (removed) *removed = NULL;
   if (removed_count) *removed_count = 0;
   if (w->status) return w->status;
@@ -1032,6 +1044,7 @@ int64_t sylva_world_prune(sylva_world *w, const double min[3], const double max[
   if (!n) w->reports = reports; /* nothing cut: as it was */
   if (n) {
     sylva__light_collect(w, T + 1, NULL); /* as after a step's shedding */
+    sylva__stems_light(w, w->q);
     /* the measures anew (stats.pruned goes on counting until the next step) */
     if (T == 0) {
       for (int k = 0; k < w->stem_count; k++) sylva__stats_planted(w, k);
@@ -1218,7 +1231,7 @@ static int finish_step(sylva_world *w, int T) {
     const sylva__obstacle *z = &w->grid.obstacles[slot];
     pruned |= sylva__prune(w, z, T, true, w->shed.data, &w->shed.len) > 0;
   }
-  if (pruned) sylva__light_collect(w, T + 1, NULL); /* as after shedding */
+  if (pruned) sylva__light_keep(w, T + 1); /* as after shedding */
   SYLVA__CHECK_WORLD(w, SYLVA__AFTER_SHEDDING);
   double t5 = now(w);
   j->phase_seconds[SYLVA_PHASE_SHEDDING] = t5 - t4;
@@ -1252,7 +1265,8 @@ int sylva_world_step(sylva_world *w, const sylva_journal **journal) {
   w->radii.len = w->shed.len = 0;
 
   double t0 = now(w);
-  sylva__light_collect(w, T, w->light);
+  /* the pass after the last step's shedding, unless the world changed since */
+  if (!sylva__light_kept(w, T)) sylva__light_collect(w, T, w->light);
   SYLVA__CHECK_WORLD(w, SYLVA__AFTER_LIGHT);
   double t1 = now(w);
   j->phase_seconds[SYLVA_PHASE_LIGHT] = t1 - t0;

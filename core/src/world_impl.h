@@ -45,6 +45,7 @@ typedef struct sylva__stem {
   sylva_stem_stats stats;
   double ext[5]; /* scratch of the stats pass: min x, max x, min y, max y, max z */
   double shed_below; /* scratch of shedding: the stem's threshold of E this iteration */
+  double light_next; /* its Q at the next iteration, after shedding and pruning (stats) */
   /* Stands (docs/model.md, "Stands"), kept in snapshots with the STAND flag */
   double clock;      /* its time on its growth equation (its local iteration while
                         every season counts one) */
@@ -158,7 +159,10 @@ struct sylva_world {
    * (docs/performance.md, "Memory"). */
   double *light;         /* light: L_i of the pass at T, read by allocation (owns the block) */
   double *q;             /* light: Q_i, the light of the node and its subtree, of the
-                            last light pass (T for allocation, T + 1 after shoots) */
+                            last light pass (T for allocation, T + 1 after shoots); L_i
+                            while light_at is the iteration of a pass kept */
+  int light_at;          /* the iteration whose light pass q holds as L_i, kept after
+                            shedding for that iteration's light phase; 0: none */
   double *pipe;          /* radii: sum over the node's children of r^v */
   double *sap;           /* radii: the functional pipes of the node's tips, sum of r_tip^v
                             (light's block) */
@@ -385,6 +389,17 @@ void sylva__check_world(const sylva_world *w, sylva__boundary at);
 /* Phases (one module each). */
 /** Light pass: L by slot (if light != NULL) and Q of every node, at iteration T. */
 void sylva__light_collect(sylva_world *w, int iteration, double *light);
+/** Light pass at iteration T kept for T's light phase (sylva__light_kept): each node's
+ *  L in q (light's block holds the sums, and each stem's light_next its Q, until the
+ *  next phase that uses the block). Anything that changes the world's light before
+ *  T's step sets light_at to 0 (docs/performance.md, "The light kept"). */
+void sylva__light_keep(sylva_world *w, int iteration);
+/** The light phase at T from the pass kept for it: L into w->light and Q into q, the
+ *  values sylva__light_collect(w, T, w->light) gives; false (nothing done) when none
+ *  is kept for T. */
+bool sylva__light_kept(sylva_world *w, int iteration);
+/** Each stem's light_next from Q by slot. */
+void sylva__stems_light(sylva_world *w, const double *q);
 /** Phases 2-3: fills w->sprouts for stems that grow at iteration T. */
 int sylva__allocate(sylva_world *w, int iteration);
 /** Phases 4-5: grows the sprouts stem by stem in w->order, shading after each shoot. */

@@ -1,10 +1,14 @@
 /* The public API's contract for bad ids (a negative status or NULL, and nothing
  * changes), the species field list (sylva/species_fields.h): its defaults, its
  * ranges as sylva_species_check applies them, and a snapshot that keeps every field;
- * each stem's leaf_area against its leaf-bearing nodes; and, in debug builds, the phase checks that stop a step on a broken invariant. */
+ * each stem's leaf_area against its leaf-bearing nodes; the light kept between steps,
+ * dropped by every change; and, in debug builds, the phase checks that stop a step on
+ * a broken invariant. */
 #include <math.h>
 #include <signal.h>
 #include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -414,13 +418,96 @@ static void test_world_hash_versions(void) {
   sylva_world_destroy(w);
 }
 
+/* The light kept from one step's shedding for the next step's light phase
+ * (docs/performance.md, "The light kept"): a change between the steps drops it. Each
+ * edit is made to a world that keeps a pass and to its copy through a snapshot (which
+ * keeps none, so its next step reads the grid); the two then grow the same world. */
+typedef struct kept_edit {
+  const char *what;
+  int64_t (*edit)(sylva_world *w, int round);
+} kept_edit;
+
+static int64_t edit_roof(sylva_world *w, int round) {
+  char label[32];
+  snprintf(label, sizeof label, "roof%d", round);
+  /* over the shrub's first stem, not its second (roots at x = 0 and 1) */
+  sylva_obstacle_def roof = {label, {-5, -5, 11.0}, {0.5, 5, 11.2}, SYLVA_OBSTACLE_SOLID, {0}};
+  return sylva_world_add_obstacle(w, &roof);
+}
+
+static int64_t edit_unroof(sylva_world *w, int round) {
+  char label[32];
+  snprintf(label, sizeof label, "roof%d", round - 1);
+  int id = sylva_world_find_obstacle(w, label);
+  return id < 0 ? id : sylva_world_remove_obstacle(w, id);
+}
+
+static int64_t edit_plant(sylva_world *w, int round) {
+  double root[1][3] = {{-1.0 - 0.5 * round, 0.5, 0}};
+  char label[32];
+  snprintf(label, sizeof label, "late%d", round);
+  sylva_plant_def pd = {0, label, (const double(*)[3])root, 1, 0, NULL, 0};
+  return sylva_world_add_plant(w, &pd, NULL);
+}
+
+static int64_t edit_prune(sylva_world *w, int round) {
+  (void)round;
+  double lo[3] = {0.3, -5, 0.3}, hi[3] = {5, 5, 12};
+  return sylva_world_prune(w, lo, hi, NULL, NULL);
+}
+
+static void test_light_kept(void) {
+  static const kept_edit edits[] = {{"an obstacle added", edit_roof},
+                                    {"an obstacle removed", edit_unroof},
+                                    {"a plant added", edit_plant},
+                                    {"a prune", edit_prune}};
+  for (int round = 0; round < 4; round++) {
+    const kept_edit *e = &edits[round];
+    sylva_world *w = small_world();
+    CHECK(w != NULL);
+    if (!w) return;
+    if (round == 1) CHECK(edit_roof(w, 0) >= 0); /* the roof the edit takes away */
+    /* on to a step that shed, and so kept its last pass for the next */
+    for (int k = 0; k < 12 && w->light_at != sylva_world_iteration(w) + 1; k++)
+      CHECK_INT(sylva_world_step(w, NULL), 0);
+    CHECK_INT(w->light_at, sylva_world_iteration(w) + 1);
+    uint8_t *img = NULL;
+    size_t n = 0;
+    sylva_world *copy = NULL;
+    CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
+    if (img) CHECK_INT(sylva_snapshot_load(img, n, &copy), 0);
+    free(img);
+    if (!copy) {
+      sylva_world_destroy(w);
+      return;
+    }
+    CHECK_INT(copy->light_at, 0);
+    int64_t a = e->edit(w, round), b = e->edit(copy, round);
+    CHECK(a >= 0 && a == b);
+    CHECK_INT(w->light_at, 0);
+    for (int k = 0; k < 2; k++) {
+      CHECK_INT(sylva_world_step(w, NULL), 0);
+      CHECK_INT(sylva_world_step(copy, NULL), 0);
+      if (sylva_world_hash(w) != sylva_world_hash(copy)) {
+        fprintf(stderr, "light kept: after %s, step %d differs from the world that kept none\n",
+                e->what, k + 1);
+        CHECK(false);
+      }
+    }
+    printf("light kept: %s at iteration %d, %zu nodes after\n", e->what,
+           sylva_world_iteration(w) - 2, sylva_world_node_count(w));
+    sylva_world_destroy(copy);
+    sylva_world_destroy(w);
+  }
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
 #ifndef NDEBUG
       CHECK_TEST(phase_checks),
 #endif
       CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot), CHECK_TEST(heartwood_snapshot), CHECK_TEST(measured_without_bad_root),
-      CHECK_TEST(leaf_area), CHECK_TEST(world_hash_versions)};
+      CHECK_TEST(leaf_area), CHECK_TEST(world_hash_versions), CHECK_TEST(light_kept)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");
 }
