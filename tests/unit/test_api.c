@@ -471,12 +471,7 @@ static void test_light_kept(void) {
     for (int k = 0; k < 12 && w->light_at != sylva_world_iteration(w) + 1; k++)
       CHECK_INT(sylva_world_step(w, NULL), 0);
     CHECK_INT(w->light_at, sylva_world_iteration(w) + 1);
-    uint8_t *img = NULL;
-    size_t n = 0;
-    sylva_world *copy = NULL;
-    CHECK_INT(sylva_snapshot_save(w, &img, &n), 0);
-    if (img) CHECK_INT(sylva_snapshot_load(img, n, &copy), 0);
-    free(img);
+    sylva_world *copy = snapshot_copy(w);
     if (!copy) {
       sylva_world_destroy(w);
       return;
