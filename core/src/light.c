@@ -32,7 +32,7 @@ static int lit_age(const sylva_world *w, size_t i, int T, int32_t *stem,
 
 /* The light live node i collects at age (0 when age < 0: no leaves, sp unread) in
  * voxel v: reads the grid (its own voxel) and the species' cached powers, writes only
- * its own own and light. */
+ * its own entries of own and light. */
 static void collect_node(const collect_ctx *c, size_t i, int age, const sylva__species *sp,
                          const int v[3]) {
   sylva_world *w = c->w;
@@ -164,7 +164,8 @@ void sylva__light_collect(sylva_world *w, int iteration, double *light) {
 void sylva__light_keep(sylva_world *w, int iteration) {
   sylva__skeleton *s = &w->nodes;
   collect_own(w, iteration, w->q, NULL);
-  /* the sums in light's block, free until the stats' canopy pass: each stem's */
+  /* the sums go to light's block (free until the stats' canopy pass), for each
+   * stem's Q */
   double *sum = w->light;
   for (size_t i = 0; i < s->count; i++) sum[i] = (s->flags[i] & SYLVA__NODE_ALIVE) ? w->q[i] : 0.0;
   sum_subtrees(s, sum);
