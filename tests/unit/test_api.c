@@ -2,9 +2,12 @@
  * changes), the species field list (sylva/species_fields.h): its defaults, its
  * ranges as sylva_species_check applies them, and a snapshot that keeps every field;
  * each stem's leaf_area against its leaf-bearing nodes; the light kept between steps,
- * dropped by every change; and, in debug builds, the phase checks that stop a step on
+ * dropped by every change; a busy pool's loop run on its caller; and, in debug builds, the phase checks that stop a step on
  * a broken invariant. */
 #include <math.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <signal.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -14,6 +17,7 @@
 #include <unistd.h>
 
 #include "../check.h"
+#include "pool.h"
 #include "sylva/sylva.h"
 #include "world_impl.h"
 
@@ -496,13 +500,64 @@ static void test_light_kept(void) {
   }
 }
 
+/* Shared threads (pool.h): a loop posted while the pool runs another caller's runs
+ * on its own caller alone, every index once. Thread A's loop holds the pool until
+ * the main thread's loop has returned, so the main thread's must run alone. */
+typedef struct busy_pool {
+  sylva__pool *pool;
+  atomic_int started, released;
+  pthread_t main;
+  atomic_int on_main, elsewhere, seen[100];
+} busy_pool;
+
+static void hold_piece(void *ctx, size_t begin, size_t end) {
+  busy_pool *b = ctx;
+  (void)begin, (void)end;
+  atomic_fetch_add(&b->started, 1);
+  while (!atomic_load(&b->released)) sched_yield();
+}
+
+static void *hold_pool(void *ctx) {
+  busy_pool *b = ctx;
+  sylva__pool_for(b->pool, 2, 1, hold_piece, b);
+  return NULL;
+}
+
+static void count_piece(void *ctx, size_t begin, size_t end) {
+  busy_pool *b = ctx;
+  for (size_t i = begin; i < end; i++) atomic_fetch_add(&b->seen[i], 1);
+  atomic_fetch_add(pthread_equal(pthread_self(), b->main) ? &b->on_main : &b->elsewhere, 1);
+}
+
+static void test_pool_busy(void) {
+  static busy_pool b;
+  CHECK_INT(sylva__pool_create(3, &b.pool), 0);
+  if (!b.pool) return;
+  b.main = pthread_self();
+  pthread_t a;
+  CHECK_INT(pthread_create(&a, NULL, hold_pool, &b), 0);
+  while (atomic_load(&b.started) == 0) sched_yield(); /* A's loop is running */
+  sylva__pool_for(b.pool, 100, 1, count_piece, &b);
+  CHECK_INT(atomic_load(&b.elsewhere), 0);
+  CHECK(atomic_load(&b.on_main) >= 1);
+  for (int i = 0; i < 100; i++) CHECK_INT(atomic_load(&b.seen[i]), 1);
+  atomic_store(&b.released, 1);
+  pthread_join(a, NULL);
+  /* free again: the next loop runs on the workers too, every index once */
+  for (int i = 0; i < 100; i++) atomic_store(&b.seen[i], 0);
+  sylva__pool_for(b.pool, 100, 1, count_piece, &b);
+  for (int i = 0; i < 100; i++) CHECK_INT(atomic_load(&b.seen[i]), 1);
+  sylva__pool_destroy(b.pool);
+}
+
 int main(int argc, char **argv) {
   static const check_test tests[] = {
 #ifndef NDEBUG
       CHECK_TEST(phase_checks),
 #endif
       CHECK_TEST(bad_ids), CHECK_TEST(species_fields), CHECK_TEST(species_snapshot), CHECK_TEST(heartwood_snapshot), CHECK_TEST(measured_without_bad_root),
-      CHECK_TEST(leaf_area), CHECK_TEST(world_hash_versions), CHECK_TEST(light_kept)};
+      CHECK_TEST(leaf_area), CHECK_TEST(world_hash_versions), CHECK_TEST(light_kept),
+      CHECK_TEST(pool_busy)};
   CHECK_RUN(argc, argv, 1, tests);
   return check_summary("api");
 }
